@@ -1,0 +1,38 @@
+"""Order and harmonic analysis, resonance finding, comparison with prediction, reports, CLI.
+
+Top of the import graph: may import ``measure`` and ``predict``. Public functions are loaded
+on first use so ``import analysis`` does no work.
+"""
+
+import importlib
+
+#: public name -> submodule that defines it
+_LAZY = {
+    "order_track": "orders",
+    "order_map": "orders",
+    "order_spectrum": "orders",
+    "campbell_map": "orders",
+    "angle_resample": "resample",
+    "vold_kalman": "vkf",
+    "harmonics": "harmonic",
+    "spectrum": "spectra",
+    "synchronous_average": "spectra",
+    "integrate": "spectra",
+    "differentiate": "spectra",
+    "find_resonances": "resonance",
+    "match_criticals": "compare",
+    "Report": "report",
+}
+
+__all__ = sorted(_LAZY)
+
+
+def __getattr__(name):
+    if name in _LAZY:
+        module = importlib.import_module(f"{__name__}.{_LAZY[name]}")
+        return getattr(module, name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def __dir__():
+    return __all__

@@ -1,0 +1,98 @@
+"""The ``crankbench`` command line.
+
+Each sub-command lives in its own module ``analysis/commands/<name>.py`` exposing ``HELP``
+(one line), ``configure(parser)`` (adds its arguments) and ``run(args) -> int``. Modules import
+their heavy dependencies inside ``run`` so ``crankbench --help`` stays fast.
+
+Errors of the project's family (bad file, channel, key, option) are printed as one line naming
+what was wrong, with exit status 2; ``-v`` adds the traceback for debugging.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import logging
+import sys
+
+from predict.errors import CrankbenchError
+
+__all__ = ["main", "build_parser", "COMMANDS"]
+
+log = logging.getLogger("crankbench")
+
+#: Sub-commands in the order ``--help`` lists them.
+COMMANDS = ("info", "demo", "synth", "predict", "analyse", "balance", "compare", "report",
+            "batch", "bench")
+
+
+def _load(name: str):
+    try:
+        return importlib.import_module(f"analysis.commands.{name}")
+    except ModuleNotFoundError as exc:
+        if exc.name == f"analysis.commands.{name}":
+            return None  # command not part of this build
+        raise
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """Return the argument parser with every available sub-command configured."""
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        ver = version("crankbench")
+    except PackageNotFoundError:
+        ver = "unknown (not installed)"
+    parser = argparse.ArgumentParser(
+        prog="crankbench",
+        description="Vibration-measurement analysis workbench for reciprocating engines.",
+    )
+    parser.add_argument("--version", action="version", version=f"crankbench {ver}")
+    verbosity = parser.add_mutually_exclusive_group()
+    verbosity.add_argument("-v", "--verbose", action="count", default=0,
+                           help="more log output (-vv for debug, with tracebacks on error)")
+    verbosity.add_argument("-q", "--quiet", action="store_true", help="only warnings and errors")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND")
+    for name in COMMANDS:
+        module = _load(name)
+        if module is None:
+            continue
+        p = sub.add_parser(name, help=module.HELP, description=module.HELP)
+        module.configure(p)
+        p.set_defaults(_run=module.run)
+    return parser
+
+
+def _setup_logging(verbose: int, quiet: bool) -> None:
+    level = logging.WARNING if quiet else (logging.DEBUG if verbose >= 2 else
+                                           logging.INFO if verbose == 1 else logging.INFO)
+    handler = logging.StreamHandler(sys.stderr)
+    handler.setFormatter(logging.Formatter("%(levelname)s: %(message)s" if verbose else "%(message)s"))
+    log.handlers[:] = [handler]
+    log.setLevel(level)
+    log.propagate = False
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Run the command line; return the process exit status."""
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    _setup_logging(args.verbose, args.quiet)
+    if not getattr(args, "_run", None):
+        parser.print_help()
+        return 1
+    try:
+        return int(args._run(args) or 0)
+    except (CrankbenchError, FileNotFoundError, FileExistsError, IsADirectoryError,
+            PermissionError) as exc:
+        if args.verbose >= 2:
+            raise
+        print(f"crankbench {args.command}: error: {exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print(f"crankbench {args.command}: interrupted", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

@@ -1,0 +1,1 @@
+"""One module per ``crankbench`` sub-command (see :mod:`analysis.cli`)."""

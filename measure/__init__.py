@@ -1,0 +1,32 @@
+"""Getting signals in: readers/writers, the Record schema, tacho and pulse timing, instrument
+models and the synthetic test bench.
+
+May import ``predict`` (the synthetic bench drives the prediction models), never ``analysis``.
+Public functions are loaded on first use so ``import measure`` does no work.
+"""
+
+import importlib
+
+from predict.errors import RecordError
+
+_LAZY = {
+    "read": "io",
+    "write": "io",
+    "open": "io",
+    "validate": "record",
+    "synthesize": "synth",
+    "Scene": "synth",
+}
+
+__all__ = sorted([*_LAZY, "RecordError"])
+
+
+def __getattr__(name):
+    if name in _LAZY:
+        module = importlib.import_module(f"{__name__}.{_LAZY[name]}")
+        return getattr(module, name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def __dir__():
+    return __all__
