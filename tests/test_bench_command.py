@@ -1,0 +1,50 @@
+"""The bench command runs suites, writes its table and fails on an exceeded error bound."""
+
+import json
+import sys
+import types
+
+import pytest
+
+import analysis.bench as bench
+from analysis.bench import Row, median_time
+from analysis.cli import main
+
+
+def _fake_suite(monkeypatch, name, rows):
+    module = types.ModuleType(f"analysis.bench.suite_{name}")
+    module.run = lambda quick: rows
+    monkeypatch.setitem(sys.modules, f"analysis.bench.suite_{name}", module)
+    monkeypatch.setattr(bench, "suites", lambda: [name])
+
+
+def test_bench_writes_table_and_exits_zero_within_bounds(monkeypatch, tmp_path, capsys):
+    rows = [Row("demo", "series", "n=2", 1e-3, "max rel", "exact", 1e-4, bound=1e-2),
+            Row("demo", "series", "n=4", 1e-6, "max rel", "exact", 2e-4, bound=1e-2)]
+    _fake_suite(monkeypatch, "demo", rows)
+    assert main(["bench", "--quick", "--json", "-o", str(tmp_path)]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["failed"] == 0 and [r["setting"] for r in out["rows"]] == ["n=2", "n=4"]
+    assert {p.name for p in tmp_path.iterdir()} == {"bench.csv", "bench.json", "demo.png"}
+    # a second run refuses to overwrite without --overwrite
+    assert main(["bench", "--quick", "-o", str(tmp_path)]) == 2
+    assert "--overwrite" in capsys.readouterr().err
+
+
+def test_bench_exits_nonzero_when_an_error_exceeds_its_bound(monkeypatch, capsys):
+    _fake_suite(monkeypatch, "demo", [Row("demo", "m", "s", 0.5, "rel", "ref", 1e-3, bound=0.1)])
+    assert main(["bench", "--quick"]) == 1
+    _fake_suite(monkeypatch, "demo", [Row("demo", "m", "s", float("nan"), "rel", "ref", 1e-3)])
+    assert main(["bench", "--quick"]) == 1
+
+
+def test_bench_rejects_unknown_suite(monkeypatch, capsys):
+    _fake_suite(monkeypatch, "demo", [])
+    assert main(["bench", "--suite", "dem"]) == 2
+    assert "--suite='dem' is not one of 'demo' (did you mean 'demo'?)" in capsys.readouterr().err
+
+
+def test_median_time_reports_per_call_time():
+    import time
+    t = median_time(lambda: time.sleep(0.002), repeats=3, warmup=0)
+    assert 0.0015 < t < 0.05
