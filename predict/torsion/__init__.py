@@ -1,0 +1,37 @@
+"""Torsional vibration of engine shaft lines.
+
+Natural frequencies and mode shapes (structured, high-relative-accuracy solvers), critical
+speeds with phase-vector sums, excitation by the harmonics of the cylinder tangential torque,
+forced response over speed, stresses against limit curves, dampers; shaft lines built from
+elements or read from TOML.
+
+Public names are imported lazily (no work at import time).
+"""
+
+from __future__ import annotations
+
+import importlib
+
+__all__ = ["chain", "TorsionalSystem", "Modes", "from_toml", "forced_response",
+           "ForcedResponse", "ShaftLine"]
+
+_LAZY = {
+    "chain": "system",
+    "TorsionalSystem": "system",
+    "Modes": "system",
+    "forced_response": "forced",
+    "ForcedResponse": "forced",
+    "ShaftLine": "elements",
+    "from_toml": "toml",
+}
+
+
+def __getattr__(name):
+    if name in _LAZY:
+        module = importlib.import_module(f"{__name__}.{_LAZY[name]}")
+        return getattr(module, name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def __dir__():
+    return sorted(set(globals()) | set(__all__))

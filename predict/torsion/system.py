@@ -1,0 +1,724 @@
+"""The assembled torsional system: lumped inertias joined by springs (a chain or a tree).
+
+A :class:`TorsionalSystem` holds every quantity *referred to the engine crankshaft speed*
+(a part turning at ``ratio`` times crankshaft speed contributes ``J·ratio²`` and ``k·ratio²``;
+its real angle is ``ratio·θ`` and its real torque ``T/ratio``), so the equations of motion are
+
+``J θ̈ + C θ̇ + K θ = T(t)``,  J diagonal, K and C weighted graph Laplacians plus ground terms.
+
+References
+----------
+.. [1] W. Ker Wilson, *Practical Solution of Torsional Vibration Problems*, vol. 1, 3rd ed.,
+   Chapman & Hall, 1956, ch. 1-3 (equivalent systems, geared systems referred by ratio²).
+.. [2] 交通大学内燃机教研组, 内燃机动力学、构造与计算 (上册), 机械工业出版社, 1958,
+   第二篇 第二章 (代替系统, 多质量振动系统) and 第四章 §1 (临界转速).
+"""
+
+from __future__ import annotations
+
+import functools
+from dataclasses import dataclass
+
+import numpy as np
+
+from .._validate import check_finite_array
+from ..errors import ModelError
+from . import eigen
+
+__all__ = ["TorsionalSystem", "Modes", "chain"]
+
+TWO_PI = 2.0 * np.pi
+
+
+@dataclass(frozen=True)
+class Modes:
+    """Undamped natural frequencies and mode shapes of a torsional system.
+
+    Attributes
+    ----------
+    frequencies_hz : ndarray (n_modes,)
+        Natural frequencies, Hz, ascending; rigid-body modes are exactly 0.
+    shapes : ndarray (n_nodes, n_modes)
+        Mass-normalised mode shapes (``xᵀ J x = 1``), rad per modal unit, referred to crankshaft
+        speed. Nodes left out of the undamped analysis (seismic rings of viscous dampers,
+        pendulums) hold 0.
+    mode_numbers : ndarray (n_modes,)
+        0 for rigid-body modes, 1, 2, ... for elastic modes.
+    node_names : tuple of str
+    method : str
+        Solver used: ``'bidiagonal dqds'`` (chains), ``'tree bisection'`` or ``'dense eigh'``.
+    relative_error_bound : float
+        Stated bound on the relative error of each frequency.
+    """
+
+    frequencies_hz: np.ndarray
+    shapes: np.ndarray
+    mode_numbers: np.ndarray
+    node_names: tuple
+    method: str
+    relative_error_bound: float
+
+    def relative(self) -> np.ndarray:
+        """Shapes scaled so each column's largest |amplitude| is 1 and that entry positive."""
+        idx = np.argmax(np.abs(self.shapes), axis=0)
+        peak = self.shapes[idx, np.arange(self.shapes.shape[1])]
+        peak = np.where(peak == 0, 1.0, peak)
+        return self.shapes / peak
+
+    def to_frame(self):
+        """Relative mode shapes as a DataFrame (rows: nodes, columns: ``mode k (f Hz)``)."""
+        import pandas as pd
+
+        cols = [f"mode {m} ({f:.4g} Hz)" for m, f in zip(self.mode_numbers, self.frequencies_hz)]
+        return pd.DataFrame(self.relative(), index=list(self.node_names), columns=cols)
+
+    def plot(self, ax=None, *, modes=None):
+        """Plot relative mode shapes along the nodes; returns the figure."""
+        import matplotlib.pyplot as plt
+
+        if ax is None:
+            fig, ax = plt.subplots(figsize=(7, 4))
+        else:
+            fig = ax.figure
+        rel = self.relative()
+        sel = [i for i, m in enumerate(self.mode_numbers)
+               if (modes is None and 1 <= m <= 4) or (modes is not None and m in modes)]
+        for i in sel:
+            ax.plot(rel[:, i], marker="o",
+                    label=f"mode {self.mode_numbers[i]}: {self.frequencies_hz[i]:.4g} Hz")
+        ax.set_xticks(range(len(self.node_names)), self.node_names, rotation=60, fontsize=7)
+        ax.axhline(0, color="0.6", lw=0.8)
+        ax.set_ylabel("relative amplitude")
+        ax.legend(fontsize=8)
+        fig.tight_layout()
+        return fig
+
+
+def _as_index_array(values, name, n, *, allow_ground=False):
+    arr = np.asarray(values)
+    if arr.size and not np.issubdtype(arr.dtype, np.integer):
+        raise ModelError(f"{name} must hold integer node indices, got {arr.dtype}")
+    low = -1 if allow_ground else 0
+    if arr.size and (arr.min() < low or arr.max() >= n):
+        raise ModelError(f"{name} holds node index out of range [{low}, {n - 1}]: {arr.tolist()}")
+    return arr.astype(int)
+
+
+class TorsionalSystem:
+    """Lumped torsional system (chain or tree), all values referred to crankshaft speed.
+
+    Parameters
+    ----------
+    inertias : array_like (n,)
+        Mass moments of inertia, kg·m² (> 0).
+    edges : array_like (m, 2) of int
+        Spring ends ``(a, b)``; ``a = -1`` ties node ``b`` to ground.
+    stiffnesses : array_like (m,)
+        Torsional stiffness of each spring, N·m/rad (>= 0; 0 = damping-only link).
+    node_names, edge_names : sequence of str, optional
+    node_damping : array_like (n,), optional
+        Absolute viscous damping of each node to ground, N·m·s/rad.
+    edge_damping : array_like (m,), optional
+        Relative viscous damping across each spring, N·m·s/rad.
+    edge_loss_factor : array_like (m,), optional
+        Hysteretic loss factor η of each spring (complex stiffness ``k(1 + iη)``).
+    edge_stiffness_speed2 : array_like (m,), optional
+        Speed-proportional stiffness coefficient, N·m·s²/rad (centrifugal pendulums):
+        the spring stiffness is ``stiffness + coeff·Ω²`` at crankshaft speed Ω.
+    node_ratio, edge_ratio : array_like, optional
+        Speed of each node/spring relative to the crankshaft (1 by default); real angle =
+        ratio·θ, real torque = T/ratio.
+    edge_outer_diameter, edge_inner_diameter : array_like (m,), optional
+        Shaft section diameters, m (NaN where unknown), for shear stress.
+    eigen_nodes : array_like of bool (n,), optional
+        Nodes included in the undamped eigen-analysis (default all); rings of viscous dampers
+        and pendulum masses, attached without a static spring, are left out.
+    cylinder_nodes : sequence of int, optional
+        Node carrying each engine cylinder, in cylinder order 1..z.
+    firing_angles_deg : array_like, optional
+        Firing angle of each cylinder after cylinder 1, crank degrees.
+    cycle : int
+        Strokes per cycle (4 or 2); sets the order grid (0.5 steps for 4-stroke).
+    engine : object, optional
+        The :class:`predict.engine.Engine` the system belongs to.
+    limits : object, optional
+        Stress limit curves (:class:`predict.torsion.stress.StressLimits`).
+    name : str
+
+    Examples
+    --------
+    >>> from predict.torsion import TorsionalSystem
+    >>> s = TorsionalSystem([1.0, 2.0], [(0, 1)], [1e4])
+    >>> print(round(float(s.natural_frequencies()[1]), 4))
+    19.4924
+    """
+
+    def __init__(self, inertias, edges, stiffnesses, *, node_names=None, edge_names=None,
+                 node_damping=None, edge_damping=None, edge_loss_factor=None,
+                 edge_stiffness_speed2=None, node_ratio=None, edge_ratio=None,
+                 edge_outer_diameter=None, edge_inner_diameter=None, eigen_nodes=None,
+                 cylinder_nodes=(), firing_angles_deg=None, cycle=4, engine=None, limits=None,
+                 name=""):
+        j = check_finite_array(inertias, "inertias", ndim=1, min_length=1, error=ModelError)
+        if np.any(j <= 0):
+            i = int(np.flatnonzero(j <= 0)[0])
+            raise ModelError(f"inertias[{i}]={j[i]!r} must be > 0 (kg·m²)")
+        n = j.size
+        e = np.asarray(edges).reshape(-1, 2) if np.size(edges) else np.zeros((0, 2), int)
+        e = _as_index_array(e, "edges", n, allow_ground=True)
+        if np.any(e[:, 1] < 0):
+            raise ModelError("edges: ground (-1) may appear only as the first end of a spring")
+        if np.any(e[:, 0] == e[:, 1]):
+            raise ModelError("edges: a spring must join two different nodes")
+        m = e.shape[0]
+        k = check_finite_array(stiffnesses, "stiffnesses", ndim=1, error=ModelError)
+        if k.size != m:
+            raise ModelError(f"stiffnesses has {k.size} values, expected one per edge ({m})")
+        if np.any(k < 0):
+            i = int(np.flatnonzero(k < 0)[0])
+            raise ModelError(f"stiffnesses[{i}]={k[i]!r} must be >= 0 (N·m/rad)")
+
+        def per(values, name, size, default, low=0.0):
+            if values is None:
+                return np.full(size, default, float)
+            arr = check_finite_array(np.broadcast_to(np.asarray(values, float), (size,))
+                                     if np.ndim(values) == 0 else values, name, ndim=1,
+                                     error=ModelError) if not (np.ndim(values) and np.isnan(
+                                         np.asarray(values, float)).any()) else np.asarray(
+                                             values, float)
+            if arr.size != size:
+                raise ModelError(f"{name} has {arr.size} values, expected {size}")
+            if low is not None and np.any(arr[np.isfinite(arr)] < low):
+                raise ModelError(f"{name} must be >= {low:g}, got {arr.tolist()}")
+            return arr.astype(float)
+
+        self._j = j
+        self._edges = e
+        self._k = k
+        self._node_damping = per(node_damping, "node_damping", n, 0.0)
+        self._edge_damping = per(edge_damping, "edge_damping", m, 0.0)
+        self._edge_eta = per(edge_loss_factor, "edge_loss_factor", m, 0.0)
+        self._k_speed2 = per(edge_stiffness_speed2, "edge_stiffness_speed2", m, 0.0)
+        self._node_ratio = per(node_ratio, "node_ratio", n, 1.0, low=None)
+        self._edge_ratio = per(edge_ratio, "edge_ratio", m, 1.0, low=None)
+        self._d_out = per(edge_outer_diameter, "edge_outer_diameter", m, np.nan)
+        self._d_in = per(edge_inner_diameter, "edge_inner_diameter", m, np.nan)
+        for arr in (self._j, self._edges, self._k, self._node_damping, self._edge_damping,
+                    self._edge_eta, self._k_speed2, self._node_ratio, self._edge_ratio,
+                    self._d_out, self._d_in):
+            arr.setflags(write=False)
+        self.node_names = tuple(node_names) if node_names is not None else tuple(
+            f"J{i + 1}" for i in range(n))
+        self.edge_names = tuple(edge_names) if edge_names is not None else tuple(
+            (f"{'ground' if a < 0 else self.node_names[a]}-{self.node_names[b]}")
+            for a, b in e)
+        if len(self.node_names) != n or len(self.edge_names) != m:
+            raise ModelError("node_names/edge_names must have one entry per node/edge")
+        mask = np.ones(n, bool) if eigen_nodes is None else np.asarray(eigen_nodes, bool)
+        if mask.shape != (n,):
+            raise ModelError(f"eigen_nodes must have {n} booleans")
+        self._eigen_nodes = mask
+        self.cylinder_nodes = tuple(int(c) for c in _as_index_array(
+            list(cylinder_nodes), "cylinder_nodes", n))
+        if firing_angles_deg is None:
+            fa = None
+        else:
+            fa = check_finite_array(firing_angles_deg, "firing_angles_deg", ndim=1,
+                                    error=ModelError)
+            if fa.size != len(self.cylinder_nodes):
+                raise ModelError(f"firing_angles_deg has {fa.size} values, expected one per "
+                                 f"cylinder node ({len(self.cylinder_nodes)})")
+        self.firing_angles_deg = fa
+        if cycle not in (2, 4):
+            raise ModelError(f"cycle={cycle!r} must be 2 or 4 (strokes per cycle)")
+        self.cycle = int(cycle)
+        self.engine = engine
+        self.limits = limits
+        self.name = str(name)
+
+    # ----------------------------------------------------------------- properties -------
+    @property
+    def n_nodes(self) -> int:
+        """Number of lumped inertias."""
+        return self._j.size
+
+    @property
+    def inertias(self) -> np.ndarray:
+        """Referred inertias, kg·m² (read-only)."""
+        return self._j
+
+    @property
+    def edges(self) -> np.ndarray:
+        """(m, 2) spring ends, -1 = ground (read-only)."""
+        return self._edges
+
+    @property
+    def stiffnesses(self) -> np.ndarray:
+        """Referred static spring stiffnesses, N·m/rad (read-only)."""
+        return self._k
+
+    @property
+    def node_ratio(self) -> np.ndarray:
+        """Speed ratio of each node to the crankshaft."""
+        return self._node_ratio
+
+    @property
+    def edge_ratio(self) -> np.ndarray:
+        """Speed ratio of each spring to the crankshaft."""
+        return self._edge_ratio
+
+    @property
+    def edge_damping(self) -> np.ndarray:
+        """Relative viscous damping, N·m·s/rad (referred)."""
+        return self._edge_damping
+
+    @property
+    def node_damping(self) -> np.ndarray:
+        """Absolute viscous damping, N·m·s/rad (referred)."""
+        return self._node_damping
+
+    @property
+    def edge_loss_factor(self) -> np.ndarray:
+        """Hysteretic loss factors η."""
+        return self._edge_eta
+
+    @property
+    def edge_stiffness_speed2(self) -> np.ndarray:
+        """Speed-proportional stiffness coefficients, N·m·s²/rad."""
+        return self._k_speed2
+
+    @property
+    def section_diameters(self) -> np.ndarray:
+        """(m, 2) outer and inner (bore) diameter of each shaft section, m (NaN = unknown)."""
+        return np.stack([self._d_out, self._d_in], axis=1)
+
+    @property
+    def eigen_nodes(self) -> np.ndarray:
+        """Boolean mask of the nodes in the undamped eigen-analysis."""
+        return self._eigen_nodes.copy()
+
+    @property
+    def is_free(self) -> bool:
+        """True when no spring ties the system to ground (a rigid-body mode exists)."""
+        return not np.any(self._edges[:, 0] < 0)
+
+    def replace(self, **changes) -> "TorsionalSystem":
+        """Copy with some constructor arguments changed (e.g. ``engine=..., limits=...``)."""
+        args = dict(inertias=self._j, edges=self._edges, stiffnesses=self._k,
+                    node_names=self.node_names, edge_names=self.edge_names,
+                    node_damping=self._node_damping, edge_damping=self._edge_damping,
+                    edge_loss_factor=self._edge_eta, edge_stiffness_speed2=self._k_speed2,
+                    node_ratio=self._node_ratio, edge_ratio=self._edge_ratio,
+                    edge_outer_diameter=self._d_out, edge_inner_diameter=self._d_in,
+                    eigen_nodes=self._eigen_nodes, cylinder_nodes=self.cylinder_nodes,
+                    firing_angles_deg=self.firing_angles_deg, cycle=self.cycle,
+                    engine=self.engine, limits=self.limits, name=self.name)
+        unknown = set(changes) - set(args)
+        if unknown:
+            raise ModelError(f"replace(): unknown argument(s) {sorted(unknown)}")
+        args.update(changes)
+        return TorsionalSystem(**args)
+
+    def __repr__(self) -> str:
+        kind = "free" if self.is_free else "grounded"
+        return (f"TorsionalSystem({self.name!r}, {self.n_nodes} nodes, {len(self._k)} springs, "
+                f"{kind}, {len(self.cylinder_nodes)} cylinders)")
+
+    # ----------------------------------------------------------------- matrices ---------
+    def _laplacian(self, weights) -> np.ndarray:
+        n = self.n_nodes
+        out = np.zeros((n, n), dtype=np.result_type(weights, float))
+        a, b = self._edges[:, 0], self._edges[:, 1]
+        np.add.at(out, (b, b), weights)
+        inner = a >= 0
+        np.add.at(out, (a[inner], a[inner]), weights[inner])
+        np.add.at(out, (a[inner], b[inner]), -weights[inner])
+        np.add.at(out, (b[inner], a[inner]), -weights[inner])
+        return out
+
+    def inertia_matrix(self) -> np.ndarray:
+        """Diagonal inertia matrix J, kg·m² (dense (n, n) ndarray)."""
+        return np.diag(self._j)
+
+    def stiffness_matrix(self, speed: float | None = None) -> np.ndarray:
+        """Stiffness matrix K, N·m/rad (dense, symmetric (n, n)).
+
+        Parameters
+        ----------
+        speed : float, optional
+            Crankshaft speed Ω, rad/s, for speed-dependent springs (centrifugal pendulums);
+            None leaves them out.
+        """
+        k = self._k if speed is None else self._k + self._k_speed2 * float(speed) ** 2
+        return self._laplacian(k)
+
+    def damping_matrix(self, omega: float | None = None) -> np.ndarray:
+        """Equivalent viscous damping matrix C, N·m·s/rad (dense, symmetric (n, n)).
+
+        Absolute (node) and relative (spring) viscous dampers, plus hysteretic damping turned
+        into its equivalent viscous value ``η k / ω`` at vibration frequency ``omega`` (rad/s);
+        with ``omega=None`` hysteretic damping is left out.
+        """
+        c = self._edge_damping.copy()
+        if omega is not None and np.any(self._edge_eta):
+            if omega <= 0:
+                raise ModelError(f"omega={omega!r} must be > 0 for hysteretic damping")
+            c = c + self._edge_eta * self._k / float(omega)
+        return self._laplacian(c) + np.diag(self._node_damping)
+
+    # ----------------------------------------------------------------- eigen ------------
+    def _layout(self):
+        """Classify the undamped spring graph: ('chain', order, grounded) | ('tree',) |
+        ('dense',)."""
+        mask = self._eigen_nodes
+        keep_e = (self._k > 0) & mask[self._edges[:, 1]] & (
+            (self._edges[:, 0] < 0) | mask[np.maximum(self._edges[:, 0], 0)])
+        nodes = np.flatnonzero(mask)
+        remap = -np.ones(self.n_nodes, int)
+        remap[nodes] = np.arange(nodes.size)
+        e = self._edges[keep_e]
+        a = np.where(e[:, 0] < 0, -1, remap[np.maximum(e[:, 0], 0)])
+        b = remap[e[:, 1]]
+        k = self._k[keep_e]
+        nn = nodes.size
+        # forest test with ground as an extra vertex (union-find)
+        parent = list(range(nn + 1))
+
+        def find(x):
+            while parent[x] != x:
+                parent[x] = parent[parent[x]]
+                x = parent[x]
+            return x
+
+        forest = True
+        for u, v in zip(a, b):
+            ru, rv = find(nn if u < 0 else u), find(v)
+            if ru == rv:
+                forest = False
+                break
+            parent[ru] = rv
+        info = dict(nodes=nodes, a=a, b=b, k=k)
+        if not forest:
+            return "dense", info
+        n_ground = int(np.sum(a < 0))
+        inner = a >= 0
+        deg = np.bincount(np.concatenate([a[inner], b[inner]]), minlength=nn)
+        connected = (len(k) - n_ground) == nn - 1
+        if connected and deg.max(initial=0) <= 2 and n_ground <= 1:
+            ends = np.flatnonzero(deg <= 1)
+            start = ends[0] if nn > 1 else 0
+            if n_ground == 1:
+                g = int(b[a < 0][0])
+                if deg[g] > 1:
+                    return "tree", info
+                start = g
+            nbr = [[] for _ in range(nn)]
+            for u, v, kk in zip(a[inner], b[inner], k[inner]):
+                nbr[u].append((v, kk))
+                nbr[v].append((u, kk))
+            order, ks, prev, cur = [start], [], -1, start
+            while len(order) < nn:
+                (nxt, kk), = [(v, kk) for v, kk in nbr[cur] if v != prev]
+                order.append(nxt)
+                ks.append(kk)
+                prev, cur = cur, nxt
+            if n_ground == 1:
+                ks = [float(k[a < 0][0])] + ks
+            info.update(order=np.asarray(order), chain_k=np.asarray(ks, float),
+                        grounded=n_ground == 1)
+            return "chain", info
+        return "tree", info
+
+    @functools.cached_property
+    def _eigen(self):
+        kind, info = self._layout()
+        nodes = info["nodes"]
+        jn = self._j[nodes]
+        shapes = np.zeros((self.n_nodes, nodes.size))
+        if kind == "chain":
+            order = info["order"]
+            omega = eigen.chain_frequencies(jn[order], info["chain_k"],
+                                            grounded=info["grounded"])
+            method, bound = "bidiagonal dqds", 8 * nodes.size * eigen.EPS
+        else:
+            sub = np.zeros((nodes.size, nodes.size))
+            a, b, k = info["a"], info["b"], info["k"]
+            np.add.at(sub, (b, b), k)
+            inner = a >= 0
+            np.add.at(sub, (a[inner], a[inner]), k[inner])
+            np.add.at(sub, (a[inner], b[inner]), -k[inner])
+            np.add.at(sub, (b[inner], a[inner]), -k[inner])
+            omega_d, vec = eigen.dense_modes(jn, sub)
+            if kind == "tree":
+                omega = eigen.tree_frequencies(jn, a, b, k, estimate=omega_d)
+                method, bound = "tree bisection", 8 * nodes.size * eigen.EPS
+            else:
+                omega = omega_d
+                method = "dense eigh"
+                bound = float(nodes.size * eigen.EPS * (omega.max() / max(
+                    omega[omega > 0].min(initial=omega.max()), 1e-300)) ** 2)
+            shapes[nodes] = vec
+        n_zero = int(np.sum(omega == 0.0))
+        if kind == "chain":
+            order = info["order"]
+            vec = eigen.chain_modes(jn[order], info["chain_k"], grounded=info["grounded"])
+            shapes[nodes[order]] = vec
+        numbers = np.concatenate([np.zeros(n_zero, int), np.arange(1, omega.size - n_zero + 1)])
+        return omega, shapes, numbers, method, bound
+
+    def natural_frequencies(self, units: str = "hz") -> np.ndarray:
+        """Undamped natural frequencies, ascending; rigid-body modes exactly 0.
+
+        Parameters
+        ----------
+        units : {'hz', 'rad/s', 'cpm'}
+            Hz (default), rad/s or cycles per minute.
+
+        Returns
+        -------
+        ndarray
+
+        References
+        ----------
+        Demmel & Kahan (1990) and Fernando & Parlett (1994) for the bidiagonal algorithm;
+        see :mod:`predict.torsion.eigen`.
+
+        Examples
+        --------
+        >>> from predict.torsion import chain
+        >>> print(chain([1.0, 1.0, 1.0], [1e4, 1e4]).natural_frequencies().round(3))
+        [ 0.    15.915 27.566]
+        """
+        from .._validate import check_option
+
+        check_option(units, "units", ("hz", "rad/s", "cpm"), error=ModelError)
+        omega = self._eigen[0]
+        scale = {"hz": 1 / TWO_PI, "rad/s": 1.0, "cpm": 60 / TWO_PI}[units]
+        return omega * scale if scale != 1.0 else omega.copy()
+
+    def mode_shapes(self) -> Modes:
+        """Natural frequencies and mass-normalised mode shapes (:class:`Modes`).
+
+        Examples
+        --------
+        >>> from predict.torsion import chain
+        >>> m = chain([1.0, 1.0], [1e4]).mode_shapes()
+        >>> print(m.relative()[:, 1].round(3))
+        [ 1. -1.]
+        """
+        omega, shapes, numbers, method, bound = self._eigen
+        return Modes(frequencies_hz=omega / TWO_PI, shapes=shapes.copy(),
+                     mode_numbers=numbers.copy(), node_names=self.node_names, method=method,
+                     relative_error_bound=bound)
+
+    # ----------------------------------------------------------------- orders -----------
+    def default_orders(self, max_order: float = 12.0) -> np.ndarray:
+        """Orders 0.5, 1, 1.5, ... (4-stroke) or 1, 2, ... (2-stroke) up to ``max_order``."""
+        step = 0.5 if self.cycle == 4 else 1.0
+        return np.arange(step, max_order + step / 2, step)
+
+    def major_orders(self, orders) -> np.ndarray:
+        """Boolean per order: True where all cylinders' excitations are in phase (q·φ_c ≡ 0
+        mod 360°), i.e. multiples of z/2 (4-stroke) or z (2-stroke) for even firing."""
+        orders = np.atleast_1d(np.asarray(orders, float))
+        if self.firing_angles_deg is None:
+            return np.zeros(orders.shape, bool)
+        ph = np.mod(np.outer(orders, self.firing_angles_deg), 360.0)
+        ph = np.minimum(ph, 360.0 - ph)
+        return np.all(ph < 1e-6, axis=1)
+
+    def vector_sums(self, orders) -> np.ndarray:
+        """Relative phase-vector sums ``|Σ_c a_c e^{-i q φ_c}|`` per (mode, order).
+
+        ``a_c`` is the mode's amplitude at cylinder c, scaled so the largest |a_c| over the
+        cylinders is 1 (Holzer/Wilson convention). NaN when the firing angles are unknown.
+
+        Returns
+        -------
+        ndarray (n_modes, n_orders)
+        """
+        orders = np.atleast_1d(np.asarray(orders, float))
+        shapes = self._eigen[1]
+        if self.firing_angles_deg is None or not self.cylinder_nodes:
+            return np.full((shapes.shape[1], orders.size), np.nan)
+        a = shapes[list(self.cylinder_nodes), :]
+        peak = np.max(np.abs(a), axis=0)
+        a = a / np.where(peak == 0, 1.0, peak)
+        phase = np.exp(-1j * np.deg2rad(np.outer(self.firing_angles_deg, orders)))
+        return np.abs(a.T @ phase)
+
+    def critical_speeds(self, orders=None, speed_range_rpm=None):
+        """Critical speeds: every (elastic mode, order) crossing, the Campbell-diagram data.
+
+        Parameters
+        ----------
+        orders : array_like, optional
+            Excitation orders (per crankshaft revolution); default 0.5..12 (4-stroke) or 1..12.
+        speed_range_rpm : (float, float), optional
+            Keep crossings within this crankshaft speed range, rpm (inclusive).
+
+        Returns
+        -------
+        pandas.DataFrame
+            Columns ``mode`` (1 = first elastic mode), ``order``, ``speed_rpm``,
+            ``frequency_hz``, ``vector_sum`` (relative, NaN without firing angles),
+            ``major`` (bool), sorted by speed.
+
+        References
+        ----------
+        内燃机动力学 (1958), 第二篇 第四章 §1 临界转速: n_c = 60 f / q.
+
+        Examples
+        --------
+        >>> from predict.torsion import chain
+        >>> s = chain([1.0, 1.0], [(2 * 3.141592653589793 * 50) ** 2 / 2])
+        >>> print(s.critical_speeds([1, 2], (0, 5000))[["mode", "order", "speed_rpm"]])
+           mode  order  speed_rpm
+        0     1    2.0     1500.0
+        1     1    1.0     3000.0
+        """
+        import pandas as pd
+
+        orders = self.default_orders() if orders is None else np.atleast_1d(
+            check_finite_array(orders, "orders", error=ModelError))
+        if np.any(orders <= 0):
+            raise ModelError(f"orders must be > 0, got {np.asarray(orders).tolist()}")
+        lo, hi = (0.0, np.inf) if speed_range_rpm is None else map(float, speed_range_rpm)
+        if not lo <= hi:
+            raise ModelError(f"speed_range_rpm={speed_range_rpm!r} must be (low, high), low<=high")
+        omega, _, numbers, _, _ = self._eigen
+        f = omega / TWO_PI
+        vs = self.vector_sums(orders)
+        major = self.major_orders(orders)
+        rows = []
+        for i in np.flatnonzero(numbers > 0):
+            for j, q in enumerate(orders):
+                rpm = 60.0 * f[i] / q
+                if lo <= rpm <= hi:
+                    rows.append((int(numbers[i]), float(q), rpm, f[i], vs[i, j], bool(major[j])))
+        frame = pd.DataFrame(rows, columns=["mode", "order", "speed_rpm", "frequency_hz",
+                                            "vector_sum", "major"])
+        return frame.sort_values(["speed_rpm", "mode"], ignore_index=True)
+
+    # ----------------------------------------------------------------- Holzer -----------
+    def holzer_table(self, frequency_hz: float):
+        """Classical Holzer table at a trial frequency (chains only).
+
+        Starting with unit amplitude at the first mass (the free end of a grounded chain),
+        each row gives the inertia torque J ω² θ, the cumulative torque in the following shaft
+        and the twist ΣT/k. The residual torque (last row's ``torque_sum``) is zero at a
+        natural frequency.
+
+        Parameters
+        ----------
+        frequency_hz : float
+            Trial frequency, Hz.
+
+        Returns
+        -------
+        pandas.DataFrame
+            Columns ``node``, ``inertia``, ``amplitude`` (rad), ``inertia_torque`` (N·m/rad of
+            reference amplitude), ``torque_sum`` (N·m), ``stiffness`` (N·m/rad), ``twist`` (rad);
+            ``attrs['residual']`` is the residual: the torque past the last mass (free chain,
+            ``attrs['residual_torque']``, N·m per rad at the first mass) or the angle at the
+            ground (grounded chain, marched from the free end, ``attrs['residual_amplitude']``).
+
+        References
+        ----------
+        H. Holzer, *Die Berechnung der Drehschwingungen*, Springer, 1921; 内燃机动力学 (1958),
+        第二篇 第二章 §2 多质量振动系统.
+
+        Examples
+        --------
+        >>> from predict.torsion import chain
+        >>> s = chain([1.0, 1.0], [1e4])
+        >>> t = s.holzer_table(s.natural_frequencies()[1])
+        >>> print(abs(t.attrs["residual_torque"]) < 1e-9)
+        True
+        """
+        import pandas as pd
+
+        from .._validate import check_nonnegative
+
+        fr = check_nonnegative(frequency_hz, "frequency_hz", error=ModelError)
+        kind, info = self._layout()
+        if kind != "chain":
+            raise ModelError("holzer_table: the system is branched; the Holzer table applies "
+                             "to chains (use natural_frequencies() for trees)")
+        order = info["nodes"][info["order"]]
+        ks = np.asarray(info["chain_k"], float)
+        grounded = info["grounded"]
+        if grounded:
+            # march from the free end towards the ground; the residual is the ground's angle
+            order = order[::-1]
+            ks = ks[::-1]
+        w2 = (TWO_PI * fr) ** 2
+        rows = []
+        theta, tsum = 1.0, 0.0
+        for idx, node in enumerate(order):
+            jt = self._j[node] * w2 * theta
+            tsum += jt
+            k = ks[idx] if idx < len(ks) else np.nan
+            twist = tsum / k if np.isfinite(k) else np.nan
+            rows.append((self.node_names[node], self._j[node], theta, jt, tsum, k, twist))
+            if np.isfinite(k):
+                theta -= twist
+        if grounded:
+            rows.append(("ground", np.inf, theta, np.nan, np.nan, np.nan, np.nan))
+        frame = pd.DataFrame(rows, columns=["node", "inertia", "amplitude", "inertia_torque",
+                                            "torque_sum", "stiffness", "twist"])
+        frame.attrs["frequency_hz"] = fr
+        if grounded:
+            frame.attrs["residual_amplitude"] = float(theta)
+            frame.attrs["residual"] = float(theta)
+        else:
+            frame.attrs["residual_torque"] = float(tsum)
+            frame.attrs["residual"] = float(tsum)
+        return frame
+
+    # ----------------------------------------------------------------- forced -----------
+    def forced_response(self, speed_rpm, **kwargs):
+        """Steady-state forced response over speed; see :func:`predict.torsion.forced.forced_response`."""
+        from .forced import forced_response
+
+        return forced_response(self, speed_rpm, **kwargs)
+
+
+def chain(inertias, stiffnesses, *, names=None) -> TorsionalSystem:
+    """A chain of lumped inertias joined by springs.
+
+    Parameters
+    ----------
+    inertias : array_like (n,)
+        Mass moments of inertia, kg·m².
+    stiffnesses : array_like
+        Torsional stiffnesses, N·m/rad: n−1 values for a chain free at both ends; n values when
+        the first stiffness ties the first inertia to ground.
+    names : sequence of str, optional
+        Node names.
+
+    Returns
+    -------
+    TorsionalSystem
+
+    Examples
+    --------
+    >>> from predict.torsion import chain
+    >>> print(chain([2.0], [800.0]).natural_frequencies("rad/s"))
+    [20.]
+    """
+    j = check_finite_array(inertias, "inertias", ndim=1, min_length=1, error=ModelError)
+    k = check_finite_array(stiffnesses, "stiffnesses", ndim=1, error=ModelError)
+    n = j.size
+    if k.size == n - 1:
+        edges = np.column_stack([np.arange(n - 1), np.arange(1, n)])
+    elif k.size == n:
+        edges = np.column_stack([np.arange(-1, n - 1), np.arange(n)])
+    else:
+        raise ModelError(f"stiffnesses has {k.size} values; a chain of {n} inertias needs "
+                         f"{n - 1} (free-free) or {n} (first inertia grounded)")
+    if np.any(k <= 0):
+        i = int(np.flatnonzero(k <= 0)[0])
+        raise ModelError(f"stiffnesses[{i}]={k[i]!r} must be > 0 (N·m/rad)")
+    return TorsionalSystem(j, edges, k, node_names=names)
+
