@@ -1,0 +1,362 @@
+"""Reading and writing Records in every test-bench format, and streaming long ones.
+
+=============  ==========================  ====================================================
+extension      format                      streams with :func:`open`
+=============  ==========================  ====================================================
+.h5 .hdf5      HDF5, crankbench layout     yes: dask chunks, lazy time index (bounded memory)
+.nc            netCDF4 (h5netcdf)          data yes; time coordinates held in memory
+.tdms          NI TDMS (npTDMS)            yes: channel slices read on demand
+.wav           WAV + ``.wav.json`` sidecar yes: frames read on demand (main clock only)
+.csv           CSV, units in header        no: loaded whole, then chunked
+.mf4 .mdf      ASAM MDF4 (asammdf)         no: loaded whole, then chunked
+.uff .unv      UFF dataset 58 (pyuff)      no: loaded whole, then chunked
+=============  ==========================  ====================================================
+
+Input files are opened read-only and never modified. :func:`write` is atomic (temporary file
+in the target folder, then rename) and refuses to replace an existing file unless
+``overwrite=True``. Units are converted to SI once, here; mixed sample rates keep their own
+time dims and are never resampled.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import logging
+import os
+import warnings
+from pathlib import Path
+
+import numpy as np
+import xarray as xr
+
+from predict.errors import CrankbenchError, RecordError
+
+from ._atomic import atomic_path, check_overwrite
+from .readers import EXTENSIONS, format_of_magic, module_for
+from .record import RecordWarning, nonfinite_spans, validate
+
+__all__ = ["read", "write", "open", "read_truth", "iter_blocks", "sha256_of", "EXTENSIONS"]
+
+log = logging.getLogger("crankbench")
+
+_HASH_CACHE: dict[tuple, str] = {}
+_FORMAT_EXT = {"hdf5": ".h5", "mdf": ".mf4", "tdms": ".tdms", "wav": ".wav", "uff": ".uff",
+               "csv": ".csv"}
+
+
+def sha256_of(path) -> str:
+    """SHA-256 hex digest of a file, read in 1 MiB blocks (cached per path, size and mtime).
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> p = pathlib.Path(tempfile.mkdtemp()) / "x.bin"
+    >>> _ = p.write_bytes(b"abc")
+    >>> sha256_of(p)[:16]
+    'ba7816bf8f01cfea'
+    """
+    path = Path(path)
+    st = path.stat()
+    key = (str(path.resolve()), st.st_size, st.st_mtime_ns)
+    if key not in _HASH_CACHE:
+        h = hashlib.sha256()
+        with path.open("rb") as f:
+            for block in iter(lambda: f.read(1 << 20), b""):
+                h.update(block)
+        _HASH_CACHE[key] = h.hexdigest()
+    return _HASH_CACHE[key]
+
+
+def _check_input(path) -> tuple[Path, object]:
+    """Resolve the format module and check existence, size and magic bytes."""
+    path = Path(path)
+    module = module_for(path)
+    if not path.exists():
+        near = ""
+        if path.parent.is_dir():
+            import difflib
+
+            close = difflib.get_close_matches(path.name, os.listdir(path.parent), n=1)
+            near = f" (did you mean {str(path.parent / close[0])!r}?)" if close else ""
+        raise FileNotFoundError(f"record file {str(path)!r} does not exist{near}")
+    if path.is_dir():
+        raise RecordError(f"{path} is a directory; expected a {module.FORMAT} file")
+    size = path.stat().st_size
+    if size == 0:
+        raise RecordError(f"{path}: file is empty (0 bytes); expected a {module.FORMAT} file")
+    with path.open("rb") as f:
+        head = f.read(64)
+    if not module.check_magic(head):
+        actual = format_of_magic(head)
+        hint = (f"; its first bytes look like {actual.upper()} — rename it to "
+                f"{path.with_suffix(_FORMAT_EXT[actual]).name!r}?") if actual else ""
+        raise RecordError(f"{path}: wrong magic bytes {head[:8]!r} for a {module.FORMAT} file "
+                          f"(extension {path.suffix!r}){hint}")
+    return path, module
+
+
+def _wrap(path: Path, module, exc: Exception) -> RecordError:
+    size = path.stat().st_size
+    return RecordError(f"{path}: cannot read as {module.FORMAT} ({type(exc).__name__}: {exc}); "
+                       f"the file ({size} bytes) is truncated or corrupt")
+
+
+def _named(path: Path, exc: CrankbenchError) -> CrankbenchError:
+    msg = str(exc)
+    if str(path) in msg or path.name in msg:
+        return exc
+    return type(exc)(f"{path}: {msg}")
+
+
+def _mask_nonfinite(ds: xr.Dataset, path: Path) -> xr.Dataset:
+    for name, var in ds.data_vars.items():
+        if var.dtype.kind != "f" or var.chunks is not None:
+            continue
+        values = var.values
+        spans = nonfinite_spans(values)
+        if not spans:
+            continue
+        fixed = values.copy()
+        fixed[~np.isfinite(fixed)] = np.nan
+        if var.attrs.get("quantity") == "pulse_times":
+            raise RecordError(f"{path}: pulse-time channel {name!r} has NaN/inf edge times; "
+                              "expected finite times in s (cannot be masked)")
+        t = ds[var.dims[0]].values if var.dims[0] in ds.coords else None
+        flat = []
+        text = []
+        for a, b in spans:
+            if t is not None:
+                flat += [float(t[a]), float(t[b - 1])]
+                text.append(f"{t[a]:.6g}..{t[b - 1]:.6g} s (samples {a}..{b - 1})")
+            else:
+                text.append(f"samples {a}..{b - 1}")
+        shown = "; ".join(text[:5]) + (f" and {len(text) - 5} more" if len(text) > 5 else "")
+        warnings.warn(f"{path.name}: channel {name!r}: {sum(b - a for a, b in spans)} NaN/inf "
+                      f"sample(s) masked as NaN in {len(spans)} span(s): {shown}",
+                      RecordWarning, stacklevel=3)
+        ds[name] = var.copy(data=fixed)
+        if flat:
+            ds[name].attrs["masked_spans_s"] = np.asarray(flat)
+    return ds
+
+
+def read(path, *, channels=None, allow_nonfinite: bool = False) -> xr.Dataset:
+    """Read a record file into a validated Record, by extension.
+
+    Parameters
+    ----------
+    path : path-like
+        ``.csv .h5 .hdf5 .nc .mf4 .mdf .tdms .uff .unv .wav`` (WAV with its ``.wav.json``).
+    channels : list of str, optional
+        Load only these channels (an unknown name is an error suggesting the close one).
+    allow_nonfinite : bool
+        Accept NaN/inf dropouts: they are masked as NaN, listed in the channel attr
+        ``masked_spans_s`` (start, end pairs in s) and reported by a :class:`RecordWarning`
+        naming channel and span. By default they are an error.
+
+    Returns
+    -------
+    xarray.Dataset
+        The Record, units in SI, with attrs ``source`` (file name) and ``sha256``.
+
+    Raises
+    ------
+    FileNotFoundError
+        The file does not exist (the message names it).
+    RecordError
+        Unknown extension (suggesting the likely one), empty, truncated or corrupt file, wrong
+        magic bytes, header/body mismatch, unknown unit, schema violation — naming the file,
+        the channel and what was expected.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> from measure.record import make_record
+    >>> rec = make_record({"acc": dict(data=np.arange(4.0), sample_rate=1000.0, units="g")})
+    >>> p = pathlib.Path(tempfile.mkdtemp()) / "r.h5"
+    >>> write(rec, p)
+    >>> back = read(p)
+    >>> print(back["acc"].attrs["units"], back["acc"].values[1], back.attrs["source"])
+    m/s^2 9.80665 r.h5
+    """
+    path, module = _check_input(path)
+    try:
+        ds = module.read(path, channels=channels)
+    except CrankbenchError as exc:
+        raise _named(path, exc) from None
+    except (MemoryError, KeyboardInterrupt):
+        raise
+    except Exception as exc:  # libraries raise anything on a corrupt file
+        raise _wrap(path, module, exc) from exc
+    if allow_nonfinite:
+        ds = _mask_nonfinite(ds, path)
+    ds.attrs["source"] = path.name
+    ds.attrs["sha256"] = sha256_of(path)
+    try:
+        return validate(ds, allow_nonfinite=allow_nonfinite)
+    except RecordError as exc:
+        raise _named(path, exc) from None
+
+
+def write(record: xr.Dataset, path, *, truth: xr.Dataset | None = None,
+          overwrite: bool = False) -> None:
+    """Write a Record atomically, format by extension.
+
+    Parameters
+    ----------
+    record : xarray.Dataset
+        A valid Record (NaN-masked spans allowed). Dask-backed channels are written block by
+        block to ``.h5``.
+    path : path-like
+        Target file. Its extension picks the format; ``.wav`` also writes ``<path>.json``.
+    truth : xarray.Dataset, optional
+        Ground truth of a synthetic record, stored as HDF5 group ``truth`` (.h5/.hdf5/.nc only).
+    overwrite : bool
+        Replace existing files; otherwise ``FileExistsError`` naming the option.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> from measure.record import make_record
+    >>> rec = make_record({"v": dict(data=np.ones(3), sample_rate=10.0, units="mm/s")})
+    >>> p = pathlib.Path(tempfile.mkdtemp()) / "r.csv"
+    >>> write(rec, p)
+    >>> print(p.read_text().splitlines()[2])
+    time [s],v [m/s]
+    """
+    path = Path(path)
+    module = module_for(path)
+    validate(record, allow_nonfinite=True)
+    check_overwrite(path, overwrite)
+    sidecars = getattr(module, "SIDECARS", ())
+    for suffix in sidecars:
+        check_overwrite(Path(str(path) + suffix), overwrite)
+    with atomic_path(path, overwrite=overwrite) as tmp:
+        extras = module.write(record, tmp, truth=truth) or {}
+        for suffix, payload in extras.items():
+            with atomic_path(Path(str(path) + suffix), overwrite=overwrite) as side:
+                side.write_bytes(payload)
+    log.debug("wrote %s (%s)", path, module.FORMAT)
+
+
+def read_truth(path) -> xr.Dataset:
+    """Read the ground truth stored by ``write(record, path, truth=ds)`` (group ``truth``).
+
+    Raises
+    ------
+    RecordError
+        The file is not HDF5/netCDF or has no ``truth`` group.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> from measure.record import make_record
+    >>> rec = make_record({"v": dict(data=np.ones(3), sample_rate=10.0, units="V")})
+    >>> truth = xr.Dataset({"critical_speed_rpm": ("mode", [1200.0, 2900.0])})
+    >>> p = pathlib.Path(tempfile.mkdtemp()) / "synth.h5"
+    >>> write(rec, p, truth=truth)
+    >>> read_truth(p)["critical_speed_rpm"].values
+    array([1200., 2900.])
+    """
+    path, module = _check_input(path)
+    if not hasattr(module, "read_truth"):
+        raise RecordError(f"{path}: ground truth is stored only in .h5/.hdf5/.nc records")
+    try:
+        return module.read_truth(path)
+    except CrankbenchError as exc:
+        raise _named(path, exc) from None
+    except Exception as exc:
+        raise _wrap(path, module, exc) from exc
+
+
+def open(path, *, chunk_seconds: float = 10.0, channels=None) -> xr.Dataset:  # noqa: A001
+    """Open a record lazily: a Record whose channels are dask arrays of ``chunk_seconds``.
+
+    Parameters
+    ----------
+    path : path-like
+        Record file. ``.h5``/``.hdf5`` stream with bounded memory (lazy time index);
+        ``.nc``, ``.tdms`` and ``.wav`` stream the samples; ``.csv``, ``.mf4`` and ``.uff``
+        cannot be read in parts and are loaded whole, then chunked (logged at INFO).
+    chunk_seconds : float
+        Target chunk length per clock, s (> 0).
+    channels : list of str, optional
+        Only these channels.
+
+    Returns
+    -------
+    xarray.Dataset
+        Lazily loaded Record (attrs ``source`` and ``sha256`` set; NaN scan left to the
+        consumer). Use :func:`iter_blocks` or dask reductions to process it.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> from measure.record import make_record
+    >>> rec = make_record({"acc": dict(data=np.ones(5000), sample_rate=1000.0, units="m/s^2")})
+    >>> p = pathlib.Path(tempfile.mkdtemp()) / "long.h5"
+    >>> write(rec, p)
+    >>> lazy = open(p, chunk_seconds=2.0)
+    >>> print(lazy["acc"].chunks, float(lazy["acc"].mean()))
+    ((2000, 2000, 1000),) 1.0
+    """
+    from predict._validate import check_positive
+
+    chunk_seconds = check_positive(chunk_seconds, "chunk_seconds", error=RecordError)
+    path, module = _check_input(path)
+    try:
+        if hasattr(module, "open"):
+            ds = module.open(path, chunk_seconds=chunk_seconds, channels=channels)
+        else:
+            log.info("%s: %s cannot be read in parts; loading it whole", path.name,
+                     module.FORMAT)
+            ds = module.read(path, channels=channels)
+            chunks = {}
+            for var in ds.data_vars.values():
+                fs = var.attrs.get("sample_rate")
+                chunks[var.dims[0]] = max(1, int(round(chunk_seconds * float(fs)))) if fs else -1
+            ds = ds.chunk(chunks)
+    except CrankbenchError as exc:
+        raise _named(path, exc) from None
+    except (MemoryError, KeyboardInterrupt):
+        raise
+    except Exception as exc:
+        raise _wrap(path, module, exc) from exc
+    ds.attrs["source"] = path.name
+    ds.attrs["sha256"] = sha256_of(path)
+    try:
+        return validate(ds, allow_nonfinite=True)
+    except RecordError as exc:
+        raise _named(path, exc) from None
+
+
+def iter_blocks(record: xr.Dataset, name: str):
+    """Yield ``(t0, block)`` for channel ``name`` of a (lazy) record, one chunk at a time.
+
+    ``t0`` is the time of the block's first sample (s); ``block`` a numpy array. For
+    numpy-backed channels the whole channel is one block.
+
+    Examples
+    --------
+    >>> from measure.record import make_record
+    >>> rec = make_record({"x": dict(data=np.arange(6.0), sample_rate=2.0, units="V")})
+    >>> [(t0, b.tolist()) for t0, b in iter_blocks(rec.chunk({"time": 4}), "x")]
+    [(0.0, [0.0, 1.0, 2.0, 3.0]), (2.0, [4.0, 5.0])]
+    """
+    if name not in record.data_vars:
+        from predict._validate import suggest
+
+        raise RecordError(f"record has no channel {name!r}"
+                          f"{suggest(name, map(str, record.data_vars))}")
+    var = record[name]
+    dim = var.dims[0]
+    has_time = dim in record.coords
+    if var.chunks is None:
+        yield (float(record[dim][0]) if has_time and var.size else 0.0), np.asarray(var.values)
+        return
+    start = 0
+    for block in var.data.blocks:
+        arr = np.asarray(block.compute())
+        t0 = float(record[dim][start]) if has_time and arr.size else float(start)
+        yield t0, arr
+        start += arr.size

@@ -1,0 +1,154 @@
+"""Helpers shared by the format modules: attribute cleaning, clocks, regular-time detection."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import xarray as xr
+
+from predict.errors import RecordError
+
+from ..record import is_pulse_dim, time_coordinate
+from ..units import QUANTITIES, SI_UNITS, sensitivity_to_si, to_si
+
+__all__ = ["clean_attr", "clean_attrs", "regular_start", "channel_meta", "dims_of",
+           "si_channel", "build_dataset", "META_KEYS"]
+
+#: Channel attrs carried through every format's metadata slot.
+META_KEYS = ("units", "quantity", "sample_rate", "location", "direction", "sensitivity",
+             "sensitivity_units", "pulses_per_rev", "missing_teeth")
+
+
+def clean_attr(value):
+    """Convert numpy/h5py attribute values to plain Python (str, int, float, bool, list)."""
+    if isinstance(value, bytes):
+        return value.decode("utf-8", "replace")
+    if isinstance(value, np.bool_):
+        return bool(value)
+    if isinstance(value, np.integer):
+        return int(value)
+    if isinstance(value, np.floating):
+        return float(value)
+    if isinstance(value, np.ndarray):
+        if value.ndim == 0:
+            return clean_attr(value[()])
+        if value.dtype.kind in "SOU":
+            return [clean_attr(v) for v in value.tolist()]
+        return value
+    return value
+
+
+def clean_attrs(attrs) -> dict:
+    """``clean_attr`` over a mapping."""
+    return {str(k): clean_attr(v) for k, v in dict(attrs).items()}
+
+
+def regular_start(t: np.ndarray, fs: float) -> float | None:
+    """Return ``t[0]`` if ``t`` equals ``time_coordinate(len(t), fs, t[0])`` exactly, else None."""
+    t = np.asarray(t, dtype=np.float64)
+    if t.size == 0:
+        return 0.0
+    if np.array_equal(t, time_coordinate(t.size, fs, float(t[0]))):
+        return float(t[0])
+    return None
+
+
+def dims_of(record: xr.Dataset) -> dict[str, list[str]]:
+    """Channel names grouped by their dim, in record order."""
+    out: dict[str, list[str]] = {}
+    for name, var in record.data_vars.items():
+        out.setdefault(str(var.dims[0]), []).append(str(name))
+    return out
+
+
+def channel_meta(var: xr.DataArray, *, dim: str | None = None) -> dict:
+    """The Record attrs of ``var`` as a JSON-able dict (plus ``dim``)."""
+    meta = {}
+    for k, v in var.attrs.items():
+        v = clean_attr(v)
+        if isinstance(v, np.ndarray):
+            v = v.tolist()
+        meta[str(k)] = v
+    if dim is not None:
+        meta["dim"] = dim
+    return meta
+
+
+def meta_json(meta: dict) -> str:
+    """Compact JSON of a metadata dict."""
+    return json.dumps(meta, separators=(",", ":"), sort_keys=False, allow_nan=True)
+
+
+def si_channel(name: str, values, meta: dict, *, file: str):
+    """Convert one channel read from a file to SI; returns ``(values, attrs)``.
+
+    ``meta`` holds the file's metadata for the channel: ``units`` (any known spelling),
+    optional ``quantity``, ``sensitivity`` (+ ``sensitivity_units``) and the other Record keys.
+    """
+    unit = meta.get("units")
+    if unit is None or unit == "":
+        raise RecordError(f"{file}: channel {name!r} has no unit in the file; expected one of "
+                          f"{', '.join(SI_UNITS)} or a usual spelling (g, mm/s, rpm, bar...)")
+    try:
+        values, si, hint = to_si(values, str(unit), channel=name)
+    except RecordError as exc:
+        raise RecordError(f"{file}: {exc}") from None
+    attrs = {k: meta[k] for k in META_KEYS if k in meta and meta[k] is not None}
+    attrs.update({k: v for k, v in meta.items() if k not in META_KEYS and k != "dim"
+                  and v is not None and not k.startswith("_")})
+    attrs["units"] = si
+    quantity = meta.get("quantity") or hint
+    if quantity is None or quantity == "sensitivity":
+        quantity = "pulse_times" if si == "s" and "pulses_per_rev" in meta else "other"
+    if quantity not in QUANTITIES:
+        raise RecordError(f"{file}: channel {name!r} has unknown quantity {quantity!r}; "
+                          f"expected one of {', '.join(QUANTITIES)}")
+    attrs["quantity"] = quantity
+    if "sensitivity" in attrs and "sensitivity_units" in attrs:
+        try:
+            value, su = sensitivity_to_si(float(attrs["sensitivity"]),
+                                          str(attrs["sensitivity_units"]), channel=name)
+        except RecordError as exc:
+            raise RecordError(f"{file}: {exc}") from None
+        attrs["sensitivity"], attrs["sensitivity_units"] = value, su
+    for key in ("pulses_per_rev", "missing_teeth"):
+        if key in attrs:
+            try:
+                attrs[key] = int(attrs[key])
+            except (TypeError, ValueError):
+                raise RecordError(f"{file}: channel {name!r}: {key}={attrs[key]!r}; expected "
+                                  "an integer") from None
+    if "sample_rate" in attrs:
+        try:
+            attrs["sample_rate"] = float(attrs["sample_rate"])
+        except (TypeError, ValueError):
+            raise RecordError(f"{file}: channel {name!r}: sample_rate={attrs['sample_rate']!r} "
+                              "is not a number (expected Hz > 0)") from None
+    return values, attrs
+
+
+def build_dataset(channels: list[tuple[str, str, np.ndarray, dict]], coords: dict,
+                  attrs: dict) -> xr.Dataset:
+    """Assemble ``[(name, dim, values, attrs)]`` and ``{dim: time array}`` into a Dataset."""
+    data_vars = {}
+    for name, dim, values, vattrs in channels:
+        data_vars[name] = xr.Variable((dim,), values, vattrs)
+    coord_vars = {dim: (dim, np.asarray(t, dtype=np.float64),
+                        {"units": "s", "long_name": "time from record start"})
+                  for dim, t in coords.items() if not is_pulse_dim(dim)}
+    return xr.Dataset(data_vars, coords=coord_vars, attrs=attrs)
+
+
+def select(names: list[str], channels, *, file: str) -> list[str]:
+    """Names to load: all, or ``channels`` checked against ``names`` (did-you-mean)."""
+    if channels is None:
+        return list(names)
+    from predict._validate import suggest
+
+    wanted = [channels] if isinstance(channels, str) else list(channels)
+    for c in wanted:
+        if c not in names:
+            raise RecordError(f"{file}: no channel {c!r}{suggest(c, names)}; channels: "
+                              f"{', '.join(names)}")
+    return wanted

@@ -1,0 +1,306 @@
+"""HDF5 in crankbench's native layout (h5py, chunked): read, write, stream.
+
+Layout (``crankbench_format = "record"``, ``crankbench_format_version = 1`` on the root)::
+
+    /                      attrs: record attrs (start_time, engine_id, ...), channel_order
+    /dims/<dim>            group, attrs kind = "regular" | "explicit" | "index", length
+                             regular:  start (s), sample_rate (Hz) -> t = start + i/sample_rate
+                             explicit: dataset "values" (s, float64)
+                             index:    pulse dims, no coordinate
+    /channels/<name>       dataset (chunked, float32/float64), attrs: the channel's Record attrs
+                           plus "dim"
+    /truth                 optional netCDF4 group (h5netcdf) holding the synthetic bench's
+                           ground truth (order amplitudes along a run, critical speeds)
+
+Regular clocks are stored as three numbers, not as a time array, so a 2 GB record streams with
+a lazy :class:`xarray.indexes.RangeIndex` time coordinate and bounded memory.
+"""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import xarray as xr
+
+from predict.errors import RecordError
+
+from ..record import is_pulse_dim, time_coordinate
+from ._common import build_dataset, clean_attrs, dims_of, regular_start, select
+
+__all__ = ["FORMAT", "check_magic", "read", "write", "open", "read_truth", "write_truth"]
+
+FORMAT = "HDF5 (crankbench layout)"
+MAGIC = b"\x89HDF\r\n\x1a\n"
+FORMAT_VERSION = 1
+#: Target size of one HDF5 chunk, bytes.
+CHUNK_BYTES = 1 << 20
+
+
+def check_magic(head: bytes) -> bool:
+    """HDF5 signature at offset 0 (files with a user block are not written by us)."""
+    return head[:8] == MAGIC
+
+
+def _h5():
+    import h5py
+
+    return h5py
+
+
+def _dim_info(record: xr.Dataset, dim: str, first_channel: xr.DataArray) -> dict:
+    if is_pulse_dim(dim):
+        return {"kind": "index", "length": int(record.sizes[dim])}
+    index = record.xindexes.get(dim)
+    if index is not None and type(index).__name__ == "RangeIndex":
+        start = float(record[dim][0])
+        fs = float(first_channel.attrs["sample_rate"])
+        return {"kind": "regular", "start": start, "sample_rate": fs,
+                "length": int(record.sizes[dim])}
+    t = np.asarray(record[dim].values, dtype=np.float64)
+    fs = first_channel.attrs.get("sample_rate")
+    if fs is not None:
+        start = regular_start(t, float(fs))
+        if start is not None:
+            return {"kind": "regular", "start": start, "sample_rate": float(fs),
+                    "length": int(t.size)}
+    return {"kind": "explicit", "length": int(t.size), "values": t}
+
+
+def _attr_value(value):
+    if isinstance(value, (dict, list, tuple)) and not isinstance(value, np.ndarray):
+        return "json:" + json.dumps(value)
+    if value is None:
+        return "json:null"
+    return value
+
+
+def _from_attr(value):
+    if isinstance(value, str) and value.startswith("json:"):
+        return json.loads(value[5:])
+    return value
+
+
+def write(record: xr.Dataset, path, *, truth: xr.Dataset | None = None) -> dict:
+    """Write ``record`` (numpy- or dask-backed) to ``path`` in the layout above.
+
+    Dask-backed channels are written block by block (bounded memory).
+    """
+    h5py = _h5()
+    with h5py.File(path, "w") as f:
+        f.attrs["crankbench_format"] = "record"
+        f.attrs["crankbench_format_version"] = FORMAT_VERSION
+        for k, v in record.attrs.items():
+            f.attrs[str(k)] = _attr_value(v)
+        f.attrs["channel_order"] = json.dumps([str(n) for n in record.data_vars])
+        gdims = f.create_group("dims")
+        gch = f.create_group("channels")
+        for dim, names in dims_of(record).items():
+            info = _dim_info(record, dim, record[names[0]])
+            g = gdims.create_group(dim)
+            values = info.pop("values", None)
+            for k, v in info.items():
+                g.attrs[k] = v
+            if values is not None:
+                g.create_dataset("values", data=values)
+        for name, var in record.data_vars.items():
+            name = str(name)
+            if "/" in name:
+                raise RecordError(f"channel {name!r}: names may not contain '/' in HDF5")
+            dtype = var.dtype if var.dtype.kind == "f" else np.float64
+            n = int(var.size)
+            chunk = max(1, min(n, CHUNK_BYTES // np.dtype(dtype).itemsize)) if n else None
+            ds = gch.create_dataset(name, shape=(n,), dtype=dtype,
+                                    chunks=(chunk,) if chunk else None)
+            if var.chunks is not None:
+                start = 0
+                for block in var.data.blocks:
+                    arr = np.asarray(block.compute(), dtype=dtype)
+                    ds[start:start + arr.size] = arr
+                    start += arr.size
+            elif n:
+                ds[...] = np.asarray(var.values, dtype=dtype)
+            for k, v in var.attrs.items():
+                ds.attrs[str(k)] = _attr_value(v)
+            ds.attrs["dim"] = str(var.dims[0])
+    if truth is not None:
+        write_truth(truth, path)
+    return {}
+
+
+def write_truth(truth: xr.Dataset, path) -> None:
+    """Append ``truth`` as netCDF4 group ``/truth`` to an existing HDF5 file."""
+    if not isinstance(truth, xr.Dataset):
+        raise RecordError(f"truth must be an xarray.Dataset, got {type(truth).__name__}")
+    truth.to_netcdf(path, mode="a", group="truth", engine="h5netcdf")
+
+
+def read_truth(path) -> xr.Dataset:
+    """Read the ``/truth`` group of an HDF5 or netCDF file into memory."""
+    h5py = _h5()
+    with h5py.File(path, "r") as f:
+        if "truth" not in f:
+            raise RecordError(f"{path}: no 'truth' group; ground truth is stored only by "
+                              "measure.write(record, path, truth=ds) (synthetic records)")
+    with xr.open_dataset(path, group="truth", engine="h5netcdf") as ds:
+        return ds.load()
+
+
+def _layout(f, file: str) -> tuple[list[str], dict]:
+    fmt = f.attrs.get("crankbench_format")
+    if isinstance(fmt, bytes):
+        fmt = fmt.decode()
+    if fmt != "record" or "channels" not in f or "dims" not in f:
+        raise RecordError(
+            f"{file}: HDF5 file is not in crankbench's record layout (expected root attr "
+            "crankbench_format='record' and groups /channels, /dims); netCDF files should be "
+            "named .nc")
+    version = int(f.attrs.get("crankbench_format_version", 0))
+    if version > FORMAT_VERSION:
+        raise RecordError(f"{file}: layout version {version} is newer than this crankbench "
+                          f"reads ({FORMAT_VERSION}); upgrade crankbench")
+    try:
+        order = json.loads(f.attrs["channel_order"])
+    except (KeyError, ValueError):
+        order = sorted(f["channels"])
+    missing = [n for n in order if n not in f["channels"]]
+    if missing:
+        raise RecordError(f"{file}: header lists channel(s) {missing} that have no data "
+                          "(header/body mismatch; file truncated?)")
+    dims = {}
+    for dim, g in f["dims"].items():
+        info = clean_attrs(g.attrs)
+        if "values" in g:
+            info["values_ds"] = g["values"]
+        dims[dim] = info
+    return order, dims
+
+
+def _channel_attrs(ds, name: str, dims: dict, file: str) -> tuple[str, dict]:
+    attrs = {k: _from_attr(v) for k, v in clean_attrs(ds.attrs).items()}
+    dim = attrs.pop("dim", None)
+    if dim not in dims:
+        raise RecordError(f"{file}: channel {name!r} refers to dim {dim!r} which is not in "
+                          "/dims (header/body mismatch)")
+    length = int(dims[dim].get("length", -1))
+    if ds.shape != (length,):
+        raise RecordError(f"{file}: channel {name!r} has {ds.shape[0] if ds.shape else 0} "
+                          f"samples but its dim {dim!r} declares {length} (header/body mismatch;"
+                          " file truncated?)")
+    return dim, attrs
+
+
+def _coordinate(dim: str, info: dict, file: str, *, lazy: bool):
+    kind = info.get("kind")
+    n = int(info.get("length", 0))
+    if kind == "index":
+        return None
+    if kind == "regular":
+        fs = float(info["sample_rate"])
+        start = float(info.get("start", 0.0))
+        if not np.isfinite(fs) or fs <= 0:
+            raise RecordError(f"{file}: dim {dim!r} declares sample_rate={fs!r} Hz; expected a "
+                              "finite value > 0")
+        if lazy:
+            from xarray.indexes import RangeIndex
+
+            stop = start + (n - 1) / fs if n > 1 else start
+            return RangeIndex.linspace(start, stop, n, endpoint=True, dim=dim)
+        return time_coordinate(n, fs, start)
+    if kind == "explicit":
+        values = np.asarray(info["values_ds"][...], dtype=np.float64)
+        if values.size != n:
+            raise RecordError(f"{file}: dim {dim!r} has {values.size} time values but declares "
+                              f"length {n} (header/body mismatch)")
+        return values
+    raise RecordError(f"{file}: dim {dim!r} has unknown kind {kind!r}; expected regular, "
+                      "explicit or index")
+
+
+def read(path, *, channels=None) -> xr.Dataset:
+    """Read a crankbench HDF5 record fully into memory."""
+    h5py = _h5()
+    file = str(path)
+    with h5py.File(path, "r") as f:
+        order, dims = _layout(f, file)
+        names = select(order, channels, file=file)
+        out, used = [], {}
+        for name in names:
+            ds = f["channels"][name]
+            dim, attrs = _channel_attrs(ds, name, dims, file)
+            out.append((name, dim, ds[...], attrs))
+            used[dim] = True
+        coords = {}
+        for dim in used:
+            c = _coordinate(dim, dims[dim], file, lazy=False)
+            if c is not None:
+                coords[dim] = c
+        attrs = {k: _from_attr(v) for k, v in clean_attrs(f.attrs).items()
+                 if k not in ("crankbench_format", "crankbench_format_version", "channel_order")}
+    return build_dataset(out, coords, attrs)
+
+
+class _LazyH5:
+    """Array-like slice of one HDF5 dataset; reopens the file read-only on each access.
+
+    Picklable (path + name), so dask can ship it to threads, processes or distributed workers.
+    """
+
+    def __init__(self, path: str, name: str, shape: tuple, dtype):
+        self.path, self.name = path, name
+        self.shape, self.dtype, self.ndim = shape, np.dtype(dtype), len(shape)
+
+    def __getitem__(self, key):
+        h5py = _h5()
+        with h5py.File(self.path, "r") as f:
+            return f["channels"][self.name][key]
+
+
+def open(path, *, chunk_seconds: float = 10.0, channels=None) -> xr.Dataset:  # noqa: A001
+    """Open a crankbench HDF5 record lazily: dask chunks of ``chunk_seconds`` per clock.
+
+    Regular time coordinates are lazy ``RangeIndex`` objects (no time array in memory), so
+    peak memory is bounded by the chunks being processed, whatever the file size.
+    """
+    import dask.array as da
+
+    h5py = _h5()
+    file = str(path)
+    with h5py.File(path, "r") as f:
+        order, dims = _layout(f, file)
+        names = select(order, channels, file=file)
+        data_vars, used = {}, {}
+        for name in names:
+            ds = f["channels"][name]
+            dim, attrs = _channel_attrs(ds, name, dims, file)
+            fs = attrs.get("sample_rate")
+            n = ds.shape[0]
+            if fs is not None and n:
+                step = max(1, int(round(float(chunk_seconds) * float(fs))))
+                c = ds.chunks[0] if ds.chunks else 0
+                if c and step >= c:  # align dask chunks on HDF5 chunks
+                    step = (step // c) * c
+            else:
+                step = max(1, n)
+            arr = da.from_array(_LazyH5(file, name, ds.shape, ds.dtype), chunks=(step,),
+                                name=f"crankbench-h5-{file}-{name}", lock=False,
+                                asarray=True, meta=np.empty(0, ds.dtype))
+            data_vars[name] = xr.Variable((dim,), arr, attrs)
+            used[dim] = True
+        coords = []
+        plain = {}
+        for dim in used:
+            c = _coordinate(dim, dims[dim], file, lazy=True)
+            if c is None:
+                continue
+            if isinstance(c, np.ndarray):
+                plain[dim] = (dim, c, {"units": "s", "long_name": "time from record start"})
+            else:
+                coords.append(c)
+        attrs = {k: _from_attr(v) for k, v in clean_attrs(f.attrs).items()
+                 if k not in ("crankbench_format", "crankbench_format_version", "channel_order")}
+    ds = xr.Dataset(data_vars, coords=plain, attrs=attrs)
+    for index in coords:
+        ds = ds.assign_coords(xr.Coordinates.from_xindex(index))
+        ds[index.dim].attrs.update(units="s", long_name="time from record start")
+    return ds
