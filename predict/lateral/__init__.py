@@ -1,0 +1,53 @@
+"""Lateral (bending) vibration of shafts and beams: critical speeds and whirl.
+
+Submodules, imported on use so ``import predict.lateral`` does no work:
+
+``beams``
+    Closed forms: uniform beams with classical end conditions, a massless shaft carrying one
+    disk, influence (flexibility) coefficients.
+``approx``
+    The classical approximations on a shaft carrying concentrated masses: Rayleigh (upper
+    bound), Dunkerley (lower bound) and Stodola's iteration (two-sided bracket).
+``fe``
+    Beam finite elements (Euler-Bernoulli or Timoshenko) with disks, bearings as springs and
+    the gyroscopic effect: natural frequencies, Campbell diagram with forward/backward whirl,
+    critical speeds, unbalance response.
+``toml``
+    The ``[rotor]`` model-file loader.
+"""
+
+import importlib
+
+#: public name -> submodule that defines it
+_LAZY = {
+    "beam_natural_frequencies": "beams",
+    "BeamModes": "beams",
+    "influence_coefficient": "beams",
+    "point_stiffness": "beams",
+    "disk_on_shaft_frequency": "beams",
+    "MassShaft": "approx",
+    "rayleigh": "approx",
+    "dunkerley": "approx",
+    "dunkerley_combine": "approx",
+    "stodola": "approx",
+    "ApproxResult": "approx",
+    "Rotor": "fe",
+    "ShaftSection": "fe",
+    "Disk": "fe",
+    "Bearing": "fe",
+    "Material": "fe",
+    "load_rotor": "toml",
+}
+
+__all__ = sorted(_LAZY)
+
+
+def __getattr__(name):
+    if name in _LAZY:
+        module = importlib.import_module(f"{__name__}.{_LAZY[name]}")
+        return getattr(module, name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def __dir__():
+    return __all__
