@@ -279,5 +279,12 @@ def tree_frequencies(inertias, edges_a, edges_b, stiffnesses, *, rtol: float = 4
         lo = np.where(left, lo, mid)
         if np.all(hi - lo <= rtol * hi):
             break
-    omega = 0.5 * (lo + hi)
-    return np.concatenate([np.zeros(n_zero), np.sort(omega)])
+    omega = np.sort(0.5 * (lo + hi))
+    # values equal within the bisection tolerance are one repeated eigenvalue: make them equal
+    start = 0
+    for i in range(1, omega.size + 1):
+        if i == omega.size or omega[i] - omega[start] > 2 * rtol * omega[i]:
+            if i - start > 1:
+                omega[start:i] = omega[start:i].mean()
+            start = i
+    return np.concatenate([np.zeros(n_zero), omega])
