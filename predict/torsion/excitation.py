@@ -262,6 +262,8 @@ def engine_excitation(system_or_engine, *, imep=None, pressure=None, orders=None
                               points=points // 2)
     unit = torque_harmonics(engine, pressure=pressure, orders=orders, omega=1.0, points=points)
     inertia = unit - gas
+    # the inertia torque repeats every revolution: its half orders vanish exactly
+    inertia[~np.isclose(orders, np.round(orders))] = 0.0
     scale = np.abs(gas).max() or 1.0
     err = float(np.abs(gas - coarse).max() / scale)
     return Excitation(orders=np.asarray(orders, float), gas=gas, inertia=inertia,
