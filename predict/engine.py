@@ -206,7 +206,7 @@ class Engine:
                              "(one per cylinder) or a single number")
         if (arr < 0).any():
             i = int(np.flatnonzero(arr < 0)[0])
-            raise ModelError(f"{name}[{i}]={arr[i]!r} must be >= 0 (kg)")
+            raise ModelError(f"{name}[{i}]={float(arr[i])!r} must be >= 0 (kg)")
         return arr
 
     def _check_articulated(self, articulated):
