@@ -1,0 +1,229 @@
+"""Torsional vibration dampers: elements for a :class:`~predict.torsion.elements.ShaftLine`
+and their classical optimum tuning.
+
+* viscous (Lanchester/Houdaille) damper: a free seismic ring coupled to the hub by viscous
+  shear only (no spring) — left out of the undamped eigen-analysis;
+* tuned spring-viscous damper (Den Hartog absorber): ring on a spring with viscous damping;
+* order-tuned centrifugal pendulum: mass m on a pivot at radius R, length r; linearised it is
+  an absorber of inertia ``J_a = m (R + r)²`` on a speed-proportional spring ``J_a (R/r) Ω²``,
+  tuned to order ``n = √(R/r)`` at every speed (Den Hartog, ch. 5);
+* Lanchester friction damper: ring driven through friction plates with slip torque T_s;
+  modelled as the **equivalent viscous** damper that dissipates the same energy per cycle at a
+  design relative amplitude a and frequency ω: ``c_eq = 4 T_s / (π ω a)`` — the real damper is
+  non-linear, so the model is right only near that amplitude.
+
+References
+----------
+.. [1] J. P. Den Hartog, *Mechanical Vibrations*, 4th ed., McGraw-Hill, 1956, §3.2-3.3
+   (damped vibration absorber, optimum tuning f = 1/(1+μ), ζ² = 3μ/(8(1+μ)³); untuned viscous
+   damper, c_opt = 2 J_d ω_n / √(2(1+μ)(2+μ))), ch. 5 (centrifugal pendulum, friction dampers).
+.. [2] 发动机设计 第三章, 减振器的型式 (dynamic, damping and compound dampers).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .._validate import check_int, check_nonnegative, check_positive
+from ..errors import ModelError
+
+__all__ = ["add_viscous_damper", "add_tuned_damper", "add_pendulum_absorber",
+           "add_friction_damper", "friction_equivalent_damping", "den_hartog_optimum",
+           "lanchester_optimum", "DamperTuning", "optimum_tuned_damper",
+           "optimum_viscous_damper"]
+
+
+def add_viscous_damper(line, node: str, *, ring_inertia: float, damping: float,
+                       name: str | None = None) -> str:
+    """Viscous (Houdaille) damper on ``node``: free ring (kg·m²) + viscous link (N·m·s/rad).
+
+    Returns the ring's node name.
+    """
+    ring = name or f"{node} viscous ring"
+    _, ratio = line._port(node)
+    line.add_mass(ring, ring_inertia, ratio=ratio, eigen=False)
+    line.add_spring(node, ring, stiffness=0.0,
+                    damping=check_positive(damping, "damping", error=ModelError),
+                    name=f"{ring} link")
+    return ring
+
+
+def add_tuned_damper(line, node: str, *, ring_inertia: float, stiffness: float,
+                     damping: float = 0.0, loss_factor: float = 0.0,
+                     name: str | None = None) -> str:
+    """Tuned spring-viscous damper: ring (kg·m²) on a spring (N·m/rad) with viscous damping
+    (N·m·s/rad) and/or hysteretic loss factor (rubber). Returns the ring's node name."""
+    ring = name or f"{node} tuned ring"
+    _, ratio = line._port(node)
+    line.add_mass(ring, ring_inertia, ratio=ratio)
+    line.add_spring(node, ring, stiffness=check_positive(stiffness, "stiffness",
+                                                          error=ModelError),
+                    damping=damping, loss_factor=loss_factor, name=f"{ring} spring")
+    return ring
+
+
+def add_pendulum_absorber(line, node: str, *, mass: float, pivot_radius: float, length: float,
+                          damping: float = 0.0, name: str | None = None) -> str:
+    """Order-tuned centrifugal pendulum on ``node`` (total pendulum mass kg, pivot radius R and
+    pendulum length r in m); tuned order n = √(R/r). Returns the pendulum node name."""
+    m = check_positive(mass, "mass", error=ModelError)
+    big_r = check_positive(pivot_radius, "pivot_radius", error=ModelError)
+    r = check_positive(length, "length", error=ModelError)
+    j_a = m * (big_r + r) ** 2
+    pend = name or f"{node} pendulum n={np.sqrt(big_r / r):.3g}"
+    _, ratio = line._port(node)
+    line.add_mass(pend, j_a, ratio=ratio, eigen=False)
+    line.add_spring(node, pend, stiffness=0.0, speed2=j_a * big_r / r,
+                    damping=check_nonnegative(damping, "damping", error=ModelError),
+                    name=f"{pend} link")
+    return pend
+
+
+def friction_equivalent_damping(slip_torque: float, omega: float,
+                                relative_amplitude: float) -> float:
+    """Equivalent viscous damping of a friction (Coulomb) link, N·m·s/rad.
+
+    Equal energy per cycle: ``4 T_s a = π c ω a²`` ⇒ ``c = 4 T_s / (π ω a)``.
+
+    Examples
+    --------
+    >>> print(round(friction_equivalent_damping(100.0, 200.0, 0.01), 3))
+    63.662
+    """
+    t = check_positive(slip_torque, "slip_torque", error=ModelError)
+    w = check_positive(omega, "omega", error=ModelError)
+    a = check_positive(relative_amplitude, "relative_amplitude", error=ModelError)
+    return 4.0 * t / (np.pi * w * a)
+
+
+def add_friction_damper(line, node: str, *, ring_inertia: float, slip_torque: float,
+                        design_frequency: float, design_amplitude: float,
+                        name: str | None = None) -> str:
+    """Lanchester friction damper as its equivalent viscous damper at a design point
+    (``design_frequency`` rad/s, ``design_amplitude`` relative rad). Returns the ring name."""
+    c = friction_equivalent_damping(slip_torque, design_frequency, design_amplitude)
+    return add_viscous_damper(line, node, ring_inertia=ring_inertia, damping=c,
+                              name=name or f"{node} friction ring")
+
+
+@dataclass(frozen=True)
+class DamperTuning:
+    """Optimum damper parameters for one mode.
+
+    Attributes
+    ----------
+    kind : str
+    mass_ratio : float
+        μ = J_damper / J_modal at the damper node.
+    natural_frequency_hz : float
+        Of the undamped mode being suppressed.
+    stiffness : float
+        N·m/rad (0 for untuned dampers).
+    damping : float
+        N·m·s/rad.
+    frequency_ratio : float
+        Damper frequency over mode frequency (tuned) or NaN.
+    damping_ratio : float
+        c / (2 J_d ω_n).
+    max_magnification : float
+        Peak amplitude over static deflection of the main mass with the optimum damper.
+    """
+
+    kind: str
+    mass_ratio: float
+    natural_frequency_hz: float
+    stiffness: float
+    damping: float
+    frequency_ratio: float
+    damping_ratio: float
+    max_magnification: float
+
+    def to_frame(self):
+        import pandas as pd
+
+        return pd.DataFrame([self.__dict__])
+
+    def plot(self, ax=None):
+        """Bar of the parameters; returns the figure."""
+        import matplotlib.pyplot as plt
+
+        if ax is None:
+            fig, ax = plt.subplots()
+        else:
+            fig = ax.figure
+        ax.bar(["μ", "f ratio", "ζ"], [self.mass_ratio, self.frequency_ratio,
+                                       self.damping_ratio])
+        ax.set_title(self.kind)
+        return fig
+
+
+def den_hartog_optimum(mass_ratio: float):
+    """Den Hartog's optimum tuned absorber: f = 1/(1+μ), ζ = √(3μ/(8(1+μ)³)),
+    peak magnification √(1 + 2/μ).
+
+    Examples
+    --------
+    >>> f, z, m = den_hartog_optimum(0.25)
+    >>> print(round(f, 4), round(z, 4), round(m, 4))
+    0.8 0.2191 3.0
+    """
+    mu = check_positive(mass_ratio, "mass_ratio", error=ModelError)
+    return 1.0 / (1.0 + mu), float(np.sqrt(3 * mu / (8 * (1 + mu) ** 3))), float(
+        np.sqrt(1 + 2 / mu))
+
+
+def lanchester_optimum(mass_ratio: float):
+    """Optimum untuned viscous (Lanchester/Houdaille) damper: ζ = c/(2 J_d ω_n) =
+    1/√(2(1+μ)(2+μ)), peak magnification 1 + 2/μ.
+
+    Examples
+    --------
+    >>> z, m = lanchester_optimum(0.25)
+    >>> print(round(z, 4), m)
+    0.4216 9.0
+    """
+    mu = check_positive(mass_ratio, "mass_ratio", error=ModelError)
+    return float(1.0 / np.sqrt(2 * (1 + mu) * (2 + mu))), 1.0 + 2.0 / mu
+
+
+def _modal(system, node, mode):
+    mode = check_int(mode, "mode", minimum=1, error=ModelError)
+    if isinstance(node, str):
+        if node not in system.node_names:
+            raise ModelError(f"node {node!r} not in the system ({', '.join(system.node_names)})")
+        node = system.node_names.index(node)
+    omega, shapes, numbers, _, _ = system._eigen
+    hit = np.flatnonzero(numbers == mode)
+    if hit.size == 0:
+        raise ModelError(f"mode={mode} does not exist (system has {numbers.max()} elastic modes)")
+    a = shapes[node, hit[0]]
+    if a == 0:
+        raise ModelError(f"node {system.node_names[node]!r} is a node of mode {mode}: a damper "
+                         "there has no effect")
+    return omega[hit[0]], 1.0 / a ** 2
+
+
+def optimum_tuned_damper(system, node, *, ring_inertia: float, mode: int = 1) -> DamperTuning:
+    """Den Hartog optimum spring and damping of a tuned damper on ``node`` for ``mode``.
+
+    The system is reduced to its modal one-degree-of-freedom equivalent at the damper node
+    (modal inertia 1/a², a mass-normalised), valid for well-separated modes.
+    """
+    w, j_eff = _modal(system, node, mode)
+    jd = check_positive(ring_inertia, "ring_inertia", error=ModelError)
+    mu = jd / j_eff
+    f, zeta, mag = den_hartog_optimum(mu)
+    return DamperTuning("tuned (Den Hartog)", mu, w / (2 * np.pi), jd * (f * w) ** 2,
+                        2 * zeta * jd * w, f, zeta, mag)
+
+
+def optimum_viscous_damper(system, node, *, ring_inertia: float, mode: int = 1) -> DamperTuning:
+    """Optimum damping of an untuned viscous (Houdaille) damper on ``node`` for ``mode``."""
+    w, j_eff = _modal(system, node, mode)
+    jd = check_positive(ring_inertia, "ring_inertia", error=ModelError)
+    mu = jd / j_eff
+    zeta, mag = lanchester_optimum(mu)
+    return DamperTuning("viscous (Lanchester/Houdaille)", mu, w / (2 * np.pi), 0.0,
+                        2 * zeta * jd * w, np.nan, zeta, mag)
