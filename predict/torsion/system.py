@@ -144,6 +144,8 @@ class TorsionalSystem:
     limits : object, optional
         Stress limit curves (:class:`predict.torsion.stress.StressLimits`).
     name : str
+    operating : dict, optional
+        Operating data from the model file: ``speed_range_rpm`` (low, high), ``imep`` (Pa).
 
     Examples
     --------
@@ -158,7 +160,7 @@ class TorsionalSystem:
                  edge_stiffness_speed2=None, node_ratio=None, edge_ratio=None,
                  edge_outer_diameter=None, edge_inner_diameter=None, eigen_nodes=None,
                  cylinder_nodes=(), firing_angles_deg=None, cycle=4, engine=None, limits=None,
-                 name=""):
+                 name="", operating=None):
         j = check_finite_array(inertias, "inertias", ndim=1, min_length=1, error=ModelError)
         if np.any(j <= 0):
             i = int(np.flatnonzero(j <= 0)[0])
@@ -235,6 +237,7 @@ class TorsionalSystem:
         self.engine = engine
         self.limits = limits
         self.name = str(name)
+        self.operating = dict(operating or {})
 
     # ----------------------------------------------------------------- properties -------
     @property
@@ -312,7 +315,8 @@ class TorsionalSystem:
                     edge_outer_diameter=self._d_out, edge_inner_diameter=self._d_in,
                     eigen_nodes=self._eigen_nodes, cylinder_nodes=self.cylinder_nodes,
                     firing_angles_deg=self.firing_angles_deg, cycle=self.cycle,
-                    engine=self.engine, limits=self.limits, name=self.name)
+                    engine=self.engine, limits=self.limits, name=self.name,
+                    operating=self.operating)
         unknown = set(changes) - set(args)
         if unknown:
             raise ModelError(f"replace(): unknown argument(s) {sorted(unknown)}")
