@@ -471,6 +471,28 @@ class Rotor:
         return out
 
     @staticmethod
+    def _circularise(values: np.ndarray, full_vecs: np.ndarray, rtol: float = 1e-8):
+        """Within clusters of repeated eigenvalues (isotropic rotor, no gyroscopic split),
+        rotate the basis to the circular forward/backward combinations: eigenvectors of the
+        whirl form Σ 2 Im(u v̄) relative to the displacement norm inside the cluster."""
+        out = full_vecs.astype(complex)
+        i = 0
+        while i < values.size:
+            j = i + 1
+            while j < values.size and abs(values[j] - values[i]) <= rtol * max(abs(values[i]),
+                                                                                1e-300):
+                j += 1
+            if j - i > 1:
+                phi = out[:, i:j]
+                u, v = phi[0::4], phi[1::4]
+                whirl = 1j * (u.conj().T @ v) - 1j * (v.conj().T @ u)
+                norm = u.conj().T @ u + v.conj().T @ v
+                _, rot = scipy.linalg.eigh(whirl, norm)
+                out[:, i:j] = phi @ rot
+            i = j
+        return out
+
+    @staticmethod
     def _whirl(model_full_vecs: np.ndarray):
         u, v = model_full_vecs[0::4], model_full_vecs[1::4]
         num = 2 * np.sum(np.imag(u * np.conj(v)), axis=0)
@@ -500,9 +522,9 @@ class Rotor:
             s, vec = s[keep], vec[:n, keep]
             omega = s.imag
             zeta = -s.real / np.abs(s)
-        order = np.argsort(omega)[:n_modes]
-        vec = self._full(model, scale[:, None] * vec[:, order])
-        return omega[order], zeta[order], vec
+        order = np.argsort(omega)[:n_modes + 1]  # one extra to close a repeated pair
+        vec = self._circularise(omega[order], self._full(model, scale[:, None] * vec[:, order]))
+        return omega[order][:n_modes], zeta[order][:n_modes], vec[:, :n_modes]
 
     def natural_frequencies(self, speed: float = 0.0, *, n_modes: int = 6,
                             error_estimate: bool = True) -> LateralModes:
@@ -614,9 +636,10 @@ class Rotor:
                 keep = (np.isfinite(lam) & (lam.real > 0)
                         & (np.abs(lam.imag) < 1e-8 * np.abs(lam)))
                 om, vec = np.sqrt(lam[keep].real), vec[:, keep]
-            index, labels = self._whirl(self._full(model, scale[:, None] * vec))
             order = np.argsort(om)
-            om, labels = om[order], labels[order]
+            om = om[order]
+            full = self._circularise(om, self._full(model, scale[:, None] * vec[:, order]))
+            labels = self._whirl(full)[1]
             if speed_range_rpm is not None:
                 lo, hi = np.asarray(speed_range_rpm, dtype=float) * np.pi / 30
                 inside = (om >= lo) & (om <= hi)

@@ -1,0 +1,212 @@
+"""Loading a rotor model (``[rotor]`` table) for lateral critical-speed analysis.
+
+File layout (SI units; rpm only in keys that say so)::
+
+    [rotor]
+    name = "two-disk rotor"
+    theory = "timoshenko"          # or "euler-bernoulli"
+    max_element_length = 0.05      # m, fidelity of the shaft mesh
+    rotary_inertia = true
+
+    [rotor.material]               # default for every section
+    youngs_modulus = 2.11e11       # Pa
+    density = 7810.0               # kg/m³
+    poisson_ratio = 0.3            # or shear_modulus (Pa)
+
+    [[rotor.shaft]]                # sections from left to right
+    length = 0.5                   # m
+    outer_diameter = 0.05          # m
+    inner_diameter = 0.0           # m (optional)
+    n_elements = 4                 # optional; a section may have its own [..material]
+
+    [[rotor.disks]]
+    position = 0.5                 # m from the left end
+    mass = 32.6                    # kg, with diametral_inertia / polar_inertia (kg·m²)
+    # or: outer_diameter, width, inner_diameter, density (geometry)
+
+    [[rotor.bearings]]
+    position = 0.0
+    kxx = 1.0e6                    # N/m; rigid = true for an ideal pin, clamp = true to fix slopes
+    kyy = 1.0e6
+    cxx = 0.0                      # N·s/m; also kxy, kyx, cxy, cyx, cyy
+
+    [analysis]                     # optional
+    speed_range_rpm = [0.0, 12000.0]
+    n_speeds = 41
+    orders = [1.0]
+    n_modes = 4
+
+    [[unbalance]]                  # optional: unbalance response
+    position = 0.5                 # m (a disk or node position)
+    magnitude = 1.0e-4             # kg·m
+    angle_deg = 0.0
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from .._toml import Table, load_toml
+from ..errors import ModelError
+from .fe import STEEL, THEORIES, Bearing, Disk, Material, Rotor, ShaftSection
+
+__all__ = ["RotorModel", "load_rotor"]
+
+
+@dataclass(frozen=True)
+class RotorModel:
+    """A rotor with the analysis settings of its model file.
+
+    Attributes
+    ----------
+    rotor : Rotor
+    speed_range_rpm : tuple of float
+    n_speeds : int
+    orders : tuple of float
+    n_modes : int
+    unbalances : tuple of (position m, magnitude kg·m, angle rad)
+    source : str
+    """
+
+    rotor: Rotor
+    speed_range_rpm: tuple
+    n_speeds: int
+    orders: tuple
+    n_modes: int
+    unbalances: tuple
+    source: str
+
+    @property
+    def speeds(self) -> np.ndarray:
+        """Analysis spin speeds, rad/s."""
+        lo, hi = self.speed_range_rpm
+        return np.linspace(lo, hi, self.n_speeds) * math.pi / 30
+
+
+def _bool(t: Table, key: str, default: bool) -> bool:
+    value = t.raw(key, default)
+    if not isinstance(value, bool):
+        t.fail(key, f"= {value!r} must be true or false")
+    return value
+
+
+def _material(t: Table | None, default: Material) -> Material:
+    if t is None or not t.data:
+        return default
+    e = t.positive("youngs_modulus", default.youngs_modulus)
+    rho = t.positive("density", default.density)
+    g = t.positive("shear_modulus", None)
+    nu = t.number("poisson_ratio", None, low=-0.999, high=0.499)
+    t.check_unknown()
+    try:
+        if g is not None:
+            return Material(e, rho, shear_modulus=g)
+        return Material(e, rho, poisson_ratio=default.poisson_ratio if nu is None else nu)
+    except ModelError as exc:
+        t.fail(None, str(exc))
+
+
+def load_rotor(path: str | Path) -> RotorModel:
+    """Read a rotor model TOML file (layout in the module docstring).
+
+    Parameters
+    ----------
+    path : str or Path
+
+    Returns
+    -------
+    RotorModel
+
+    Raises
+    ------
+    ModelError
+        Naming the file, the dotted key and what was expected.
+
+    Examples
+    --------
+    >>> import pathlib
+    >>> p = pathlib.Path(__file__).parents[2] / "sample_data" / "rotors" / "two_disk.toml"
+    >>> model = load_rotor(p)
+    >>> len(model.rotor.disks), model.rotor.theory
+    (2, 'timoshenko')
+    """
+    doc = load_toml(path)
+    r = doc.table("rotor", None)
+    if r is None or not r.data:
+        doc.fail("rotor", "table is missing (required): the file must define [rotor]")
+    material = _material(r.table("material", None), STEEL)
+    sections = []
+    for s in r.tables("shaft"):
+        mat = _material(s.table("material", None), material)
+        try:
+            sections.append(ShaftSection(
+                length=s.positive("length"), outer_diameter=s.positive("outer_diameter"),
+                inner_diameter=s.number("inner_diameter", 0.0, low=0.0), material=mat,
+                n_elements=s.integer("n_elements", None, minimum=1)))
+        except ModelError as exc:
+            s.fail(None, str(exc))
+        s.check_unknown()
+    if not sections:
+        r.fail("shaft", "needs at least one [[rotor.shaft]] section")
+    disks = []
+    for d in r.tables("disks", []):
+        try:
+            if "mass" in d:
+                disks.append(Disk(position=d.number("position", low=0.0), mass=d.positive("mass"),
+                                  diametral_inertia=d.number("diametral_inertia", 0.0, low=0.0),
+                                  polar_inertia=d.number("polar_inertia", 0.0, low=0.0)))
+            else:
+                disks.append(Disk.from_geometry(
+                    position=d.number("position", low=0.0),
+                    outer_diameter=d.positive("outer_diameter"), width=d.positive("width"),
+                    inner_diameter=d.number("inner_diameter", 0.0, low=0.0),
+                    density=d.positive("density", material.density)))
+        except ModelError as exc:
+            d.fail(None, str(exc))
+        d.check_unknown()
+    bearings = []
+    for b in r.tables("bearings", []):
+        rigid = _bool(b, "rigid", False)
+        inf = math.inf
+        kxx = inf if rigid else b.number("kxx", low=0.0)
+        kw = dict(kyy=inf if rigid else b.number("kyy", None, low=0.0),
+                  kxy=b.number("kxy", 0.0), kyx=b.number("kyx", 0.0),
+                  cxx=b.number("cxx", 0.0, low=0.0), cyy=b.number("cyy", None, low=0.0),
+                  cxy=b.number("cxy", 0.0), cyx=b.number("cyx", 0.0),
+                  clamp=_bool(b, "clamp", False))
+        try:
+            bearings.append(Bearing(b.number("position", low=0.0), kxx, **kw))
+        except ModelError as exc:
+            b.fail(None, str(exc))
+        b.check_unknown()
+    try:
+        rotor = Rotor(shaft=sections, disks=disks, bearings=bearings,
+                      theory=r.string("theory", "timoshenko", options=THEORIES),
+                      max_element_length=r.positive("max_element_length", None),
+                      rotary_inertia=_bool(r, "rotary_inertia", True),
+                      name=r.string("name", Path(path).stem))
+    except ModelError as exc:
+        r.fail(None, str(exc))
+    r.check_unknown()
+
+    a = doc.table("analysis", {})
+    rng = a.numbers("speed_range_rpm", [0.0, 10000.0], length=2, low=0.0)
+    if rng[1] <= rng[0]:
+        a.fail("speed_range_rpm", f"= {rng.tolist()} must be increasing")
+    orders = a.numbers("orders", [1.0], low=0.0, strict_low=True)
+    n_speeds = a.integer("n_speeds", 41, minimum=2)
+    n_modes = a.integer("n_modes", 4, minimum=1)
+    a.check_unknown()
+    unbalances = []
+    for u in doc.tables("unbalance", []):
+        unbalances.append((u.number("position", low=0.0), u.positive("magnitude"),
+                           math.radians(u.number("angle_deg", 0.0))))
+        u.check_unknown()
+    doc.check_unknown()
+    return RotorModel(rotor=rotor, speed_range_rpm=(float(rng[0]), float(rng[1])),
+                      n_speeds=n_speeds, orders=tuple(float(o) for o in orders),
+                      n_modes=n_modes, unbalances=tuple(unbalances), source=str(path))
