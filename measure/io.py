@@ -308,7 +308,7 @@ def open(path, *, chunk_seconds: float = 10.0, channels=None) -> xr.Dataset:  # 
         if hasattr(module, "open"):
             ds = module.open(path, chunk_seconds=chunk_seconds, channels=channels)
         else:
-            log.info("%s: %s cannot be read in parts; loading it whole", path.name,
+            log.debug("%s: %s cannot be read in parts; loading it whole", path.name,
                      module.FORMAT)
             ds = module.read(path, channels=channels)
             chunks = {}

@@ -9,7 +9,7 @@ Written layout (read back exactly: floats as shortest round-trip repr)::
     0,0.12,0,157.08,0.0012
     ...
 
-One column per time dim (``<dim> [s]``) followed by the channels on that clock; channels of a
+Floats are written as their shortest round-trip repr. One column per time dim (``<dim> [s]``) followed by the channels on that clock; channels of a
 slower clock or pulse trains end early and the rest of their column is left empty.
 
 Foreign CSV files are accepted too: comment lines starting with ``#`` are skipped; the first
@@ -68,10 +68,10 @@ def write(record: xr.Dataset, path, *, truth=None) -> dict:
         f.write(",".join(_quote(h) for h, _ in columns) + "\n")
         texts = []
         for _, values in columns:
-            if values.dtype == np.float32:
-                txt = np.char.mod("%.9g", values.astype(np.float64))
-            else:
-                txt = np.char.mod("%.17g", values.astype(np.float64))
+            # numpy's float -> str is the shortest repr that round-trips (float32 stays
+            # exact when read as float64 and cast back)
+            txt = values.astype(np.float32 if values.dtype == np.float32 else np.float64
+                                ).astype(str)
             pad = np.full(n_rows - values.size, "", dtype=txt.dtype if txt.size else "<U1")
             texts.append(np.concatenate([txt, pad]) if pad.size else txt)
         block = 100_000
