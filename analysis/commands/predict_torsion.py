@@ -1,0 +1,103 @@
+"""``crankbench predict torsion MODEL.toml``: natural frequencies, mode table, critical speeds,
+resonance amplitudes (energy balance vs exact) and worst vibratory stresses of a shaft line."""
+
+from __future__ import annotations
+
+HELP = "torsional vibration of a shaft line: frequencies, critical speeds, stresses"
+
+
+def configure(parser) -> None:
+    parser.add_argument("model", help="shaft-line TOML ([shaftline] table)")
+    parser.add_argument("--json", action="store_true", help="print JSON instead of tables")
+    parser.add_argument("--speed-range", nargs=2, type=float, metavar=("LOW", "HIGH"),
+                        help="crankshaft speed range, rpm (default: the model's "
+                             "speed_range_rpm)")
+    parser.add_argument("--max-order", type=float, default=12.0,
+                        help="highest excitation order (default 12)")
+    parser.add_argument("--modes", type=int, default=8, help="elastic modes to list (default 8)")
+    parser.add_argument("--imep", type=float, default=None,
+                        help="mean indicated pressure, Pa, for the excitation")
+    parser.add_argument("--speeds", type=int, default=400,
+                        help="number of speeds for the forced response (default 400)")
+    parser.add_argument("--min-vector-sum", type=float, default=0.2,
+                        help="list criticals with relative vector sum >= this (default 0.2)")
+    parser.add_argument("--no-forced", action="store_true",
+                        help="skip forced response, resonance amplitudes and stresses")
+
+
+def run(args) -> int:
+    import numpy as np
+    import pandas as pd
+
+    from analysis._output import print_json, print_table
+    from predict.torsion import from_toml
+    from predict.torsion.resonance import resonance_amplitudes
+    from predict.torsion.stress import check_stress
+
+    system = from_toml(args.model)
+    rng = args.speed_range or system.operating.get("speed_range_rpm")
+    if rng is None:
+        rated = getattr(system.engine, "rated_speed_rpm", None)
+        rng = (0.25 * rated, 1.1 * rated) if rated else None
+    if rng is None:
+        from predict.errors import ConfigError
+
+        raise ConfigError(f"{args.model}: no [shaftline] speed_range_rpm and no engine "
+                          "rated_speed_rpm; give --speed-range LOW HIGH (rpm)")
+    lo, hi = float(rng[0]), float(rng[1])
+    modes = system.mode_shapes()
+    freqs = modes.frequencies_hz
+    elastic = np.flatnonzero(modes.mode_numbers > 0)[: args.modes]
+    rel = modes.relative()
+    mode_table = pd.DataFrame({
+        "mode": modes.mode_numbers[elastic],
+        "frequency_hz": freqs[elastic],
+        "frequency_cpm": freqs[elastic] * 60.0,
+        "max_amplitude_node": [system.node_names[int(np.argmax(np.abs(rel[:, i])))]
+                               for i in elastic],
+    })
+    orders = system.default_orders(args.max_order)
+    crit = system.critical_speeds(orders, (lo, hi))
+    crit_shown = crit[(crit["vector_sum"].isna()) | (crit["vector_sum"] >= args.min_vector_sum)]
+    out = dict(model=str(args.model), name=system.name, nodes=list(system.node_names),
+               eigen_method=modes.method, relative_error_bound=modes.relative_error_bound,
+               speed_range_rpm=[lo, hi], modes=mode_table, critical_speeds=crit_shown)
+    forced_ok = (not args.no_forced and system.engine is not None and system.cylinder_nodes)
+    if forced_ok:
+        res = resonance_amplitudes(system, orders=orders, speed_range_rpm=(lo, hi),
+                                   imep=args.imep or system.operating.get("imep"),
+                                   min_vector_sum=args.min_vector_sum)
+        out["resonances"] = res
+        speeds = np.linspace(max(lo, 1.0), hi, args.speeds)
+        resp = system.forced_response(speeds, orders=orders,
+                                      imep=args.imep or system.operating.get("imep"))
+        frame = resp.to_frame()
+        worst = frame.sort_values("max_stress_mpa", ascending=False).head(5)
+        out["worst_stresses"] = worst
+        if system.limits is not None:
+            chk = check_stress(resp, system.limits)
+            out["limits"] = dict(source=system.limits.source, passed=chk.passed,
+                                 barred_ranges_rpm=chk.barred_ranges_rpm,
+                                 transient_exceeded_rpm=chk.transient_exceeded_rpm)
+    if args.json:
+        print_json(out)
+        return 0
+    print(f"{system.name}: {system.n_nodes} masses, eigen-solver {modes.method} "
+          f"(relative error bound {modes.relative_error_bound:.1e})")
+    print_table(mode_table, title="\nNatural frequencies")
+    print_table(crit_shown, title=f"\nCritical speeds {lo:g}-{hi:g} rpm "
+                                  f"(relative vector sum >= {args.min_vector_sum:g})")
+    if forced_ok:
+        cols = ["mode", "order", "speed_rpm", "vector_sum", "node", "energy_balance_deg",
+                "exact_deg", "method_error", "dynamic_magnifier", "max_stress_mpa", "section"]
+        print_table(out["resonances"][cols], title="\nResonance amplitudes (energy balance vs "
+                                                    "exact damped solve)")
+        print_table(out["worst_stresses"], title="\nWorst superposed stresses")
+        if "limits" in out:
+            lim = out["limits"]
+            barred = ", ".join(f"{a:.0f}-{b:.0f}" for a, b in lim["barred_ranges_rpm"]) or "none"
+            print(f"\nLimits ({lim['source']}): barred speed ranges [rpm]: {barred}; "
+                  f"transient limit {'kept' if lim['passed'] else 'EXCEEDED'}")
+    elif not args.no_forced:
+        print("\n(no engine with cylinders attached: forced response skipped)")
+    return 0
