@@ -425,10 +425,13 @@ def lanchester_shafts(engine, *, order, positions=None, counterweights=()):
     _, PF, QF, PM, QM = _phasors(engine, 1.0, [order], tuple(counterweights), ())
     scale = float(order) ** 2
     ref = engine.reference_position
+    # residuals below round-off of the engine's own unbalances need no shaft
+    tiny = 1e-12 * float(np.sum(engine.reciprocating_mass + engine.rotating_mass)
+                         * engine.crank_radius) * max(1.0, scale)
     out = []
     if positions is None:
         for direction, X in ((1, PF[0]), (-1, QF[0])):
-            if abs(X) == 0.0:
+            if abs(X) <= tiny:
                 continue
             out.append(BalanceShaft(order=order, direction=direction,
                                     mass_radius=float(abs(X) / scale),
@@ -444,7 +447,7 @@ def lanchester_shafts(engine, *, order, positions=None, counterweights=()):
         fb = (-XM + da * X) / (db - da)
         fa = -X - fb
         for f, z in ((fa, za), (fb, zb)):
-            if abs(f) == 0.0:
+            if abs(f) <= tiny:
                 continue
             out.append(BalanceShaft(order=order, direction=direction,
                                     mass_radius=float(abs(f) / scale),
