@@ -205,13 +205,14 @@ def _sturm_counts(order, parent, weight, shifts):
     acc = np.zeros((nv, shifts.size))
     count = np.zeros(shifts.size, int)
     tiny = np.finfo(float).tiny
-    for v in order:
-        piv = -shifts - acc[v]
-        piv = np.where(piv == 0.0, -tiny, piv)
-        count += piv < 0
-        p = parent[v]
-        if p >= 0:
-            acc[p] += weight[v] ** 2 / piv
+    with np.errstate(over="ignore", invalid="ignore"):
+        for v in order:
+            piv = -shifts - acc[v]
+            piv = np.where(piv == 0.0, -tiny, piv)
+            count += piv < 0
+            p = parent[v]
+            if p >= 0:
+                acc[p] += weight[v] ** 2 / piv
     return count
 
 

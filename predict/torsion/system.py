@@ -164,7 +164,7 @@ class TorsionalSystem:
         j = check_finite_array(inertias, "inertias", ndim=1, min_length=1, error=ModelError)
         if np.any(j <= 0):
             i = int(np.flatnonzero(j <= 0)[0])
-            raise ModelError(f"inertias[{i}]={j[i]!r} must be > 0 (kg·m²)")
+            raise ModelError(f"inertias[{i}]={float(j[i])!r} must be > 0 (kg·m²)")
         n = j.size
         e = np.asarray(edges).reshape(-1, 2) if np.size(edges) else np.zeros((0, 2), int)
         e = _as_index_array(e, "edges", n, allow_ground=True)
@@ -178,7 +178,7 @@ class TorsionalSystem:
             raise ModelError(f"stiffnesses has {k.size} values, expected one per edge ({m})")
         if np.any(k < 0):
             i = int(np.flatnonzero(k < 0)[0])
-            raise ModelError(f"stiffnesses[{i}]={k[i]!r} must be >= 0 (N·m/rad)")
+            raise ModelError(f"stiffnesses[{i}]={float(k[i])!r} must be >= 0 (N·m/rad)")
 
         def per(values, name, size, default, low=0.0):
             if values is None:
@@ -723,6 +723,6 @@ def chain(inertias, stiffnesses, *, names=None) -> TorsionalSystem:
                          f"{n - 1} (free-free) or {n} (first inertia grounded)")
     if np.any(k <= 0):
         i = int(np.flatnonzero(k <= 0)[0])
-        raise ModelError(f"stiffnesses[{i}]={k[i]!r} must be > 0 (N·m/rad)")
+        raise ModelError(f"stiffnesses[{i}]={float(k[i])!r} must be > 0 (N·m/rad)")
     return TorsionalSystem(j, edges, k, node_names=names)
 
