@@ -1,0 +1,1071 @@
+"""Resonance identification on order tracks.
+
+A run-up (or run-down) sweeps every engine order through the shaft line's natural frequencies.
+Where order ``k`` meets mode frequency ``f_n`` the order amplitude peaks at the critical speed
+``n_c = 60 f_n / k`` rpm. :func:`find_resonances` finds those peaks in an order track, separates
+them from order amplitude that merely grows with speed, and identifies each one as a single
+degree of freedom (SDOF) mode:
+
+* the **half-power bandwidth** estimate, with the exact SDOF relations for displacement,
+  velocity and acceleration responses (not the small-damping approximation);
+* a **modal (circle) fit** of the complex order track around the peak: the SDOF frequency
+  response plus a complex background, fitted by variable projection; on the Nyquist plane this
+  is the classical circle fit with residual terms (Ewins, *Modal Testing*, 2nd ed., §4.3);
+* the **sweep-rate effect**: a finite sweep lowers and shifts the peak. The loss is estimated by
+  integrating the SDOF envelope equation through the measured sweep at the identified natural
+  frequency and damping, the apparent damping is de-inflated by inverting that simulation, and
+  the critical speed and amplitude are corrected.
+
+The natural frequency follows as ``f_n = n_c k / 60``. Each resonance carries a confidence built
+from its signal-to-noise ratio, the quality of the modal fit and whether both half-power points
+were observed.
+
+Errors: for a noiseless SDOF track sampled at >= 10 points per half-power band, the modal fit is
+exact to the solver tolerance (relative 1e-8); the half-power estimate is exact for an SDOF with
+constant excitation and is biased by O(ζ · d ln F / d ln ω) when the excitation amplitude ``F``
+varies with speed (inertia torques grow as ω²). The sweep correction assumes an SDOF mode and a
+constant sweep rate across the peak; its residual error is below 1 % of the peak for sweep
+parameters η = α/(ζ f_n)² ≤ 1 (α the sweep rate of the excitation frequency in Hz/s).
+"""
+
+from __future__ import annotations
+
+import logging
+from dataclasses import asdict, dataclass, field
+
+import numpy as np
+
+from predict._validate import check_int, check_option, check_positive, check_range
+from predict.errors import AnalysisError
+
+__all__ = ["Resonance", "ResonanceTable", "OrderCurve", "find_resonances",
+           "half_power_damping", "sdof_response", "sweep_peak_loss"]
+
+log = logging.getLogger("crankbench")
+
+#: response quantity -> power p of (iω) in the SDOF response (iω)^p / (k − mω² + icω)
+RESPONSES = {"displacement": 0, "velocity": 1, "acceleration": 2}
+
+_UNIT_RESPONSE = {
+    "rad": "displacement", "m": "displacement", "deg": "displacement",
+    "rad/s": "velocity", "m/s": "velocity",
+    "rad/s^2": "acceleration", "rad/s²": "acceleration", "rad/s**2": "acceleration",
+    "m/s^2": "acceleration", "m/s²": "acceleration", "m/s**2": "acceleration",
+}
+
+
+# ---------------------------------------------------------------------------------------------
+# closed forms
+# ---------------------------------------------------------------------------------------------
+def sdof_response(frequency, *, natural_frequency, damping_ratio, response="displacement"):
+    """Complex SDOF frequency response normalised to unit static (or high-frequency) gain.
+
+    ``H_p(ν) = (iν)^p / (1 − ν² + 2iζν)`` with ``ν = f / f_n`` and ``p`` = 0, 1, 2 for
+    displacement, velocity and acceleration responses to a force of constant amplitude.
+
+    Parameters
+    ----------
+    frequency : array_like
+        Excitation frequency, Hz (any unit works if ``natural_frequency`` uses the same; rpm of
+        one order is fine).
+    natural_frequency : float
+        Undamped natural frequency ``f_n``, same unit as ``frequency``.
+    damping_ratio : float
+        Viscous damping ratio ζ (dimensionless), 0 < ζ < 1.
+    response : {'displacement', 'velocity', 'acceleration'}
+        Measured quantity.
+
+    Returns
+    -------
+    ndarray of complex
+        Dimensionless response.
+
+    References
+    ----------
+    Ewins, D. J., *Modal Testing: Theory, Practice and Application*, 2nd ed., §2.2 (receptance,
+    mobility and accelerance of an SDOF system).
+
+    Examples
+    --------
+    >>> h = sdof_response([10.0], natural_frequency=10.0, damping_ratio=0.05)
+    >>> print(f"{abs(h[0]):.3f}")
+    10.000
+    """
+    check_option(response, "response", RESPONSES)
+    fn = check_positive(natural_frequency, "natural_frequency", error=AnalysisError)
+    zeta = check_range(damping_ratio, "damping_ratio", 0.0, 1.0, inclusive=(False, False),
+                       error=AnalysisError)
+    nu = np.asarray(frequency, dtype=float) / fn
+    return (1j * nu) ** RESPONSES[response] / (1.0 - nu**2 + 2j * zeta * nu)
+
+
+def half_power_damping(f_low, f_high, *, response="displacement"):
+    """Damping ratio and natural frequency from the two half-power points of an SDOF peak.
+
+    Exact for an SDOF system under a force of constant amplitude (no small-damping
+    approximation): with ``q = (f₂² − f₁²)/(f₂² + f₁²)`` the displacement response gives
+    ``ζ² = (1 − 1/√(1 + q²))/2`` and ``f_n² = (f₁² + f₂²)/(2(1 − 2ζ²))``; the velocity response
+    gives ``ζ = (f₂ − f₁)/(2√(f₁f₂))``, ``f_n = √(f₁f₂)``; the acceleration response is the
+    displacement case in ``1/f``. The familiar ``ζ ≈ (f₂ − f₁)/(2f_n)`` is their first-order
+    form.
+
+    Parameters
+    ----------
+    f_low, f_high : float
+        Frequencies (Hz, or rpm of one order) below and above the peak where the response is
+        ``1/√2`` of its peak.
+    response : {'displacement', 'velocity', 'acceleration'}
+
+    Returns
+    -------
+    damping_ratio : float
+    natural_frequency : float
+        Same unit as the inputs.
+
+    References
+    ----------
+    Ewins, *Modal Testing*, 2nd ed., §4.3.2 (peak-amplitude / half-power method); derivation
+    from the SDOF receptance solved for ``|H| = |H|_max/√2``.
+
+    Examples
+    --------
+    >>> zeta, fn = half_power_damping(9.5, 10.5, response="velocity")
+    >>> print(f"{zeta:.4f} {fn:.4f}")
+    0.0501 9.9875
+    """
+    check_option(response, "response", RESPONSES)
+    f1 = check_positive(f_low, "f_low", error=AnalysisError)
+    f2 = check_positive(f_high, "f_high", error=AnalysisError)
+    if f2 <= f1:
+        raise AnalysisError(f"f_high={f_high!r} must exceed f_low={f_low!r}")
+    p = RESPONSES[response]
+    if p == 1:
+        fn = np.sqrt(f1 * f2)
+        return float((f2 - f1) / (2.0 * fn)), float(fn)
+    if p == 2:  # accelerance at ν equals receptance at 1/ν
+        f1, f2 = 1.0 / f2, 1.0 / f1
+    q = (f2**2 - f1**2) / (f2**2 + f1**2)
+    zeta = np.sqrt(0.5 * (1.0 - 1.0 / np.sqrt(1.0 + q**2)))
+    fn = np.sqrt((f1**2 + f2**2) / (2.0 * (1.0 - 2.0 * zeta**2)))
+    if p == 2:
+        fn = 1.0 / fn
+    return float(zeta), float(fn)
+
+
+# ---------------------------------------------------------------------------------------------
+# sweep-rate effect
+# ---------------------------------------------------------------------------------------------
+def _swept_envelope(zeta, s, p, *, lead=None, lag=None):
+    """Response envelope of an SDOF through a linear sweep, in normalised time τ = ω_n t.
+
+    ``z'' + 2ζz' + z = exp(iφ)`` with ``φ' = ν(τ) = ν₀ + sτ``. By partial fractions
+    ``z = (q₁ − q₂)/(λ₁ − λ₂)`` with ``q_j' = λ_j q_j + exp(iφ)`` and poles
+    ``λ₁,₂ = −ζ ± i√(1 − ζ²)``. Writing ``q_j = u_j exp(iφ)``: ``u_j' = (λ_j − iν)u_j + 1``.
+    The resonant pole's ``u₁`` is stepped exactly for ν frozen at each step's midpoint
+    (exponential integrator, linear recurrence evaluated by chunked cumulative products); the
+    non-resonant ``u₂`` follows quasi-statically (relative error O(sζ)).
+    Returns (ν, complex response envelope).
+    """
+    direction = 1.0 if s > 0 else -1.0
+    a = abs(s)
+    lead = max(8.0 * zeta, 0.02) if lead is None else lead
+    # the swept peak trails resonance by ~ a/ζ (slow sweeps) or ~ √a (fast sweeps)
+    lag = max(8.0 * zeta, 0.02) + 10.0 * np.sqrt(a) if lag is None else lag
+    nu0 = max(1.0 - direction * lead, 0.05)
+    nu1 = max(1.0 + direction * lag, 0.05)
+    tau_end = abs(nu1 - nu0) / a
+    wd = np.sqrt(1.0 - zeta**2)
+    lam1, lam2 = complex(-zeta, wd), complex(-zeta, -wd)
+    # frozen-ν exponential steps: exact rotation and decay, error O(s h²) per step; the ν
+    # resolution s·h ≤ ζ/50 resolves the peak (checked against h → h/100: < 2e-6 relative)
+    h = min(np.sqrt(2e-3 / a), 0.02 * max(zeta, np.sqrt(a)) / a)
+    n = int(np.clip(np.ceil(tau_end / h), 200, 400_000))
+    h = tau_end / n
+    tau = np.arange(n + 1) * h
+    nu = nu0 + s * tau
+    mu = lam1 - 1j * (nu0 + s * (tau[:-1] + 0.5 * h))
+    step_a = np.exp(mu * h)
+    step_b = np.expm1(mu * h) / mu
+    mu0 = lam1 - 1j * nu0
+    u1 = np.empty(n + 1, dtype=complex)
+    u1[0] = -1.0 / mu0 - 1j * s / mu0**3  # quasi-static start with its first sweep correction
+    chunk = 256
+    for k0 in range(0, n, chunk):  # u_{k+1} = A_k u_k + B_k, |cumprod(A)| stays O(1) per chunk
+        A = step_a[k0:k0 + chunk]
+        B = step_b[k0:k0 + chunk]
+        P = np.cumprod(A)
+        u1[k0 + 1:k0 + 1 + A.size] = P * (u1[k0] + np.cumsum(B / P))
+    u2 = 1.0 / (1j * nu - lam2)
+    w = (u1 - u2) / (lam1 - lam2)
+    v = (lam1 * u1 - lam2 * u2) / (lam1 - lam2)
+    if p == 0:
+        env = w
+    elif p == 1:
+        env = v
+    else:  # z'' = e^{iφ} − 2ζz' − z
+        env = 1.0 - 2.0 * zeta * v - w
+    return nu, env
+
+
+def _peak_and_half_power(x, y):
+    """Parabolic peak (x_pk, y_pk) and the half-power crossings (x1, x2), NaN where absent."""
+    i = int(np.argmax(y))
+    x_pk, y_pk = _parabolic(x, y, i)
+    level = y_pk / np.sqrt(2.0)
+    x1 = _crossing(x, y, i, level, -1)
+    x2 = _crossing(x, y, i, level, +1)
+    return x_pk, y_pk, x1, x2
+
+
+def sweep_peak_loss(*, natural_frequency, damping_ratio, sweep_rate, response="displacement"):
+    """Peak loss, peak shift and apparent damping of an SDOF mode swept at a constant rate.
+
+    The SDOF response to ``exp(iφ(t))`` is integrated through the resonance from a
+    quasi-static start with an exponential integrator on the resonant pole (exact for a
+    frozen frequency within each step); the envelope is read
+    against the instantaneous excitation frequency, as an order track reads amplitude
+    against rpm. Cost: a few thousand vectorised steps, about 1 ms.
+
+    Parameters
+    ----------
+    natural_frequency : float
+        f_n, Hz.
+    damping_ratio : float
+        ζ of the mode (true, not apparent).
+    sweep_rate : float
+        Rate of change of the excitation frequency α, Hz/s; negative for a run-down. For order
+        ``k`` of a run-up at ``R`` rpm/s, ``α = k R / 60``.
+    response : {'displacement', 'velocity', 'acceleration'}
+
+    Returns
+    -------
+    dict
+        ``loss`` (fraction of the steady-state peak lost, ≥ 0 for slow sweeps), ``shift``
+        (f_peak,swept − f_peak,steady in Hz, same sign as the sweep), ``apparent_damping``
+        (half-power damping ratio read off the swept envelope), ``eta`` (α/(ζ f_n)²).
+
+    Notes
+    -----
+    The loss depends only on ζ and η; below η = 0.02 it is under 1e-4 and the integration is
+    skipped (returns zeros). Integration error < 1e-5 relative (checked against halved steps
+    and an adaptive Runge–Kutta solution in the tests).
+
+    References
+    ----------
+    Lewis, F. M., "Vibration during acceleration through a critical speed", Trans. ASME 54
+    (1932) 253–261; Reed & Kabe, "Peak response of single-degree-of-freedom systems to
+    swept-frequency excitation", The Mathematica Journal 21 (2019).
+
+    Examples
+    --------
+    >>> r = sweep_peak_loss(natural_frequency=10.0, damping_ratio=0.02, sweep_rate=0.2)
+    >>> print(f"eta={r['eta']:.2f} loss={r['loss']:.3f}")
+    eta=5.00 loss=0.082
+    """
+    check_option(response, "response", RESPONSES)
+    fn = check_positive(natural_frequency, "natural_frequency", error=AnalysisError)
+    zeta = check_range(damping_ratio, "damping_ratio", 0.0, 0.5, inclusive=(False, True),
+                       error=AnalysisError)
+    alpha = check_range(sweep_rate, "sweep_rate", error=AnalysisError)
+    eta = abs(alpha) / (zeta * fn) ** 2
+    if eta < 0.02:
+        return {"loss": 0.0, "shift": 0.0, "apparent_damping": zeta, "fit_damping": zeta,
+                "fit_shift": 0.0, "eta": eta}
+    return _sweep_effect(zeta, alpha / (2.0 * np.pi * fn**2), RESPONSES[response], fn,
+                         complex_data=True) | {"eta": float(eta)}
+
+
+def _sweep_effect(zeta, s, p, fn, *, complex_data):
+    """Loss, peak shift, half-power and modal-fit damping/shift read off a swept envelope."""
+    nu, env = _swept_envelope(zeta, s, p)
+    order = np.argsort(nu)
+    nu, env = nu[order], env[order]
+    mag = np.abs(env)
+    nu_pk, env_pk, nu1, nu2 = _peak_and_half_power(nu, mag)
+    # steady-state peak of the same response, on a fine grid around ν = 1
+    grid = np.linspace(max(1.0 - 6 * zeta, 0.01), 1.0 + 6 * zeta, 4001)
+    steady = np.abs((1j * grid) ** p / (1.0 - grid**2 + 2j * zeta * grid))
+    g_pk, s_pk, _, _ = _peak_and_half_power(grid, steady)
+    apparent = fit_zeta = fit_shift = np.nan
+    if np.isfinite(nu1) and np.isfinite(nu2) and nu2 > nu1 > 0:
+        apparent, nu_hp = half_power_damping(nu1, nu2, response=list(RESPONSES)[p])
+        half = 0.5 * (nu2 - nu1)
+        win = (nu >= nu_pk - 3 * half) & (nu <= nu_pk + 3 * half)
+        sel = np.flatnonzero(win)
+        if sel.size > 400:  # the fit needs shape, not every integration step
+            sel = sel[np.linspace(0, sel.size - 1, 400).astype(int)]
+        if sel.size >= 7:
+            data = env[sel] if complex_data else mag[sel]
+            fit = _modal_fit(nu[sel], data, nu_hp, apparent, p, complex_data)
+            if fit is not None:
+                fit_zeta, fit_shift = fit[1], (fit[0] - 1.0) * fn
+    return {"loss": float(1.0 - env_pk / s_pk), "shift": float((nu_pk - g_pk) * fn),
+            "apparent_damping": float(apparent), "fit_damping": float(fit_zeta),
+            "fit_shift": float(fit_shift)}
+
+
+def _ascending(x, y):
+    order = np.argsort(x)
+    return x[order], y[order]
+
+
+def _deinflate(zeta_app, fn, alpha, p, key, complex_data):
+    """True ζ whose swept estimate ``key`` ('fit_damping' or 'apparent_damping') equals the
+    apparent ``zeta_app``; returns (ζ, sweep effect dict) or None when no ζ explains it."""
+    from scipy.optimize import brentq
+
+    s = alpha / (2.0 * np.pi * fn**2)
+    cache = {}
+
+    def effect(z):
+        if z not in cache:
+            cache[z] = _sweep_effect(z, s, p, fn, complex_data=complex_data)
+        return cache[z]
+
+    def gap(z):
+        value = effect(z)[key]
+        return (value if np.isfinite(value) else np.inf) - zeta_app
+
+    # the half-power damping is inflated by a sweep; the modal-fit damping barely moves and
+    # may fall slightly below the true value: bracket on both sides
+    lo, hi = max(0.2 * zeta_app, 1e-3), min(3.0 * zeta_app, 0.5)
+    if hi <= lo:
+        return None
+    g_lo, g_hi = gap(lo), gap(hi)
+    if not (np.isfinite(g_lo) and g_lo < 0 < g_hi):
+        return None
+    z = float(brentq(gap, lo, hi, xtol=1e-5 * zeta_app, rtol=1e-6))
+    return z, effect(z)
+
+
+# ---------------------------------------------------------------------------------------------
+# helpers on sampled curves
+# ---------------------------------------------------------------------------------------------
+def _parabolic(x, y, i):
+    """Vertex of the parabola through the samples i-1, i, i+1 (falls back to the sample)."""
+    if i <= 0 or i >= len(y) - 1:
+        return float(x[i]), float(y[i])
+    x0, x1, x2 = x[i - 1], x[i], x[i + 1]
+    y0, y1, y2 = y[i - 1], y[i], y[i + 1]
+    denom = (x0 - x1) * (x0 - x2) * (x1 - x2)
+    if denom == 0:
+        return float(x1), float(y1)
+    a = (x2 * (y1 - y0) + x1 * (y0 - y2) + x0 * (y2 - y1)) / denom
+    b = (x2**2 * (y0 - y1) + x1**2 * (y2 - y0) + x0**2 * (y1 - y2)) / denom
+    if a >= 0:
+        return float(x1), float(y1)
+    xv = -b / (2 * a)
+    if not (x0 <= xv <= x2):
+        return float(x1), float(y1)
+    c = y1 - a * x1**2 - b * x1
+    return float(xv), float(a * xv**2 + b * xv + c)
+
+
+def _crossing(x, y, i, level, step):
+    """First crossing of ``level`` walking from index i in direction ``step`` (linear interp)."""
+    j = i
+    while 0 <= j + step < len(y):
+        if y[j + step] <= level:
+            xa, xb, ya, yb = x[j], x[j + step], y[j], y[j + step]
+            if ya == yb:
+                return float(xb)
+            return float(xa + (level - ya) * (xb - xa) / (yb - ya))
+        j += step
+    return float("nan")
+
+
+def _split_sweeps(rpm, hysteresis):
+    """Indices splitting ``rpm`` into monotonic sweeps (zig-zag with ``hysteresis`` rpm)."""
+    n = len(rpm)
+    breaks = [0]
+    trend, i_ext = 0, 0
+    for i in range(1, n):
+        r = rpm[i]
+        if trend == 0:
+            if r - rpm[0] > hysteresis:
+                trend, i_ext = 1, i
+            elif rpm[0] - r > hysteresis:
+                trend, i_ext = -1, i
+        elif trend == 1:
+            if r >= rpm[i_ext]:
+                i_ext = i
+            elif rpm[i_ext] - r > hysteresis:
+                breaks.append(i_ext)
+                trend, i_ext = -1, i
+        else:
+            if r <= rpm[i_ext]:
+                i_ext = i
+            elif r - rpm[i_ext] > hysteresis:
+                breaks.append(i_ext)
+                trend, i_ext = 1, i
+    breaks.append(n)
+    return [(breaks[k], breaks[k + 1]) for k in range(len(breaks) - 1)]
+
+
+def _bin(rpm, values, n_bins):
+    """Average ``values`` (real or complex) in ``n_bins`` equal rpm bins; empty bins dropped."""
+    edges = np.linspace(rpm.min(), rpm.max(), n_bins + 1)
+    idx = np.clip(np.searchsorted(edges, rpm, side="right") - 1, 0, n_bins - 1)
+    count = np.bincount(idx, minlength=n_bins)
+    keep = count > 0
+    centre = np.bincount(idx, weights=rpm, minlength=n_bins)[keep] / count[keep]
+    out = []
+    for v in values:
+        if v is None:
+            out.append(None)
+        elif np.iscomplexobj(v):
+            re = np.bincount(idx, weights=v.real, minlength=n_bins)[keep]
+            im = np.bincount(idx, weights=v.imag, minlength=n_bins)[keep]
+            out.append((re + 1j * im) / count[keep])
+        else:
+            out.append(np.bincount(idx, weights=v, minlength=n_bins)[keep] / count[keep])
+    return centre, out
+
+
+def _baseline(x, y, degree, iterations=200):
+    """Smooth lower envelope by iterative polynomial peak stripping ('modpoly').
+
+    Lieber, C. A. & Mahadevan-Jansen, A., "Automated method for subtraction of fluorescence
+    from biological Raman spectra", Appl. Spectrosc. 57 (2003) 1363–1367.
+    """
+    from numpy.polynomial import polynomial as P
+
+    t = (x - x.min()) / max(np.ptp(x), 1e-300) * 2.0 - 1.0
+    work = y.copy()
+    scale = max(np.max(np.abs(y)), 1e-300)
+    fit = y
+    for _ in range(iterations):
+        coef = P.polyfit(t, work, degree)
+        fit = P.polyval(t, coef)
+        new = np.minimum(work, fit)
+        if np.max(np.abs(new - work)) < 1e-9 * scale:
+            break
+        work = new
+    return fit
+
+
+def _robust_noise(r):
+    """Noise standard deviation from the MAD of first differences (robust to smooth peaks)."""
+    d = np.diff(r)
+    if d.size < 3:
+        return 0.0
+    return float(1.4826 * np.median(np.abs(d - np.median(d))) / np.sqrt(2.0))
+
+
+def _modal_fit(x, c, x0_fn, x0_zeta, p, complex_data):
+    """Variable-projection SDOF fit: c ≈ R H_p(x; fn, ζ) + B0 + B1 (x − x̄)/x̄.
+
+    Returns (fn, ζ, R, r2, |c − background|) or None when the fit fails.
+    """
+    from scipy.optimize import least_squares
+
+    xm = float(np.mean(x))
+    lin = (x - xm) / xm
+
+    def design(theta):
+        fn = np.exp(theta[0])
+        zeta = np.exp(theta[1])
+        nu = x / fn
+        h = (1j * nu) ** p / (1.0 - nu**2 + 2j * zeta * nu)
+        if not complex_data:
+            h = np.abs(h)
+        return np.column_stack([h, np.ones_like(x), lin])
+
+    def solve(theta):
+        a = design(theta)
+        coef, *_ = np.linalg.lstsq(a, c, rcond=None)
+        return coef, c - a @ coef
+
+    def fun(theta):
+        _, res = solve(theta)
+        return np.concatenate([res.real, res.imag]) if complex_data else res
+
+    theta0 = np.array([np.log(x0_fn), np.log(max(x0_zeta, 1e-4))])
+    try:
+        sol = least_squares(fun, theta0, method="lm", xtol=1e-12, ftol=1e-12, max_nfev=400)
+    except (ValueError, np.linalg.LinAlgError):
+        return None
+    if not np.all(np.isfinite(sol.x)):
+        return None
+    coef, res = solve(sol.x)
+    total = np.sum(np.abs(c - np.mean(c)) ** 2)
+    r2 = 1.0 - np.sum(np.abs(res) ** 2) / total if total > 0 else 0.0
+
+    # the data with the fitted background removed: the resonant part alone
+    clean = np.abs(c - coef[1] - coef[2] * lin)
+    return float(np.exp(sol.x[0])), float(np.exp(sol.x[1])), coef[0], float(r2), clean
+
+
+def _swept_fit(x, c, order, rate, fn0, zeta0, p, complex_data):
+    """SDOF fit that models the sweep: c ≈ R E(x; fn, ζ, sweep) + B0 + B1 (x − x̄)/x̄.
+
+    ``E`` is the swept envelope of :func:`_swept_envelope` read at the data's instantaneous
+    speeds; ``x`` and ``fn`` in rpm of this order, ``rate`` in rpm/s. Variable projection as in
+    :func:`_modal_fit`. Returns (fn, ζ, r2, steady-state peak amplitude) or None.
+    """
+    from scipy.optimize import least_squares
+
+    xm = float(np.mean(x))
+    lin = (x - xm) / xm
+    up = rate > 0
+
+    def envelope(theta):
+        fn = np.exp(theta[0])
+        zeta = np.exp(theta[1])
+        fn_hz = fn * order / 60.0
+        s = (order * rate / 60.0) / (2.0 * np.pi * fn_hz**2)
+        below = max(1.0 - x.min() / fn, 0.0) + 2.0 * zeta
+        above = max(x.max() / fn - 1.0, 0.0) + 2.0 * zeta
+        lead, lag = (below, above) if up else (above, below)
+        lead = max(lead, 8.0 * zeta, 0.02)
+        lag = max(lag, 8.0 * zeta, 0.02)
+        nu, env = _swept_envelope(zeta, s, p, lead=lead, lag=lag)
+        k = np.argsort(nu)
+        nu, env = nu[k], env[k]
+        xi = x / fn
+        e = np.interp(xi, nu, env.real) + 1j * np.interp(xi, nu, env.imag)
+        return e if complex_data else np.abs(e)
+
+    def solve(theta):
+        a = np.column_stack([envelope(theta), np.ones_like(x), lin])
+        coef, *_ = np.linalg.lstsq(a, c, rcond=None)
+        return coef, c - a @ coef
+
+    def fun(theta):
+        _, res = solve(theta)
+        return np.concatenate([res.real, res.imag]) if complex_data else res
+
+    theta0 = np.array([np.log(fn0), np.log(max(zeta0, 1e-3))])
+    try:
+        # the simulation's step count changes with ζ: difference over a resolvable step
+        sol = least_squares(fun, theta0, method="lm", diff_step=1e-4, xtol=1e-10, ftol=1e-12,
+                            max_nfev=200)
+    except (ValueError, np.linalg.LinAlgError, FloatingPointError):
+        return None
+    if not np.all(np.isfinite(sol.x)):
+        return None
+    coef, res = solve(sol.x)
+    total = np.sum(np.abs(c - np.mean(c)) ** 2)
+    r2 = 1.0 - np.sum(np.abs(res) ** 2) / total if total > 0 else 0.0
+    fn, zeta = float(np.exp(sol.x[0])), float(np.exp(sol.x[1]))
+    # the steady-state order amplitude the fitted model predicts: same R and background, the
+    # steady SDOF response in place of the swept envelope
+    xg = np.linspace(x.min(), x.max(), 4001)
+    nu = xg / fn
+    h = (1j * nu) ** p / (1.0 - nu**2 + 2j * zeta * nu)
+    steady = coef[0] * (h if complex_data else np.abs(h)) + coef[1] + coef[2] * (xg - xm) / xm
+    return fn, zeta, float(r2), float(np.max(np.abs(steady)))
+
+
+# ---------------------------------------------------------------------------------------------
+# results
+# ---------------------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class Resonance:
+    """One identified resonance (a peak of one order in one sweep).
+
+    Speeds in rpm, frequencies in Hz, amplitudes in the track's units and amplitude convention.
+
+    Attributes
+    ----------
+    order : float
+    speed_rpm : float
+        Critical speed: the natural frequency × 60 / order, sweep-corrected where possible.
+    frequency_hz : float
+        Natural frequency ``speed_rpm × order / 60``.
+    damping_ratio : float
+        Best estimate: modal fit (de-inflated for the sweep when corrected), else half-power.
+    amplitude : float
+        Measured peak order amplitude (raw track, parabolic peak).
+    amplitude_corrected : float
+        ``amplitude`` with the sweep peak loss restored (steady-state equivalent).
+    resonant_amplitude : float
+        Height of the peak above the smooth baseline (speed-growth part removed).
+    baseline_amplitude : float
+        Smooth baseline at the peak.
+    peak_speed_rpm : float
+        Where the measured amplitude peaks.
+    speed_rpm_half_power, damping_ratio_half_power : float
+        Half-power estimates (exact SDOF relations).
+    speed_rpm_fit, damping_ratio_fit, fit_r2 : float
+        Modal (circle) fit of the complex track; NaN when the fit failed.
+    half_power_complete : bool
+        Both half-power points observed.
+    snr : float
+        Resonant amplitude / noise standard deviation.
+    confidence : float
+        0..1: fit quality (R² of the modal fit; 0.25 when no SDOF shape could be fitted) ×
+        SNR factor (1 − exp(−SNR/10)) × (1 if both half-power points were seen else 0.5).
+    sweep, direction : int, str
+        Which monotonic sweep of the record ('up' or 'down').
+    sweep_rate_rpm_per_s : float
+        Local speed sweep rate at the peak (NaN without a time axis).
+    sweep_eta : float
+        α/(ζ f_n)²: the dimensionless sweep parameter.
+    sweep_peak_loss : float
+        Estimated fraction of the steady-state peak lost to the sweep.
+    sweep_shift_rpm : float
+        Estimated shift of the peak by the sweep, rpm.
+    sweep_corrected : bool
+    method : str
+    """
+
+    order: float
+    speed_rpm: float
+    frequency_hz: float
+    damping_ratio: float
+    amplitude: float
+    amplitude_corrected: float
+    resonant_amplitude: float
+    baseline_amplitude: float
+    peak_speed_rpm: float
+    speed_rpm_half_power: float
+    damping_ratio_half_power: float
+    speed_rpm_fit: float
+    damping_ratio_fit: float
+    fit_r2: float
+    half_power_complete: bool
+    snr: float
+    confidence: float
+    sweep: int
+    direction: str
+    sweep_rate_rpm_per_s: float
+    sweep_eta: float
+    sweep_peak_loss: float
+    sweep_shift_rpm: float
+    sweep_corrected: bool
+    method: str
+
+
+@dataclass(frozen=True)
+class OrderCurve:
+    """One order in one sweep as analysed: binned amplitude and its smooth baseline vs rpm."""
+
+    order: float
+    sweep: int
+    direction: str
+    speed_rpm: np.ndarray
+    amplitude: np.ndarray
+    baseline: np.ndarray
+
+
+@dataclass(frozen=True)
+class ResonanceTable:
+    """Resonances found in an order track, with the curves they were found on.
+
+    Attributes
+    ----------
+    resonances : tuple of Resonance
+        Sorted by order, then speed.
+    curves : tuple of OrderCurve
+    units : str
+        Amplitude units of the track.
+    amplitude_convention : str
+        'peak' | 'rms' | 'peak-to-peak', from the track.
+    settings : dict
+        Parameters used (response, thresholds, baseline degree...).
+    """
+
+    resonances: tuple
+    curves: tuple = ()
+    units: str = ""
+    amplitude_convention: str = "peak"
+    settings: dict = field(default_factory=dict)
+
+    def __len__(self):
+        return len(self.resonances)
+
+    def __iter__(self):
+        return iter(self.resonances)
+
+    def to_frame(self):
+        """One row per resonance (pandas DataFrame); speeds rpm, frequencies Hz."""
+        import pandas as pd
+
+        cols = list(Resonance.__dataclass_fields__)
+        frame = pd.DataFrame([asdict(r) for r in self.resonances], columns=cols)
+        frame.attrs.update(units=self.units, amplitude_convention=self.amplitude_convention)
+        return frame
+
+    def plot(self, ax=None):
+        """Order amplitude against rpm with baselines and the resonances marked; returns figure."""
+        import matplotlib.pyplot as plt
+
+        if ax is None:
+            fig, ax = plt.subplots(figsize=(8, 4.5))
+        else:
+            fig = ax.figure
+        colours = {}
+        for c in self.curves:
+            line, = ax.plot(c.speed_rpm, c.amplitude, lw=1.0,
+                            label=f"order {c.order:g}" if c.order not in colours else None,
+                            color=colours.get(c.order))
+            colours.setdefault(c.order, line.get_color())
+            ax.plot(c.speed_rpm, c.baseline, lw=0.8, ls=":", color=colours[c.order])
+        for r in self.resonances:
+            ax.plot(r.peak_speed_rpm, r.amplitude, "v", color=colours.get(r.order, "k"), ms=7)
+            ax.annotate(f"{r.frequency_hz:.2f} Hz", (r.peak_speed_rpm, r.amplitude),
+                        textcoords="offset points", xytext=(0, 6), ha="center", fontsize=7)
+        ax.set_xlabel("speed (rpm)")
+        ax.set_ylabel(f"order amplitude ({self.amplitude_convention}, {self.units})".replace(", )", ")"))
+        if self.curves:
+            ax.legend(fontsize=7, ncol=2)
+        ax.grid(alpha=0.3)
+        return fig
+
+
+# ---------------------------------------------------------------------------------------------
+# the finder
+# ---------------------------------------------------------------------------------------------
+def _track_arrays(track, order):
+    """(rpm, time or None, amplitude, complex or None) for one order of the track."""
+    sub = track.sel(order=order)
+    amp = np.asarray(sub["amplitude"].values, dtype=float)
+    dim = sub["amplitude"].dims[0] if sub["amplitude"].ndim == 1 else None
+    if dim is None:
+        raise AnalysisError(f"track amplitude for order {order:g} must be 1-D along time or "
+                            f"rpm, got dims {sub['amplitude'].dims}")
+    if "rpm" in sub.coords:
+        rpm = np.asarray(sub["rpm"].values, dtype=float)
+    elif "speed_rpm" in sub.coords:
+        rpm = np.asarray(sub["speed_rpm"].values, dtype=float)
+    else:
+        raise AnalysisError("track has no 'rpm' coordinate; expected an order track from "
+                            "analysis.order_track (coordinate 'rpm' along 'time')")
+    time = np.asarray(sub["time"].values, dtype=float) if "time" in sub.coords else None
+    comp = None
+    if "phase" in sub:
+        ph = np.asarray(sub["phase"].values, dtype=float)
+        units = str(track["phase"].attrs.get("units", "rad")).lower()
+        if units.startswith("deg"):
+            ph = np.deg2rad(ph)
+        comp = amp * np.exp(1j * ph)
+    ok = np.isfinite(rpm) & np.isfinite(amp)
+    if comp is not None:
+        ok &= np.isfinite(comp)
+    if time is not None:
+        ok &= np.isfinite(time)
+    return (rpm[ok], None if time is None else time[ok], amp[ok],
+            None if comp is None else comp[ok])
+
+
+def find_resonances(track, *, orders=None, response=None, min_snr=5.0, min_prominence=0.05,
+                    max_damping=0.2, min_confidence=0.3, baseline_degree=3,
+                    max_points=3000, sweep_correction=True, sweep_hysteresis=0.02):
+    """Find and identify resonances in an order track.
+
+    Parameters
+    ----------
+    track : xarray.Dataset
+        Order track as returned by :func:`analysis.order_track`: ``amplitude`` (and optionally
+        ``phase``, rad) over (``order``, ``time``) with an ``rpm`` coordinate along ``time``.
+        A track over (``order``, ``rpm``) is also accepted (no sweep-rate correction then).
+    orders : sequence of float, optional
+        Orders to search (default: all in the track).
+    response : {'displacement', 'velocity', 'acceleration'}, optional
+        Measured quantity; default inferred from ``amplitude.attrs['units']`` (rad, m →
+        displacement; rad/s, m/s → velocity; m/s² → acceleration).
+    min_snr : float
+        Minimum resonant amplitude / noise standard deviation (robust MAD of first
+        differences).
+    min_prominence : float
+        Minimum height of the peak above its surroundings as a fraction of the peak value
+        (dimensionless): rejects ripples on a large smooth track.
+    max_damping : float
+        Peaks wider than this damping ratio are treated as growth with speed, not resonance.
+    min_confidence : float
+        Resonances below this confidence (0..1) are dropped.
+    baseline_degree : int
+        Degree of the polynomial baseline (in rpm) that models order amplitude growing with
+        speed; it is fitted as a lower envelope (peak stripping) and removed before peaks are
+        sought.
+    max_points : int
+        Each sweep is averaged into at most this many rpm bins (resolution knob).
+    sweep_correction : bool
+        Correct critical speed, amplitude and damping for the finite sweep rate (needs a
+        ``time`` axis).
+    sweep_hysteresis : float
+        Fraction of the total speed span that a reversal must exceed to start a new sweep.
+
+    Returns
+    -------
+    ResonanceTable
+        ``.to_frame()`` lists order, critical ``speed_rpm``, natural ``frequency_hz``,
+        ``damping_ratio`` (fit and half-power), ``amplitude`` (and sweep-corrected), the
+        sweep rate, its estimated peak loss and a confidence per resonance.
+
+    Raises
+    ------
+    AnalysisError
+        Track without an ``order`` dimension, ``amplitude`` variable or rpm coordinate.
+
+    Notes
+    -----
+    Per order and monotonic sweep: bin in rpm, fit the baseline, find peaks of the residual
+    (scipy.signal.find_peaks with SNR and prominence thresholds; a smaller peak within four
+    half-power widths of a larger one in the same sweep is a sweep ripple and dropped),
+    then estimate half-power and modal-fit parameters in a window of ±3 half-power widths.
+    Cost: O(N) per order plus a few ms per resonance for the fit and sweep correction.
+
+    References
+    ----------
+    Ewins, *Modal Testing*, 2nd ed., §4.3 (SDOF modal analysis: peak amplitude and circle
+    fit); Lewis (1932), Trans. ASME 54, 253–261 (passage through resonance at a finite rate);
+    internal-combustion engine dynamics (1958), chapter on torsional vibration: critical speed
+    n_c = 60 f_n / k and the resonance curve (seeds/001).
+
+    Examples
+    --------
+    >>> import numpy as np, xarray as xr
+    >>> rpm = np.linspace(300, 900, 3001)
+    >>> f = 6 * rpm / 60                        # order 6 excitation, Hz
+    >>> h = sdof_response(f, natural_frequency=60.0, damping_ratio=0.03)
+    >>> track = xr.Dataset({"amplitude": (("order", "time"), np.abs(h)[None] * 1e-3),
+    ...                     "phase": (("order", "time"), np.angle(h)[None])},
+    ...                    coords={"order": [6.0], "rpm": ("time", rpm)})
+    >>> res = find_resonances(track).to_frame()
+    >>> print(res[["order", "speed_rpm", "frequency_hz", "damping_ratio"]].round(4).to_string(index=False))
+     order  speed_rpm  frequency_hz  damping_ratio
+       6.0      600.0          60.0           0.03
+    """
+    import xarray as xr
+    from scipy.signal import find_peaks
+
+    if not isinstance(track, xr.Dataset):
+        if isinstance(track, xr.DataArray):
+            track = track.to_dataset(name="amplitude")
+        else:
+            raise AnalysisError(f"track must be an xarray.Dataset order track, got "
+                                f"{type(track).__name__}")
+    if "amplitude" not in track:
+        raise AnalysisError(f"track has no 'amplitude' variable; variables: {list(track.data_vars)}")
+    if "order" not in track["amplitude"].dims:
+        raise AnalysisError(f"track amplitude has no 'order' dimension; dims: "
+                            f"{track['amplitude'].dims}")
+    units = str(track["amplitude"].attrs.get("units", track.attrs.get("units", "")))
+    convention = str(track["amplitude"].attrs.get("amplitude",
+                     track.attrs.get("amplitude", "peak")))
+    if response is None:
+        response = _UNIT_RESPONSE.get(units.strip(), "displacement")
+    check_option(response, "response", RESPONSES)
+    p = RESPONSES[response]
+    min_snr = check_positive(min_snr, "min_snr", error=AnalysisError)
+    min_prominence = check_range(min_prominence, "min_prominence", 0.0, 1.0, error=AnalysisError)
+    max_damping = check_range(max_damping, "max_damping", 0.0, 0.5, inclusive=(False, True),
+                              error=AnalysisError)
+    min_confidence = check_range(min_confidence, "min_confidence", 0.0, 1.0, error=AnalysisError)
+    baseline_degree = check_int(baseline_degree, "baseline_degree", minimum=0, error=AnalysisError)
+    max_points = check_int(max_points, "max_points", minimum=16, error=AnalysisError)
+    sweep_hysteresis = check_range(sweep_hysteresis, "sweep_hysteresis", 0.0, 1.0,
+                                   inclusive=(False, False), error=AnalysisError)
+    all_orders = [float(o) for o in np.atleast_1d(track["order"].values)]
+    if orders is None:
+        orders = all_orders
+    else:
+        orders = [float(o) for o in np.atleast_1d(orders)]
+        for o in orders:
+            if not np.any(np.isclose(all_orders, o, rtol=0, atol=1e-9)):
+                raise AnalysisError(f"order {o:g} is not in the track; available: "
+                                    f"{', '.join(f'{v:g}' for v in all_orders)}")
+
+    found, curves = [], []
+    for order in orders:
+        rpm, time, amp, comp = _track_arrays(track, order)
+        if rpm.size < 16:
+            log.info("order %g: only %d finite points, skipped", order, rpm.size)
+            continue
+        span = float(np.ptp(rpm))
+        if span <= 0:
+            continue
+        segments = _split_sweeps(rpm, sweep_hysteresis * span)
+        for k, (i0, i1) in enumerate(segments):
+            seg = slice(i0, i1 + 1 if i1 < rpm.size else i1)
+            r_seg = rpm[seg]
+            if r_seg.size < 16 or np.ptp(r_seg) < 3 * sweep_hysteresis * span:
+                continue
+            direction = "up" if r_seg[-1] >= r_seg[0] else "down"
+            rate_fn = None
+            if time is not None:
+                t_seg = time[seg]
+                rate_fn = _local_rate(t_seg, r_seg)
+            n_bins = int(min(r_seg.size, max_points))
+            x, (a, c) = _bin(r_seg, [amp[seg], None if comp is None else comp[seg]], n_bins)
+            if x.size < 16:
+                continue
+            base = _baseline(x, a, baseline_degree)
+            curves.append(OrderCurve(order, k, direction, x, a, base))
+            resid = a - base
+            sigma = _robust_noise(resid)
+            floor = 1e-9 * max(np.max(np.abs(a)), 1e-300)
+            sigma = max(sigma, floor)
+            peaks, props = find_peaks(resid, prominence=min_snr * sigma)
+            if peaks.size == 0:
+                continue
+            order_idx = np.argsort(props["prominences"])[::-1]
+            accepted = []  # (x_peak, half-width, prominence)
+            for j in order_idx:
+                i = int(peaks[j])
+                prom = float(props["prominences"][j])
+                if prom < min_prominence * a[i]:
+                    continue
+                res = _identify(x, a, c, base, resid, i, p, response, order, sigma, prom,
+                                max_damping, accepted, rate_fn, direction, k,
+                                sweep_correction)
+                if res is None or res.confidence < min_confidence:
+                    continue
+                found.append(res)
+    found.sort(key=lambda r: (r.order, r.sweep, r.speed_rpm))
+    settings = {"response": response, "min_snr": min_snr, "min_prominence": min_prominence,
+                "max_damping": max_damping, "min_confidence": min_confidence,
+                "baseline_degree": baseline_degree, "max_points": max_points,
+                "sweep_correction": bool(sweep_correction),
+                "sweep_hysteresis": sweep_hysteresis}
+    return ResonanceTable(tuple(found), tuple(curves), units, convention, settings)
+
+
+def _local_rate(t, rpm):
+    """Callable: local d(rpm)/dt (rpm/s) at a given speed, from a straight-line fit nearby."""
+    order = np.argsort(t)
+    t, rpm = t[order], rpm[order]
+
+    def rate(speed_rpm, half_window_rpm):
+        near = np.abs(rpm - speed_rpm) <= max(half_window_rpm, 1e-9)
+        if near.sum() < 3:
+            i = int(np.argmin(np.abs(rpm - speed_rpm)))
+            near = np.zeros_like(rpm, dtype=bool)
+            near[max(i - 2, 0):i + 3] = True
+        if near.sum() < 2 or np.ptp(t[near]) <= 0:
+            return float("nan")
+        return float(np.polyfit(t[near], rpm[near], 1)[0])
+
+    return rate
+
+
+def _identify(x, a, c, base, resid, i, p, response, order, sigma, prom, max_damping, accepted,
+              rate_fn, direction, sweep, sweep_correction):
+    """Identify the peak at bin ``i``; None if it is not a resonance. Appends to ``accepted``."""
+    step = float(np.median(np.diff(x)))
+    x_pk, a_pk = _parabolic(x, a, i)
+    _, r_pk = _parabolic(x, resid, i)
+    level = r_pk / np.sqrt(2.0)
+    x1 = _crossing(x, resid, i, level, -1)
+    x2 = _crossing(x, resid, i, level, +1)
+    complete = bool(np.isfinite(x1) and np.isfinite(x2))
+    if not complete:  # mirror the observed side
+        if np.isfinite(x1):
+            x2 = 2 * x_pk - x1
+        elif np.isfinite(x2):
+            x1 = 2 * x_pk - x2
+        else:
+            return None
+    if x1 <= 0 or x2 <= x1:
+        return None
+    half_width = 0.5 * (x2 - x1)
+    if 2 * half_width < 2.0 * step:
+        return None  # narrower than two bins: a spike, not a resonance
+    rate = rate_fn(x_pk, 2 * half_width) if rate_fn is not None else float("nan")
+    for xa, hw, pr in accepted:
+        reach = 4.0 * max(hw, half_width)
+        if np.isfinite(rate) and rate != 0 and (x_pk - xa) * rate > 0:
+            # after a fast passage the free vibration beats against the excitation: ripples
+            # trail the peak at Δν ≈ √(4πks), k = 1, 2, ... (s = dν/d(ω_n t)); cover k ≤ 10
+            s_norm = abs(order * rate / 60.0) / (2 * np.pi * (xa * order / 60.0) ** 2)
+            reach += xa * np.sqrt(40.0 * np.pi * s_norm)
+        if abs(x_pk - xa) < reach and prom < 0.5 * pr:
+            return None  # ripple beside a larger peak
+    try:
+        zeta_hp, n_hp = half_power_damping(x1, x2, response=response)
+    except AnalysisError:
+        return None
+    if not np.isfinite(zeta_hp) or zeta_hp > max_damping:
+        return None
+
+    # modal (circle) fit in ±3 half-power widths
+    lo, hi = x_pk - 3 * half_width, x_pk + 3 * half_width
+    win = (x >= lo) & (x <= hi)
+    fit = None
+    if win.sum() >= 7:
+        data = c[win] if c is not None else a[win]
+        fit = _modal_fit(x[win], data, n_hp, zeta_hp, p, c is not None)
+    n_fit = z_fit = r2 = np.nan
+    if fit is not None:
+        n_fit, z_fit, _, r2 = fit[:4]
+        # a fit that left the window or disagrees with the bandwidth by more than 4x is no
+        # SDOF peak (edge transient, two modes, trend)
+        if not (lo <= n_fit <= hi) or not (0.25 * zeta_hp <= z_fit <= min(4.0 * zeta_hp,
+                                                                          max_damping)):
+            n_fit = z_fit = np.nan
+            r2 = np.nan
+    if np.isfinite(n_fit):
+        speed, zeta, method = n_fit, z_fit, "modal fit"
+        quality = float(np.clip(r2, 0.0, 1.0))
+        # half-power again on the resonant part alone: data minus the fitted complex
+        # background (a magnitude baseline cannot remove a background that adds in phase)
+        xw, clean = x[win], fit[4]
+        j = int(np.argmax(clean))
+        _, c_pk = _parabolic(xw, clean, j)
+        y1 = _crossing(xw, clean, j, c_pk / np.sqrt(2.0), -1)
+        y2 = _crossing(xw, clean, j, c_pk / np.sqrt(2.0), +1)
+        if np.isfinite(y1) and np.isfinite(y2) and 0 < y1 < y2:
+            zeta_hp, n_hp = half_power_damping(y1, y2, response=response)
+    else:
+        # no SDOF shape could be fitted: keep only as a low-confidence candidate (baseline
+        # bumps beside a large peak and edge transients end here)
+        speed, zeta, method = n_hp, zeta_hp, "half-power"
+        quality = 0.25
+    snr = r_pk / sigma
+
+    # sweep-rate effect: a finite sweep lowers, widens and delays the peak. With a modal fit
+    # the sweep is modelled in the fit itself (swept SDOF envelope); otherwise the half-power
+    # damping is de-inflated by inverting a swept simulation read the same way.
+    eta = loss = shift = np.nan
+    corrected = False
+    amp_corr = a_pk
+    if np.isfinite(rate) and rate != 0:
+        alpha = order * rate / 60.0
+        eta = abs(alpha) / (zeta * speed * order / 60.0) ** 2
+        if eta >= 0.02:
+            if sweep_correction and method == "modal fit":
+                data = c[win] if c is not None else a[win]
+                swept = _swept_fit(x[win], data, order, rate, speed, zeta, p, c is not None)
+                if swept is not None and lo <= swept[0] <= hi and \
+                        0.2 * zeta <= swept[1] <= min(2.0 * zeta, max_damping) and \
+                        swept[2] >= r2 - 0.05:
+                    speed, zeta, steady_peak = swept[0], swept[1], swept[3]
+                    quality = float(np.clip(swept[2], 0.0, 1.0))
+                    corrected = True
+                    method = "swept modal fit"
+            elif sweep_correction:
+                inverted = _deinflate(zeta, speed * order / 60.0, alpha, p,
+                                      "apparent_damping", c is not None)
+                if inverted is not None:
+                    zeta_true, effect = inverted
+                    speed = speed - effect["shift"] * 60.0 / order
+                    zeta = zeta_true
+                    corrected = True
+                    method = "half-power + sweep correction"
+            fn_hz = speed * order / 60.0
+            effect = _sweep_effect(zeta, alpha / (2 * np.pi * fn_hz**2), p, fn_hz,
+                                   complex_data=c is not None)
+            eta = abs(alpha) / (zeta * fn_hz) ** 2
+            loss = effect["loss"]
+            shift = effect["shift"] * 60.0 / order
+            if method == "swept modal fit":
+                amp_corr = steady_peak
+            elif corrected:
+                amp_corr = a_pk - r_pk + r_pk / max(1.0 - loss, 1e-6)
+        else:
+            loss, shift = 0.0, 0.0
+    confidence = quality * (1.0 - np.exp(-snr / 10.0)) * (1.0 if complete else 0.5)
+    accepted.append((x_pk, half_width, prom))
+    return Resonance(
+        order=float(order), speed_rpm=float(speed), frequency_hz=float(speed * order / 60.0),
+        damping_ratio=float(zeta), amplitude=float(a_pk), amplitude_corrected=float(amp_corr),
+        resonant_amplitude=float(r_pk), baseline_amplitude=float(a_pk - r_pk),
+        peak_speed_rpm=float(x_pk), speed_rpm_half_power=float(n_hp),
+        damping_ratio_half_power=float(zeta_hp), speed_rpm_fit=float(n_fit),
+        damping_ratio_fit=float(z_fit), fit_r2=float(r2), half_power_complete=complete,
+        snr=float(snr), confidence=float(confidence), sweep=int(sweep), direction=direction,
+        sweep_rate_rpm_per_s=float(rate), sweep_eta=float(eta),
+        sweep_peak_loss=float(loss), sweep_shift_rpm=float(shift), sweep_corrected=corrected,
+        method=method)
