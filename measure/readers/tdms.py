@@ -81,7 +81,8 @@ def write(record: xr.Dataset, path, *, truth=None) -> dict:
         for name in names:
             var = record[name]
             props = {"unit_string": str(var.attrs.get("units", "")),
-                     "crankbench": json.dumps(_jsonable(channel_meta(var, dim=dim)))}
+                     "crankbench": json.dumps({**_jsonable(channel_meta(var, dim=dim)),
+                                               "n": int(var.size)})}
             if regular is not None:
                 props.update(wf_start_offset=regular, wf_increment=1.0 / float(fs),
                              wf_samples=int(var.size))
@@ -141,6 +142,10 @@ def _plan(tdms, file: str):
             meta["units"] = props.get("unit_string") or props.get("NI_UnitDescription") \
                 or meta.get("units")
             n = len(ch)
+            declared = meta.pop("n", None)
+            if declared is not None and int(declared) != n:
+                raise RecordError(f"{file}: channel {ch.name!r} declares {int(declared)} samples "
+                                  f"but holds {n} (header/body mismatch; file truncated?)")
             spec = None
             if not is_pulse_dim(dim):
                 if "wf_increment" in props:

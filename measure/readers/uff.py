@@ -87,7 +87,9 @@ def write(record: xr.Dataset, path, *, truth=None) -> dict:
         raise RecordError(f"{path}: ground truth can only be stored in .h5/.hdf5/.nc records")
     pyuff = _pyuff()
     file = str(path)
-    d1, d2, d3 = _pack(_jsonable(dict(record.attrs)), 3, "record", file)
+    header = _jsonable(dict(record.attrs))
+    header["_n_channels"] = len(record.data_vars)
+    d1, d2, d3 = _pack(header, 3, "record", file)
     sets = [dict(type=151, model_name="crankbench record", description=d1, db_app=d2,
                  program=d3, date_db_created="", time_db_created="", date_db_saved="",
                  time_db_saved="", date_file_written="", time_file_written="")]
@@ -129,10 +131,24 @@ def write(record: xr.Dataset, path, *, truth=None) -> dict:
     return {}
 
 
+def _check_complete(path, file: str) -> None:
+    """A complete UFF file ends with the ``-1`` delimiter closing its last dataset."""
+    with open(path, "rb") as f:
+        f.seek(0, 2)
+        size = f.tell()
+        f.seek(max(0, size - 16))
+        tail = f.read()
+    # binary 58 data runs straight into the delimiter, so test the 6-column field only
+    if tail.rstrip(b"\r\n\x00")[-6:] != b"    -1":
+        raise RecordError(f"{file}: UFF file does not end with the '-1' delimiter of its last "
+                          f"dataset ({size} bytes; file truncated?)")
+
+
 def read(path, *, channels=None) -> xr.Dataset:
     """Read every dataset 58 of a UFF file."""
     pyuff = _pyuff()
     file = str(path)
+    _check_complete(path, file)
     uff = pyuff.UFF(file)
     types = list(uff.get_set_types())
     if 58 not in types:
@@ -148,6 +164,10 @@ def read(path, *, channels=None) -> xr.Dataset:
             meta = _unpack([s.get("description", ""), s.get("db_app", ""), s.get("program", "")])
             if meta is not None:
                 record_attrs = meta
+    declared = record_attrs.pop("_n_channels", None)
+    if declared is not None and int(declared) != len(fn):
+        raise RecordError(f"{file}: header declares {int(declared)} channel(s), the file holds "
+                          f"{len(fn)} dataset(s) 58 (header/body mismatch; file truncated?)")
     names = [str(s.get("id1", "")).strip() or f"ch{i + 1}" for i, s in enumerate(fn)]
     if len(set(names)) != len(names):
         dup = sorted({n for n in names if names.count(n) > 1})

@@ -217,11 +217,36 @@ def _extras(extra: list, wanted, file: str):
     return out, coords
 
 
+def _check_chunks(path: Path, file: str) -> None:
+    """Walk the RIFF chunks: the data chunk must be complete (libsndfile reads short ones)."""
+    import struct
+
+    size = path.stat().st_size
+    with path.open("rb") as f:
+        head = f.read(12)
+        if head[:4] != b"RIFF":
+            return  # RF64/BW64: sizes live in ds64, leave it to libsndfile
+        pos = 12
+        while pos + 8 <= size:
+            f.seek(pos)
+            tag, length = struct.unpack("<4sI", f.read(8))
+            if tag == b"data":
+                if pos + 8 + length > size:
+                    raise RecordError(
+                        f"{file}: WAV data chunk declares {length} bytes but only "
+                        f"{size - pos - 8} are present (header/body mismatch; file truncated?)")
+                return
+            pos += 8 + length + (length & 1)
+    raise RecordError(f"{file}: WAV file has no complete data chunk ({size} bytes; file "
+                      "truncated?)")
+
+
 def read(path, *, channels=None) -> xr.Dataset:
     """Read a WAV file and its sidecar fully into memory."""
     sf = _sf()
     path = Path(path)
     file = str(path)
+    _check_chunks(path, file)
     info = sf.info(file)
     cols, fs, t0, extra, attrs = _plan(path, info, file)
     names = [c["name"] for c in cols] + [e.get("name") for e in extra]
@@ -272,6 +297,7 @@ def open(path, *, chunk_seconds: float = 10.0, channels=None) -> xr.Dataset:  # 
     sf = _sf()
     path = Path(path)
     file = str(path)
+    _check_chunks(path, file)
     info = sf.info(file)
     cols, fs, t0, extra, attrs = _plan(path, info, file)
     names = [c["name"] for c in cols] + [e.get("name") for e in extra]
