@@ -182,9 +182,9 @@ def cylinder_forcing(system, cylinder_harmonics, orders, n_speeds) -> np.ndarray
         raise ModelError("the system has no firing_angles_deg; attach an engine or give them")
     h = np.asarray(cylinder_harmonics, complex)
     no = len(orders)
-    if h.ndim == 1:
+    if h.ndim == 1 and h.shape == (no,):
         h = np.broadcast_to(h[None, :, None], (n_speeds, no, z))
-    elif h.ndim == 2:
+    elif h.ndim == 2 and h.shape == (n_speeds, no):
         h = np.broadcast_to(h[:, :, None], (n_speeds, no, z))
     if h.shape != (n_speeds, no, z):
         raise ModelError(f"cylinder torque harmonics have shape {h.shape}, expected "
