@@ -101,7 +101,7 @@ def test_crank_throw_inertia_energy_average():
     _, dx, _ = e.piston_motion(psi)
     exact_mean = 4.0 * np.mean(dx[0] ** 2)
     j = crank_throw_inertia(e, 1, 0.5)
-    assert j - 0.5 - 3.0 * 0.01 == pytest.approx(exact_mean, rel=0.1 * 0.2 ** 4)
+    assert j - 0.5 - 3.0 * 0.01 == pytest.approx(exact_mean, rel=0.25 * 0.2 ** 4)
 
 
 def test_gear_referral_by_ratio_squared():
