@@ -83,7 +83,7 @@ def _check_input(path) -> tuple[Path, object]:
         raise RecordError(f"{path} is a directory; expected a {module.FORMAT} file")
     size = path.stat().st_size
     if size == 0:
-        raise RecordError(f"{path}: file is empty (0 bytes); expected a {module.FORMAT} file")
+        raise RecordError(f"{path}: file is empty (0 bytes); expected {module.FORMAT} content")
     with path.open("rb") as f:
         head = f.read(64)
     if not module.check_magic(head):
@@ -227,6 +227,8 @@ def write(record: xr.Dataset, path, *, truth: xr.Dataset | None = None,
     path = Path(path)
     module = module_for(path)
     validate(record, allow_nonfinite=True)
+    if truth is not None and not hasattr(module, "write_truth"):
+        raise RecordError(f"{path}: ground truth can only be stored in .h5/.hdf5/.nc records")
     check_overwrite(path, overwrite)
     sidecars = getattr(module, "SIDECARS", ())
     for suffix in sidecars:

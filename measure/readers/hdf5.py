@@ -26,7 +26,7 @@ import xarray as xr
 from predict.errors import RecordError
 
 from ..record import is_pulse_dim, time_coordinate
-from ._common import build_dataset, clean_attrs, dims_of, regular_start, select
+from ._common import build_dataset, clean_attrs, dims_of, regular_start, select, si_channel
 
 __all__ = ["FORMAT", "check_magic", "read", "write", "open", "read_truth", "write_truth"]
 
@@ -228,7 +228,8 @@ def read(path, *, channels=None) -> xr.Dataset:
         for name in names:
             ds = f["channels"][name]
             dim, attrs = _channel_attrs(ds, name, dims, file)
-            out.append((name, dim, ds[...], attrs))
+            values, attrs = si_channel(name, ds[...], attrs, file=file)
+            out.append((name, dim, values, attrs))
             used[dim] = True
         coords = {}
         for dim in used:
@@ -285,6 +286,7 @@ def open(path, *, chunk_seconds: float = 10.0, channels=None) -> xr.Dataset:  # 
             arr = da.from_array(_LazyH5(file, name, ds.shape, ds.dtype), chunks=(step,),
                                 name=f"crankbench-h5-{file}-{name}", lock=False,
                                 asarray=True, meta=np.empty(0, ds.dtype))
+            arr, attrs = si_channel(name, arr, attrs, file=file)
             data_vars[name] = xr.Variable((dim,), arr, attrs)
             used[dim] = True
         coords = []

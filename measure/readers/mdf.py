@@ -17,8 +17,10 @@ cannot be read in parts here: :func:`measure.io.open` loads them whole.
 from __future__ import annotations
 
 import datetime as _dt
+import gc
 import json
 import os
+import sys
 import xml.etree.ElementTree as ET
 
 import numpy as np
@@ -117,11 +119,32 @@ def _channel_meta(comment: str) -> dict | None:
     return meta if isinstance(meta, dict) and "dim" in meta else None
 
 
+def _open(asammdf, path, file: str):
+    """``asammdf.MDF(path)``; on a corrupt file raise RecordError without asammdf's noise.
+
+    A failed ``MDF(...)`` leaves a half-built object whose ``__del__`` raises; it is collected
+    here with the unraisable-exception hook silenced, so users see one clear message.
+    """
+    hook = sys.unraisablehook
+    sys.unraisablehook = lambda unraisable: None
+    try:
+        try:
+            return asammdf.MDF(str(path))
+        except Exception as exc:  # noqa: BLE001 - any library failure means a corrupt file
+            reason = f"{type(exc).__name__}: {exc}"
+        gc.collect()
+    finally:
+        sys.unraisablehook = hook
+    size = os.path.getsize(path)
+    raise RecordError(f"{file}: cannot read as {FORMAT} ({reason}); the file ({size} bytes) is "
+                      "truncated or corrupt")
+
+
 def read(path, *, channels=None) -> xr.Dataset:
     """Read an MDF4 file fully into memory."""
     asammdf = _asammdf()
     file = str(path)
-    mdf = asammdf.MDF(str(path))
+    mdf = _open(asammdf, path, file)
     try:
         header = _header_attrs(mdf)
         entries = []  # (name, group, index, meta or None)
