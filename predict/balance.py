@@ -499,29 +499,41 @@ class BalanceResiduals:
     measures: tuple = ()
     counterweights: tuple = ()
     shafts: tuple = ()
+    round_off_force: float = 0.0
+    round_off_moment: float = 0.0
 
     @property
     def speed_rpm(self) -> float:
         return self.omega * 60 / (2 * np.pi)
 
-    def to_frame(self):
-        """One row per order: forces in N, moments in N·m."""
+    def to_frame(self, *, clean=True):
+        """One row per order: forces in N, moments in N·m.
+
+        With ``clean`` (default) values below the round-off level of the sums
+        (``round_off_force``, ``round_off_moment``: 1e-11 of the engine's total centrifugal
+        force, resp. that times the engine length) are shown as 0.
+        """
         import pandas as pd
 
+        def c(values, level):
+            values = np.asarray(values, dtype=float)
+            return np.where(np.abs(values) < level, 0.0, values) if clean else values
+
+        f, m = self.round_off_force, self.round_off_moment
         return pd.DataFrame({
             "order": self.orders,
-            "force_unbalanced_n": self.force_unbalanced,
-            "force_n": self.force,
-            "force_forward_n": self.force_forward,
-            "force_backward_n": self.force_backward,
-            "force_vertical_n": self.force_vertical,
-            "force_horizontal_n": self.force_horizontal,
-            "moment_unbalanced_nm": self.moment_unbalanced,
-            "moment_nm": self.moment,
-            "moment_forward_nm": self.moment_forward,
-            "moment_backward_nm": self.moment_backward,
-            "moment_pitch_nm": self.moment_pitch,
-            "moment_yaw_nm": self.moment_yaw,
+            "force_unbalanced_n": c(self.force_unbalanced, f),
+            "force_n": c(self.force, f),
+            "force_forward_n": c(self.force_forward, f),
+            "force_backward_n": c(self.force_backward, f),
+            "force_vertical_n": c(self.force_vertical, f),
+            "force_horizontal_n": c(self.force_horizontal, f),
+            "moment_unbalanced_nm": c(self.moment_unbalanced, m),
+            "moment_nm": c(self.moment, m),
+            "moment_forward_nm": c(self.moment_forward, m),
+            "moment_backward_nm": c(self.moment_backward, m),
+            "moment_pitch_nm": c(self.moment_pitch, m),
+            "moment_yaw_nm": c(self.moment_yaw, m),
         })
 
     def plot(self, ax=None):
@@ -597,6 +609,9 @@ def balance_residuals(engine, *, omega, orders=(1, 2, 4, 6, 8), balance_factor=N
                                 counterweights=cws if o == 1 else ())
         shafts.extend(new)
         measures.append(f"balance shafts, order {o}: {len(new)} eccentric(s)")
+    scale = 1e-11 * float(np.sum(engine.reciprocating_mass + engine.rotating_mass)
+                          * engine.crank_radius) * omega**2
+    span = max(float(np.ptp(engine.cylinder_positions)), engine.crank_radius)
     before = unbalance(engine, omega=omega, orders=orders)
     after = unbalance(engine, omega=omega, orders=orders, counterweights=cws, shafts=shafts)
     return BalanceResiduals(
@@ -610,4 +625,5 @@ def balance_residuals(engine, *, omega, orders=(1, 2, 4, 6, 8), balance_factor=N
         force_vertical=after["force_vertical"].values,
         force_horizontal=after["force_horizontal"].values,
         moment_pitch=after["moment_pitch"].values, moment_yaw=after["moment_yaw"].values,
-        measures=tuple(measures) or ("none",), counterweights=tuple(cws), shafts=tuple(shafts))
+        measures=tuple(measures) or ("none",), counterweights=tuple(cws), shafts=tuple(shafts),
+        round_off_force=scale, round_off_moment=scale * span)
