@@ -104,7 +104,8 @@ class BalanceResult:
     condition_number : float
         2-norm condition number κ(A) (after scaling each column to unit norm).
     trial_condition : float
-        Condition number of the trial-mass matrix (1 for one trial per plane).
+        Condition number of the trial-mass matrix with each plane's column scaled to unit norm
+        (1 for one trial per plane).
     response_change : ndarray
         |V_j − V₀| / |V₀| for each trial run (norms over the measurement planes).
     warnings : tuple of str
@@ -248,6 +249,8 @@ def influence_balance(initial, trial_runs, trial_masses, *, min_response_change=
                          "planes (need at least as many measurements)")
     if np.any(np.abs(masses).sum(axis=1) == 0):
         raise ModelError("every trial run needs a non-zero trial mass")
+    if np.any(np.abs(masses).sum(axis=0) == 0):
+        raise ModelError("every correction plane needs a trial mass in some run")
     if not np.any(v0):
         raise ModelError("initial vibration is zero: nothing to balance")
     min_change = check_range(min_response_change, "min_response_change", 0.0, error=ModelError)
@@ -261,7 +264,8 @@ def influence_balance(initial, trial_runs, trial_masses, *, min_response_change=
             msgs.append(f"trial run {j + 1} changed the vibration by only {100 * c:.3g} % of "
                         f"the initial run (< {100 * min_change:g} %): the trial weight was too "
                         "small; the influence coefficients are unreliable — use a heavier trial")
-    trial_cond = float(np.linalg.cond(masses))
+    # per-plane scaling: unequal trial sizes in different planes are fine, dependence is not
+    trial_cond = float(np.linalg.cond(masses / np.linalg.norm(masses, axis=0)[None, :]))
     if trial_cond > max_cond:
         msgs.append(f"trial-mass matrix condition {trial_cond:.3g} > {max_cond:g}: the trial "
                     "weight sets are nearly dependent; place them in different planes/angles")

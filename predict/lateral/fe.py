@@ -477,7 +477,7 @@ class Rotor:
         return out
 
     @staticmethod
-    def _circularise(values: np.ndarray, full_vecs: np.ndarray, rtol: float = 1e-8):
+    def _circularise(values: np.ndarray, full_vecs: np.ndarray, rtol: float = 1e-6):
         """Within clusters of repeated eigenvalues (isotropic rotor, no gyroscopic split),
         rotate the basis to the circular forward/backward combinations: eigenvectors of the
         whirl form Σ 2 Im(u v̄) relative to the displacement norm inside the cluster."""
