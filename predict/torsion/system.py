@@ -375,6 +375,14 @@ class TorsionalSystem:
         """Classify the undamped spring graph: ('chain', order, grounded) | ('tree',) |
         ('dense',)."""
         mask = self._eigen_nodes
+        n, e, k = self.n_nodes, self._edges, self._k
+        if mask.all() and np.all(k > 0) and len(k) in (n - 1, n):
+            # fast path: a chain as chain() builds it (free, or grounded at node 0)
+            first = np.arange(n - len(k), n - 1) if len(k) == n - 1 else np.arange(-1, n - 1)
+            if np.array_equal(e[:, 0], first) and np.array_equal(e[:, 1], first + 1):
+                info = dict(nodes=np.arange(n), a=e[:, 0], b=e[:, 1], k=k,
+                            order=np.arange(n), chain_k=k, grounded=len(k) == n)
+                return "chain", info
         keep_e = (self._k > 0) & mask[self._edges[:, 1]] & (
             (self._edges[:, 0] < 0) | mask[np.maximum(self._edges[:, 0], 0)])
         nodes = np.flatnonzero(mask)
@@ -433,41 +441,62 @@ class TorsionalSystem:
             return "chain", info
         return "tree", info
 
+    def _sub_stiffness(self, info):
+        nodes = info["nodes"]
+        sub = np.zeros((nodes.size, nodes.size))
+        a, b, k = info["a"], info["b"], info["k"]
+        np.add.at(sub, (b, b), k)
+        inner = a >= 0
+        np.add.at(sub, (a[inner], a[inner]), k[inner])
+        np.add.at(sub, (a[inner], b[inner]), -k[inner])
+        np.add.at(sub, (b[inner], a[inner]), -k[inner])
+        return sub
+
+    @functools.cached_property
+    def _values(self):
+        """(ω rad/s, mode numbers, method, bound, layout kind, layout info): values only."""
+        kind, info = self._layout()
+        nodes = info["nodes"]
+        jn = self._j[nodes]
+        if kind == "chain":
+            omega = eigen.chain_frequencies(jn[info["order"]], info["chain_k"],
+                                            grounded=info["grounded"])
+            method, bound = "bidiagonal dqds", 8 * nodes.size * eigen.EPS
+        else:
+            import scipy.linalg as sl
+
+            rj = 1.0 / np.sqrt(jn)
+            lam = sl.eigh(self._sub_stiffness(info) * rj[:, None] * rj[None, :],
+                          eigvals_only=True)
+            omega_d = np.sqrt(np.clip(lam, 0.0, None))
+            if kind == "tree":
+                omega = eigen.tree_frequencies(jn, info["a"], info["b"], info["k"],
+                                               estimate=omega_d)
+                method, bound = "tree bisection", 8 * nodes.size * eigen.EPS
+            else:
+                omega = omega_d
+                method = "dense eigh"
+                positive = omega[omega > 0]
+                bound = float(nodes.size * eigen.EPS * (omega.max() / positive.min()) ** 2
+                              if positive.size else nodes.size * eigen.EPS)
+        n_zero = int(np.sum(omega == 0.0))
+        numbers = np.concatenate([np.zeros(n_zero, int), np.arange(1, omega.size - n_zero + 1)])
+        return omega, numbers, method, bound, kind, info
+
     @functools.cached_property
     def _eigen(self):
-        kind, info = self._layout()
+        """(ω rad/s, mass-normalised shapes (n_nodes, n_modes), numbers, method, bound)."""
+        omega, numbers, method, bound, kind, info = self._values
         nodes = info["nodes"]
         jn = self._j[nodes]
         shapes = np.zeros((self.n_nodes, nodes.size))
         if kind == "chain":
             order = info["order"]
-            omega = eigen.chain_frequencies(jn[order], info["chain_k"],
-                                            grounded=info["grounded"])
-            method, bound = "bidiagonal dqds", 8 * nodes.size * eigen.EPS
-        else:
-            sub = np.zeros((nodes.size, nodes.size))
-            a, b, k = info["a"], info["b"], info["k"]
-            np.add.at(sub, (b, b), k)
-            inner = a >= 0
-            np.add.at(sub, (a[inner], a[inner]), k[inner])
-            np.add.at(sub, (a[inner], b[inner]), -k[inner])
-            np.add.at(sub, (b[inner], a[inner]), -k[inner])
-            omega_d, vec = eigen.dense_modes(jn, sub)
-            if kind == "tree":
-                omega = eigen.tree_frequencies(jn, a, b, k, estimate=omega_d)
-                method, bound = "tree bisection", 8 * nodes.size * eigen.EPS
-            else:
-                omega = omega_d
-                method = "dense eigh"
-                bound = float(nodes.size * eigen.EPS * (omega.max() / max(
-                    omega[omega > 0].min(initial=omega.max()), 1e-300)) ** 2)
-            shapes[nodes] = vec
-        n_zero = int(np.sum(omega == 0.0))
-        if kind == "chain":
-            order = info["order"]
             vec = eigen.chain_modes(jn[order], info["chain_k"], grounded=info["grounded"])
             shapes[nodes[order]] = vec
-        numbers = np.concatenate([np.zeros(n_zero, int), np.arange(1, omega.size - n_zero + 1)])
+        else:
+            _, vec = eigen.dense_modes(jn, self._sub_stiffness(info))
+            shapes[nodes] = vec
         return omega, shapes, numbers, method, bound
 
     def natural_frequencies(self, units: str = "hz") -> np.ndarray:
@@ -496,7 +525,7 @@ class TorsionalSystem:
         from .._validate import check_option
 
         check_option(units, "units", ("hz", "rad/s", "cpm"), error=ModelError)
-        omega = self._eigen[0]
+        omega = self._values[0]
         scale = {"hz": 1 / TWO_PI, "rad/s": 1.0, "cpm": 60 / TWO_PI}[units]
         return omega * scale if scale != 1.0 else omega.copy()
 
@@ -590,7 +619,7 @@ class TorsionalSystem:
         lo, hi = (0.0, np.inf) if speed_range_rpm is None else map(float, speed_range_rpm)
         if not lo <= hi:
             raise ModelError(f"speed_range_rpm={speed_range_rpm!r} must be (low, high), low<=high")
-        omega, _, numbers, _, _ = self._eigen
+        omega, numbers = self._values[:2]
         f = omega / TWO_PI
         vs = self.vector_sums(orders)
         major = self.major_orders(orders)
