@@ -1,0 +1,280 @@
+"""Damaged tacho trains and vibration channels: a clear error, or a masked result with a warning.
+
+The signals come from ``tests/corpus/make_bad_signals.py``. For every one the consumer either
+raises an error of the project's family naming the argument/channel and what was expected, or —
+where the data is usable in part (a few dropouts, NaN runs read with ``allow_nonfinite``) —
+returns a result whose damaged span is masked and says so in a warning. Faults found are strict
+xfails with the fault in ``reason``.
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import sys
+import warnings
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from analysis.orders import campbell_map, order_map, order_spectrum, order_track
+from measure import io as mio
+from measure.record import RecordWarning, make_record
+from measure.tacho import angle_from_pulses, count_pitches, detect_edges, speed_from_pulses
+from measure.torsiograph import angular_vibration
+from predict.errors import AnalysisError, CrankbenchError, RecordError
+
+CORPUS = Path(__file__).resolve().parents[1] / "corpus"
+
+
+def _load(name):
+    key = f"crankbench_corpus_{name}"
+    if key not in sys.modules:
+        spec = importlib.util.spec_from_file_location(key, CORPUS / f"{name}.py")
+        module = importlib.util.module_from_spec(spec)
+        sys.modules[key] = module
+        spec.loader.exec_module(module)
+    return sys.modules[key]
+
+
+sig = _load("make_bad_signals")
+PPR = sig.PULSES_PER_REV
+FS = sig.FS
+
+PULSE_FUNCS = {
+    "count_pitches": lambda e, **kw: count_pitches(e, pulses_per_rev=PPR, **kw),
+    "speed_from_pulses": lambda e, **kw: speed_from_pulses(e, pulses_per_rev=PPR, **kw),
+    "angle_from_pulses": lambda e, **kw: angle_from_pulses(e, pulses_per_rev=PPR, **kw),
+    "angular_vibration": lambda e, **kw: angular_vibration(e, pulses_per_rev=PPR, **kw),
+}
+ORDER_FUNCS = {
+    "order_track": lambda x, rpm: order_track(x, rpm=rpm, orders=[2.0, 4.0], revolutions=8),
+    "order_map": lambda x, rpm: order_map(x, rpm=rpm, revolutions=8),
+    "order_spectrum": lambda x, rpm: order_spectrum(x, rpm=rpm),
+    "campbell_map": lambda x, rpm: campbell_map(x, rpm=rpm, nperseg=1024),
+}
+
+
+def _channel(data, name="acc"):
+    """A Record channel (so messages can name it), built without the finiteness check."""
+    rec = make_record({name: dict(data=data, sample_rate=FS, units="m/s^2",
+                                  quantity="acceleration")}, allow_nonfinite=True)
+    return rec[name]
+
+
+# ------------------------------------------------------------------------------ tacho
+@pytest.mark.parametrize("func", list(PULSE_FUNCS))
+@pytest.mark.parametrize("case, pattern", [
+    ("tacho_no_pulses", r"edge_times has 0 edges; at least 3 are needed"),
+    ("tacho_one_pulse", r"edge_times has 1 edges; at least 3 are needed"),
+    ("tacho_two_pulses", r"edge_times has 2 edges; at least 3 are needed"),
+    ("tacho_reversed", r"edge_times must increase strictly; edge 1 .* does not follow edge 0"),
+    ("tacho_duplicated_edge", r"edge_times must increase strictly; edge 101 .* does not follow "
+                              r"edge 100"),
+])
+def test_unusable_pulse_train_is_named_error(case, pattern, func):
+    tacho = sig.TACHO_CASES[case]()
+    with pytest.raises(AnalysisError, match=pattern):
+        PULSE_FUNCS[func](tacho.edge_times)
+
+
+@pytest.mark.parametrize("func", ["count_pitches", "speed_from_pulses", "angle_from_pulses"])
+def test_plain_wheel_declared_with_gap_is_named_error(func):
+    tacho = sig.tacho_plain_wheel_declared_60_2()
+    with pytest.raises(AnalysisError, match=r"no gap of 2 missing teeth found in 720 edges "
+                                            r".*at least one full revolution"):
+        PULSE_FUNCS[func](tacho.edge_times, missing_teeth=2)
+
+
+def test_pulse_train_shorter_than_speed_window_is_named_error():
+    tacho = sig.tacho_shorter_than_window()
+    with pytest.raises(AnalysisError, match=r"edge_times span 29 pitches, fewer than the "
+                                            r"averaging window of 60 pitches \(window_revs=1"):
+        speed_from_pulses(tacho.edge_times, pulses_per_rev=PPR)
+
+
+def test_flat_analog_tacho_is_named_error():
+    tacho = sig.tacho_flat_analog()
+    with pytest.raises(AnalysisError, match=r"signal is constant \(no pulses\).*expected a "
+                                            r"pulse train"):
+        detect_edges(tacho.signal, fs=tacho.fs)
+
+
+def test_few_dropouts_are_bridged_and_counted():
+    """3 % lost pulses: usable — every dropout bridged (counted in ``filled``), speed exact."""
+    tacho = sig.tacho_few_missing()
+    n_lost = sig.steady_edges().size - tacho.edge_times.size
+    pc = count_pitches(tacho.edge_times, pulses_per_rev=PPR)
+    assert pc.filled == n_lost
+    trace = speed_from_pulses(tacho.edge_times, pulses_per_rev=PPR)
+    np.testing.assert_allclose(trace.speed_rpm, sig.SPEED_RPM, rtol=1e-9)
+
+
+@pytest.mark.xfail(strict=True, reason="measure.tacho.count_pitches: with 50 % of the pulses "
+                   "lost at random the running-median pitch locks onto 2 pitches; speed comes "
+                   "out 12-33 % low (675-883 rpm for 1000 rpm) with no error or warning")
+def test_half_missing_pulses_give_right_speed_or_error():
+    tacho = sig.tacho_half_missing()
+    try:
+        trace = speed_from_pulses(tacho.edge_times, pulses_per_rev=PPR)
+    except AnalysisError as exc:
+        assert "missing" in str(exc)
+        return
+    np.testing.assert_allclose(trace.speed_rpm, sig.SPEED_RPM, rtol=0.02)
+
+
+@pytest.mark.xfail(strict=True, reason="measure.tacho.count_pitches bridges a 5 s standstill as "
+                   "5000 'missing pulses' and reports a constant 1000 rpm through it, silently")
+def test_standstill_is_not_bridged_as_dropouts():
+    tacho = sig.tacho_stops()
+    try:
+        trace = speed_from_pulses(tacho.edge_times, pulses_per_rev=PPR)
+    except AnalysisError as exc:
+        assert "0.71" in str(exc) or "5" in str(exc)   # names the stretch
+        return
+    inside = (trace.time > tacho.span[0] + 0.1) & (trace.time < tacho.span[1] - 0.1)
+    assert not np.any(trace.speed_rpm[inside] > 100.0)
+
+
+def test_standstill_bridge_is_visible_in_pitch_count():
+    """What the user can see today: the bridged pitches are counted in ``filled``."""
+    tacho = sig.tacho_stops()
+    pc = count_pitches(tacho.edge_times, pulses_per_rev=PPR)
+    assert pc.filled == 5000          # 5.001 s interval = 5001 pitches at 1000 pulses/s
+
+
+@pytest.mark.xfail(strict=True, reason="measure.tacho: check_finite_array is called without "
+                   "error=AnalysisError, so NaN edge times / samples raise a bare ValueError "
+                   "outside the project's error family")
+@pytest.mark.parametrize("case", ["tacho_nan_edge", "tacho_nan_analog"])
+def test_nan_in_tacho_is_our_error(case):
+    tacho = sig.TACHO_CASES[case]()
+    with pytest.raises(CrankbenchError, match=r"(edge_times|signal) contains \d+ NaN/inf"):
+        if tacho.edge_times is not None:
+            speed_from_pulses(tacho.edge_times, pulses_per_rev=PPR)
+        else:
+            detect_edges(tacho.signal, fs=tacho.fs)
+
+
+@pytest.mark.xfail(strict=True, reason="measure.tacho.count_pitches formats edge times with "
+                   "repr() of numpy scalars: 'edge 1 (np.float64(0.7182) s)'")
+def test_reversed_tacho_message_is_plain_numbers():
+    with pytest.raises(AnalysisError) as info:
+        speed_from_pulses(sig.tacho_reversed().edge_times, pulses_per_rev=PPR)
+    assert "np.float64" not in str(info.value)
+
+
+# ------------------------------------------------------------------------------ channels
+@pytest.mark.parametrize("func", list(ORDER_FUNCS))
+@pytest.mark.parametrize("case, pattern", [
+    ("channel_dropout_nan", r"acc contains 100 NaN/inf value\(s\), first at index 4000"),
+    ("channel_dropout_inf", r"acc contains 5 NaN/inf value\(s\), first at index 2000"),
+    ("channel_zero_speed_segment", r"rpm must be > 0 throughout.*found .*0\.0.* at sample 3000"),
+    ("channel_negative_speed", r"rpm must be > 0 throughout.*found .*-1500\.0.* at sample 0"),
+    ("channel_nan_speed", r"rpm contains 1 NaN/inf value\(s\), first at index 7999"),
+    ("channel_speed_wrong_length", r"rpm has 7900 samples but the signal has 8000"),
+])
+def test_unusable_channel_is_named_error(case, pattern, func):
+    c = sig.CHANNEL_CASES[case]()
+    with pytest.raises(AnalysisError, match=pattern):
+        ORDER_FUNCS[func](_channel(c.data), c.rpm)
+
+
+@pytest.mark.parametrize("func", ["order_track", "order_map", "order_spectrum"])
+def test_too_short_channel_is_named_error(func):
+    c = sig.channel_too_short()
+    with pytest.raises(AnalysisError, match=r"acc must have at least 8 values, got 5"):
+        ORDER_FUNCS[func](_channel(c.data), c.rpm)
+
+
+def test_dead_sensor_gives_zero_orders_not_nan():
+    c = sig.channel_constant()
+    res = order_track(_channel(c.data), rpm=c.rpm, orders=[2.0, 4.0], revolutions=8)
+    amp = res.amplitude.values
+    assert np.all(np.isfinite(amp)) and np.all(amp == 0.0)
+
+
+@pytest.mark.parametrize("ext", [".h5", ".csv", ".nc", ".tdms", ".mf4", ".wav"])
+def test_dropouts_in_a_file_are_an_error_naming_channel_and_span(tmp_path, ext):
+    c = sig.channel_dropout_nan()
+    path = tmp_path / f"drop{ext}"
+    mio.write(make_record({"acc": dict(data=c.data, sample_rate=FS, units="m/s^2",
+                                       quantity="acceleration")}, allow_nonfinite=True), path)
+    with pytest.raises(RecordError, match=rf"drop{ext}: channel 'acc' has 100 NaN/inf sample\(s\) "
+                                          r"in 1 run\(s\): samples 4000\.\.4099 \(t = 2\.\.2\.0495 s\).*"
+                                          r"allow_nonfinite=True"):
+        mio.read(path)
+
+
+@pytest.mark.parametrize("ext", [".h5", ".csv", ".nc", ".tdms", ".mf4", ".wav"])
+def test_dropouts_read_with_allow_nonfinite_are_masked_with_warning(tmp_path, ext):
+    """Usable in part: the span is NaN-masked, listed in ``masked_spans_s`` and warned about;
+    every other sample is unchanged."""
+    c = sig.channel_dropout_nan()
+    path = tmp_path / f"drop{ext}"
+    mio.write(make_record({"acc": dict(data=c.data, sample_rate=FS, units="m/s^2",
+                                       quantity="acceleration")}, allow_nonfinite=True), path)
+    with pytest.warns(RecordWarning, match=rf"drop{ext}: channel 'acc': 100 NaN/inf sample\(s\) "
+                                           r"masked as NaN in 1 span\(s\): 2\.\.2\.0495 s"):
+        rec = mio.read(path, allow_nonfinite=True)
+    values = rec["acc"].values
+    np.testing.assert_array_equal(np.flatnonzero(np.isnan(values)), np.arange(4000, 4100))
+    np.testing.assert_allclose(rec["acc"].attrs["masked_spans_s"], [2.0, 2.0495])
+    good = np.isfinite(c.data)
+    tol = 1e-4 if ext == ".wav" else 1e-12      # WAV stores 32-bit float samples
+    np.testing.assert_allclose(values[good], c.data[good], atol=tol)
+
+
+@pytest.mark.xfail(strict=True, reason="measure UFF 58 writer stores NaN as 0.0 and inf as "
+                   "1.797e308; reading back gives finite data, no mask, no warning (silent "
+                   "corruption of dropouts)")
+def test_uff_keeps_or_refuses_dropouts(tmp_path):
+    c = sig.channel_dropout_nan()
+    path = tmp_path / "drop.uff"
+    rec = make_record({"acc": dict(data=c.data, sample_rate=FS, units="m/s^2",
+                                   quantity="acceleration")}, allow_nonfinite=True)
+    try:
+        mio.write(rec, path)
+    except RecordError as exc:
+        assert "acc" in str(exc) and "NaN" in str(exc)
+        return
+    with pytest.raises(RecordError, match="NaN/inf"):
+        mio.read(path)
+
+
+@pytest.mark.xfail(strict=True, reason="analysis.orders rejects any NaN: a record with a masked "
+                   "dropout cannot be order-analysed at all; expected blocks overlapping the "
+                   "masked span set to NaN and a warning naming the span")
+def test_masked_dropout_gives_masked_order_track_with_warning():
+    c = sig.channel_dropout_nan()
+    with pytest.warns(UserWarning, match=r"acc.*(masked|NaN).*2(\.0)?\.\.2\.0495 s"):
+        res = order_track(_channel(c.data), rpm=c.rpm, orders=[2.0], revolutions=8)
+    amp = res.amplitude.sel(order=2.0)
+    t = res.time.values
+    assert np.isnan(amp.values[np.abs(t - 2.02) < 0.05]).all()
+    far = np.abs(t - 2.02) > 0.5
+    np.testing.assert_allclose(amp.values[far], 1.0, rtol=1e-2)
+
+
+@pytest.mark.xfail(strict=True, reason="no clipping detection anywhere (measure.io.read, "
+                   "measure.record.validate, analysis.orders): a channel saturated at ±0.8 is "
+                   "read and order-analysed without a warning")
+def test_clipped_channel_is_flagged(tmp_path):
+    c = sig.channel_clipped()
+    path = tmp_path / "clip.h5"
+    mio.write(make_record({"acc": dict(data=c.data, sample_rate=FS, units="m/s^2",
+                                       quantity="acceleration")}), path)
+    with pytest.warns(RecordWarning, match=r"clip\.h5: channel 'acc'.*clip"):
+        rec = mio.read(path)
+    assert "clipped_spans_s" in rec["acc"].attrs
+
+
+def test_clipped_channel_order_amplitude_is_wrong_without_flag():
+    """Why clipping must be flagged: the 2nd-order amplitude of the clipped channel is off by
+    more than 10 % from the truth (1.0), a silent error."""
+    c = sig.channel_clipped()
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        res = order_track(_channel(c.data), rpm=c.rpm, orders=[2.0], revolutions=8)
+    amp = float(res.amplitude.sel(order=2.0).mean())
+    assert abs(amp - c.truth[2.0]) > 0.1
