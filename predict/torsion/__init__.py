@@ -13,7 +13,8 @@ from __future__ import annotations
 import importlib
 
 __all__ = ["chain", "TorsionalSystem", "Modes", "from_toml", "forced_response",
-           "ForcedResponse", "ShaftLine"]
+           "ForcedResponse", "ShaftLine", "resonance_amplitudes", "engine_excitation",
+           "Excitation", "StressLimits", "check_stress"]
 
 _LAZY = {
     "chain": "system",
@@ -23,6 +24,11 @@ _LAZY = {
     "ForcedResponse": "forced",
     "ShaftLine": "elements",
     "from_toml": "toml",
+    "resonance_amplitudes": "resonance",
+    "engine_excitation": "excitation",
+    "Excitation": "excitation",
+    "StressLimits": "stress",
+    "check_stress": "stress",
 }
 
 

@@ -14,7 +14,7 @@ and their classical optimum tuning.
 
 References
 ----------
-.. [1] J. P. Den Hartog, *Mechanical Vibrations*, 4th ed., McGraw-Hill, 1956, §3.2-3.3
+.. [1] J. P. Den Hartog, *Mechanical Vibrations*, 4th ed., McGraw-Hill, 1956, ch. 3
    (damped vibration absorber, optimum tuning f = 1/(1+μ), ζ² = 3μ/(8(1+μ)³); untuned viscous
    damper, c_opt = 2 J_d ω_n / √(2(1+μ)(2+μ))), ch. 5 (centrifugal pendulum, friction dampers).
 .. [2] 发动机设计 第三章, 减振器的型式 (dynamic, damping and compound dampers).

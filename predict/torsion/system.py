@@ -633,6 +633,40 @@ class TorsionalSystem:
                                             "vector_sum", "major"])
         return frame.sort_values(["speed_rpm", "mode"], ignore_index=True)
 
+    def plot_campbell(self, orders=None, speed_range_rpm=None, *, ax=None, modes=None):
+        """Campbell diagram: natural frequencies (horizontal) and order lines vs speed, with
+        the critical speeds marked (size ∝ relative vector sum). Returns the figure."""
+        import matplotlib.pyplot as plt
+
+        orders = self.default_orders() if orders is None else np.asarray(orders, float)
+        crit = self.critical_speeds(orders, speed_range_rpm)
+        if ax is None:
+            fig, ax = plt.subplots(figsize=(7, 5))
+        else:
+            fig = ax.figure
+        lo, hi = (0.0, float(crit.speed_rpm.max()) * 1.1 if len(crit) else 1000.0) \
+            if speed_range_rpm is None else map(float, speed_range_rpm)
+        omega, numbers = self._values[:2]
+        f = omega / TWO_PI
+        shown = [i for i in np.flatnonzero(numbers > 0) if modes is None or numbers[i] in modes]
+        for i in shown:
+            ax.axhline(f[i], color="0.5", lw=0.8)
+        rpm = np.array([lo, hi])
+        for q in orders:
+            ax.plot(rpm, rpm * q / 60.0, color="C0" if self.major_orders([q])[0] else "C1",
+                    lw=0.6)
+        sel = crit[crit["mode"].isin(numbers[shown])]
+        size = 10 + 30 * np.nan_to_num(sel.vector_sum.to_numpy(), nan=1.0)
+        ax.scatter(sel.speed_rpm, sel.frequency_hz, s=size, color="k", zorder=3)
+        ax.set_xlim(lo, hi)
+        top = f[shown].max() * 1.15 if shown else 1.0
+        ax.set_ylim(0, top)
+        ax.set_xlabel("speed [rpm]")
+        ax.set_ylabel("frequency [Hz]")
+        ax.set_title("Campbell diagram (blue: major orders)")
+        fig.tight_layout()
+        return fig
+
     # ----------------------------------------------------------------- Holzer -----------
     def holzer_table(self, frequency_hz: float):
         """Classical Holzer table at a trial frequency (chains only).

@@ -10,7 +10,7 @@ Sources (seeds in /work/shared/seeds):
   §22 Equivalent Shaft 及 Equivalent Inertia (p. 94), §23 联动之轴 (geared shafts, p. 100),
   §24 Forced Torsional Vibration (p. 107).
 * [Tim] S. Timoshenko, *Vibration Problems in Engineering*, 2nd ed., Van Nostrand, 1937,
-  §58 torsional vibration of a uniform shaft (ω_m = mπ/l·√(G/ρ)).
+  ch. 5, torsional vibration of a uniform circular shaft (ω_m = mπ/l·√(G/ρ)).
 * [Th] W. T. Thomson, *Theory of Vibration with Applications*, Prentice Hall: lumped chains by
   difference equations (uniform chain eigenvalues 4(k/J) sin²(…)).
 * [KW] W. Ker Wilson, *Practical Solution of Torsional Vibration Problems*, vol. 1, 1956:
@@ -130,7 +130,7 @@ def test_branched_system_with_identical_branches():
 
 
 def test_distributed_shaft_discretisation_converges():
-    """[Tim] §58: a free-free uniform shaft has ω_m = mπ/l·√(G/ρ). [JT1958] p. 96: replace it by
+    """[Tim] ch. 5: a free-free uniform shaft has ω_m = mπ/l·√(G/ρ). [JT1958] p. 96: replace it by
     N lumped sections (half masses at the ends); the error falls as 1/N²."""
     g, rho, length, d = 80e9, 7850.0, 2.0, 0.1
     ip = np.pi * d ** 4 / 32

@@ -217,3 +217,16 @@ def test_cli_json(models, capsys):
     assert {"resonances", "worst_stresses", "limits", "critical_speeds"} <= set(out)
     first = out["resonances"][0]
     assert {"energy_balance_deg", "exact_deg", "method_error"} <= set(first)
+
+
+def test_plots_return_figures(models, tmp_path):
+    import matplotlib
+
+    s = from_toml(models / "marine_6l.toml")
+    figs = [s.plot_campbell([3.0, 4.5, 6.0], (200, 800)), s.mode_shapes().plot(),
+            check_stress(s.forced_response(np.linspace(200, 800, 30)), s.limits).plot()]
+    for i, fig in enumerate(figs):
+        assert isinstance(fig, matplotlib.figure.Figure)
+        fig.savefig(tmp_path / f"{i}.png")
+    table = s.mode_shapes().to_frame()
+    assert table.shape == (s.n_nodes, s.n_nodes - 1)
