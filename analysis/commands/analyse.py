@@ -1,0 +1,160 @@
+"""``crankbench analyse RECORD --channel NAME --orders 0.5,1,1.5``: order analysis of a record.
+
+Reads the record (``measure.read``), takes the shaft speed from its speed channel or pulse train
+(``analysis.speedref``), tracks the requested orders (COT or Vold–Kalman) and prints, per order,
+the largest amplitude, the speed where it occurs and the mean amplitude. ``--json`` prints the
+same plus the parameters used and the tracks (at most ``--json-points`` points per order).
+``--plot DIR`` writes ``order_map.png``, ``campbell.png`` and ``order_tracks.png`` atomically;
+existing files are kept unless ``--overwrite``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import logging
+
+HELP = "order analysis of a record channel (order tracks, order map, Campbell diagram)"
+
+log = logging.getLogger("crankbench")
+
+PLOTS = ("order_map.png", "campbell.png", "order_tracks.png")
+
+
+def _orders(text: str) -> list[float]:
+    try:
+        values = [float(v) for v in text.replace(" ", "").split(",") if v]
+    except ValueError:
+        raise argparse.ArgumentTypeError(
+            f"--orders {text!r}: expected comma-separated numbers such as 0.5,1,1.5") from None
+    if not values or any(v <= 0 for v in values):
+        raise argparse.ArgumentTypeError(f"--orders {text!r}: expected positive orders")
+    return values
+
+
+def configure(parser) -> None:
+    parser.add_argument("record", metavar="RECORD", help="record file (any format measure.read knows)")
+    parser.add_argument("--channel", required=True, help="channel to analyse")
+    parser.add_argument("--orders", required=True, type=_orders,
+                        help="orders to track, comma-separated (e.g. 0.5,1,1.5)")
+    parser.add_argument("--method", choices=("cot", "vkf"), default="cot",
+                        help="computed order tracking (default) or Vold-Kalman filter")
+    parser.add_argument("--amplitude", choices=("peak", "rms", "peak-to-peak"), default="peak",
+                        help="amplitude convention (default peak)")
+    parser.add_argument("--speed-channel", default=None,
+                        help="speed source (rotational_speed channel or pulse train); "
+                             "default: found in the record")
+    parser.add_argument("--revolutions", type=int, default=16,
+                        help="COT/map block length in revolutions (order resolution 1/N)")
+    parser.add_argument("--samples-per-rev", type=int, default=64,
+                        help="angle samples per revolution (orders up to N/4)")
+    parser.add_argument("--bandwidth-hz", type=float, default=None,
+                        help="VKF -3 dB bandwidth, Hz")
+    parser.add_argument("--bandwidth-orders", type=float, default=None,
+                        help="VKF bandwidth in orders (follows the speed)")
+    parser.add_argument("--filter-order", type=int, choices=(1, 2), default=2,
+                        help="VKF filter order")
+    parser.add_argument("--json", action="store_true", help="print JSON")
+    parser.add_argument("--json-points", type=int, default=500,
+                        help="largest number of track points per order in the JSON output")
+    parser.add_argument("--plot", metavar="DIR", default=None,
+                        help="write order_map.png, campbell.png, order_tracks.png to DIR")
+    parser.add_argument("--overwrite", action="store_true", help="replace existing plot files")
+
+
+def _summary(tracks):
+    import numpy as np
+    import pandas as pd
+
+    rows = []
+    for o in tracks["order"].values:
+        amp = tracks["amplitude"].sel(order=o).values
+        i = int(np.argmax(amp))
+        rows.append({"order": float(o), "max_amplitude": float(amp[i]),
+                     "speed_rpm_at_max": float(tracks["rpm"].values[i]),
+                     "time_s_at_max": float(tracks["time"].values[i]),
+                     "mean_amplitude": float(np.mean(amp))})
+    return pd.DataFrame(rows)
+
+
+def run(args) -> int:
+    from pathlib import Path
+
+    import numpy as np
+
+    import measure
+    from analysis._output import print_json, print_table
+    from analysis.orders import campbell_map, order_map, order_track
+    from analysis.speedref import speed_reference
+    from predict._validate import suggest
+    from predict.errors import ConfigError, RecordError
+
+    targets = []
+    if args.plot:
+        from measure._atomic import check_overwrite
+
+        out_dir = Path(args.plot)
+        if out_dir.exists() and not out_dir.is_dir():
+            raise ConfigError(f"--plot {out_dir}: exists and is not a directory")
+        targets = [out_dir / name for name in PLOTS]
+        for path in targets:           # refuse before any work, never half a set of plots
+            check_overwrite(path, args.overwrite, option="--overwrite")
+    record = measure.read(args.record)
+    names = [str(n) for n in record.data_vars]
+    if args.channel not in names:
+        raise RecordError(f"{args.record}: no channel {args.channel!r}"
+                          f"{suggest(args.channel, names)}; channels: {', '.join(names)}")
+    channel = record[args.channel]
+    if channel.attrs.get("sample_rate") is None:
+        raise RecordError(f"{args.record}: channel {args.channel!r} is not a sampled channel "
+                          "(no sample_rate); choose a signal channel")
+    rpm = speed_reference(record, args.channel, speed_channel=args.speed_channel)
+    channel = channel.load() if hasattr(channel, "load") else channel
+    kwargs = dict(rpm=rpm, orders=args.orders, amplitude=args.amplitude, method=args.method,
+                  samples_per_rev=args.samples_per_rev, revolutions=args.revolutions)
+    if args.method == "vkf":
+        kwargs.update(bandwidth_hz=args.bandwidth_hz, bandwidth_orders=args.bandwidth_orders,
+                      filter_order=args.filter_order)
+    tracks = order_track(channel, **kwargs)
+    summary = _summary(tracks)
+    units = tracks["amplitude"].attrs.get("units", "")
+    if args.json:
+        step = max(1, int(np.ceil(tracks.sizes["time"] / max(1, args.json_points))))
+        sub = tracks.isel(time=slice(None, None, step))
+        print_json({
+            "record": str(args.record), "channel": args.channel, "units": units,
+            "amplitude_convention": args.amplitude,
+            "parameters": {k: v for k, v in tracks.attrs.items()},
+            "summary": summary,
+            "tracks": {"time_s": sub["time"].values, "speed_rpm": sub["rpm"].values,
+                       "orders": {f"{o:g}": {"amplitude": sub["amplitude"].sel(order=o).values,
+                                             "phase_rad": sub["phase"].sel(order=o).values}
+                                  for o in sub["order"].values},
+                       "every_nth_point": step},
+        })
+    else:
+        print_table(summary, title=f"{args.channel} [{units}], {args.amplitude} amplitude, "
+                                   f"method {args.method} ({tracks.attrs.get('method', '')})")
+    if targets:
+        import matplotlib
+
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+
+        from measure._atomic import atomic_path
+        from analysis.plots import plot_campbell, plot_order_map, plot_order_tracks
+
+        fs = float(channel.attrs["sample_rate"])
+        omap = order_map(channel, rpm=rpm, samples_per_rev=args.samples_per_rev,
+                         revolutions=args.revolutions, amplitude=args.amplitude)
+        nperseg = int(2 ** np.clip(np.round(np.log2(fs)), 8, 16))
+        top = max(args.orders) * float(np.max(rpm)) / 60.0 * 1.5
+        camp = campbell_map(channel, rpm=rpm, nperseg=min(nperseg, channel.shape[0]),
+                            orders=args.orders, max_frequency=min(top, fs / 2),
+                            amplitude=args.amplitude)
+        figures = [plot_order_map(omap), plot_campbell(camp), plot_order_tracks(tracks)]
+        for fig, path in zip(figures, targets):
+            with atomic_path(path, overwrite=args.overwrite, option="--overwrite") as tmp:
+                fig.savefig(tmp, format="png", dpi=110)
+            plt.close(fig)
+            log.info("wrote %s", path)
+    return 0
