@@ -21,10 +21,32 @@ requested orders solved jointly by least squares with a smoothness constraint. I
 resolution is set by the bandwidth, not by a block; use it for fast sweeps through resonances,
 for crossing orders and for closely spaced orders. See ``analysis.vkf`` for its error.
 
-Measured on the resonance-crossing case (Q = 20, order 3 crossing 100 Hz, envelope truth from
-``solve_ivp``; see ``tests/analysis/test_resonance_sweep.py`` and bench suite ``orders``):
-VKF (2nd order, bandwidth ≈ the half-power bandwidth of the resonance) is the method of choice
-at 400 and 1000 rpm/s; COT/map with short blocks are adequate at 100 rpm/s.
+Measured (bench suite ``orders``; order 3 crossing a Q = 20 resonance at 100 Hz, i.e. 2000 rpm,
+half-power bandwidth ``f_n/Q`` = 5 Hz; truth = exact envelope from ``solve_ivp``):
+
+=============================  ==============  ==============  ===============
+peak-amplitude error           100 rpm/s       400 rpm/s       1000 rpm/s
+=============================  ==============  ==============  ===============
+COT tracks, Hann, 2 rev        −0.04 %         −0.48 %         −1.9 %
+COT tracks, Hann, 4 rev        −0.17 %         −1.9 %          −7.0 %
+order map, 2 rev, band ±2 bin  −0.01 %         −0.12 %         −0.42 %
+VKF p=2, B = 4 f_n/Q           < 0.01 %        −0.05 %         −0.70 %
+VKF p=2, B = 8 f_n/Q           < 0.01 %        < 0.01 %        −0.04 %
+=============================  ==============  ==============  ===============
+
+Which method when:
+
+* **fast sweeps through resonances** (the resonance crossed in a few of its decay times,
+  ``(df/dt)/(f_n/Q)² ≳ 0.5``): VKF, second order, bandwidth 4–8 × the resonance's
+  half-power bandwidth ``f_n/Q`` (wider passes more noise: ``σ_A ∝ sqrt(B)``);
+* **slow sweeps and steady or slowly varying orders** (run-ups with ≲ 100 rpm/s across a
+  Q ≈ 20 resonance, steady-state points): COT tracks or the order map with blocks of
+  ``revolutions`` long enough for the noise (error ``sqrt(N0·ENBW/T_block)``) and short
+  enough for the envelope (a block spans ≲ 1/5 of the resonance's half-power crossing time);
+* **crossing orders** (orders of different shafts, or an order through a fixed-frequency
+  component): VKF with all of them in one solve;
+* **an overview of all orders**: the order map (``scaling="power"`` + :func:`band_amplitude`
+  when an order falls between bins); the Campbell map for fixed-frequency resonances.
 
 Conventions: the phase of an order ``o`` is that of ``A cos(o φ + phase)`` with the shaft
 angle ``φ`` from the speed reference, zero at the first sample of the record. Amplitudes are
@@ -96,6 +118,14 @@ def get_window(window, length: int) -> np.ndarray:
         raise AnalysisError(f"window={window!r} is not a scipy window ({exc}); valid names "
                             f"include {', '.join(names[:30])}"
                             f"{suggest(str(window), names)}") from None
+
+
+def _t0(x) -> float:
+    """Time of the first sample of a Record channel (its time coordinate), else 0."""
+    dims = getattr(x, "dims", None)
+    if dims and dims[0] in getattr(x, "coords", {}):
+        return float(x.coords[dims[0]].values[0])
+    return 0.0
 
 
 def _check_orders(orders) -> np.ndarray:
@@ -211,7 +241,7 @@ def order_track(x, *, fs=None, rpm, orders, amplitude: str = "peak", method: str
                           bandwidth_orders=bandwidth_orders, filter_order=filter_order)
         amp = np.abs(res["envelope"].values) * factor
         ds = _track_dataset(amp, np.angle(res["envelope"].values), orders,
-                            res["time"].values, res["rpm"].values, units, label)
+                            res["time"].values + _t0(x), res["rpm"].values, units, label)
         ds.attrs.update(res.attrs)
         ds.attrs.update({"amplitude_convention": amplitude})
         return ds
@@ -229,6 +259,7 @@ def order_track(x, *, fs=None, rpm, orders, amplitude: str = "peak", method: str
         coef[sl] = data[idx] @ kernel
     coef *= np.exp(-1j * np.outer(phi0, orders))
     t, r = _block_coords(y, starts, length)
+    t = t + _t0(x)
     ds = _track_dataset(np.abs(coef).T * factor, np.angle(coef).T, orders, t, r,
                         y.attrs.get("units", ""), y.name)
     enbw = float(length * np.sum(w ** 2) / np.sum(w) ** 2)
@@ -250,7 +281,9 @@ def _track_dataset(amp, phase, orders, t, r, units, label):
         {"amplitude": (("order", "time"), amp, {"units": units, "long_name": f"{label} order amplitude"}),
          "phase": (("order", "time"), phase, {"units": "rad",
                                                "long_name": "phase of A cos(o φ + phase)"})},
-        coords=coords, attrs={"channel": str(label)})
+        coords=coords, attrs={"channel": str(label),
+                              "phase_reference": "shaft angle 0 at the first sample of the "
+                                                 "record (speed-reference integration)"})
 
 
 # ---------------------------------------------------------------------------- order map
@@ -338,6 +371,7 @@ def order_map(x, *, fs=None, rpm, samples_per_rev: int = 64, revolutions: int = 
     values = _map_values(y, starts, length, w, scaling, factor, n_orders)
     order_axis = np.arange(n_orders) / revolutions
     t, r = _block_coords(y, starts, length)
+    t = t + _t0(x)
     units = y.attrs.get("units", "")
     out_units = units if scaling == "amplitude" else (f"({units})^2" if units else "1")
     import xarray as xr
@@ -547,7 +581,7 @@ def campbell_map(x, *, fs=None, rpm, nperseg: int = 4096, overlap: float = 0.5, 
                                   "amplitude", factor)
     cs = np.concatenate([[0.0], np.cumsum(speed)])
     frame_rpm = (cs[starts + nperseg] - cs[starts]) / nperseg
-    t = (starts + nperseg / 2.0 - 0.5) / fs
+    t = (starts + nperseg / 2.0 - 0.5) / fs + _t0(x)
     import xarray as xr
 
     orders = _check_orders(orders)
