@@ -53,6 +53,10 @@ def write(record: xr.Dataset, path, *, truth=None) -> dict:
     columns: list[tuple[str, np.ndarray]] = []
     lines = ["# crankbench-record: " + meta_json({str(k): _jsonable(v)
                                                   for k, v in record.attrs.items()})]
+    for name in record.data_vars:
+        if any(c in str(name) for c in ',"[]\n\r') or str(name) != str(name).strip():
+            raise RecordError(f"{path}: channel name {str(name)!r} cannot be a CSV column header "
+                              "(no commas, quotes, brackets, line breaks or outer spaces)")
     for dim, names in dims_of(record).items():
         if not is_pulse_dim(dim):
             columns.append((f"{dim} [s]", np.asarray(record[dim].values, dtype=np.float64)))
@@ -137,6 +141,12 @@ def read(path, *, channels=None) -> xr.Dataset:
     if frame.shape[0] == 0:
         raise RecordError(f"{file}: CSV has a header but no data rows")
     if metas:
+        with _io.open(path, "rb") as f:
+            f.seek(-1, 2)
+            if f.read(1) != b"\n":
+                raise RecordError(f"{file}: last line has no line break; the file was cut "
+                                  "mid-row (truncated?) — expected crankbench CSV rows to end "
+                                  "with a newline")
         return _read_native(frame, metas, record_attrs, channels, file)
     return _read_foreign(frame, channels, file)
 

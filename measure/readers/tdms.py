@@ -134,7 +134,7 @@ def _plan(tdms, file: str):
                 continue
             props = _props(ch)
             if meta is None:
-                dim = "time" if gi == 0 else f"time_{group.name}"
+                dim = f"time_{group.name}"  # the fastest clock is renamed 'time' below
                 meta = {"dim": dim}
             else:
                 meta = dict(meta)
@@ -165,11 +165,25 @@ def _plan(tdms, file: str):
                 elif group.name in time_channels or foreign_time is not None:
                     tch = time_channels.get(group.name, foreign_time)
                     spec = ("channel", tch)
+                    if "sample_rate" not in meta and len(tch) >= 2:
+                        t_first, t_last = float(tch[0]), float(tch[len(tch) - 1])
+                        if t_last > t_first:
+                            meta["sample_rate"] = (len(tch) - 1) / (t_last - t_first)
                 else:
                     raise RecordError(f"{file}: channel {ch.name!r} has no clock: expected the "
                                       "waveform properties wf_increment/wf_start_offset or a "
                                       "'Time' channel in its group")
             entries.append((ch.name, ch, dim, meta, spec))
+    if root is None and entries:
+        rates = {e[2]: float(e[3].get("sample_rate", 0.0)) for e in entries
+                 if not is_pulse_dim(e[2])}
+        if rates:
+            fastest = max(rates, key=rates.get)
+            for e in entries:
+                if e[2] == fastest:
+                    e[3]["dim"] = "time"
+            entries = [(n, c, "time" if d == fastest else d, m, sp)
+                       for n, c, d, m, sp in entries]
     if root is not None:
         attrs = dict(root)
     else:
