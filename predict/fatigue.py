@@ -134,11 +134,13 @@ def shear_strength(tensile) -> float:
     return 0.6 * check_positive(tensile, "tensile", error=ModelError)
 
 
-def max_stress_at_ratio(ratio, *, endurance, form="2a") -> float:
+def max_stress_at_ratio(ratio, *, endurance, ultimate=None, form="2a") -> float:
     """Endurance limit (largest maximum stress) at stress ratio r = σ_min/σ_max.
 
-    Seed eq. (2a): S_r = 2 S_u / (3 − r) = 4 S_e / (3 − r); eq. (2b): S_r = (3 + r) S_e / 2,
-    both fitted through S_r = S_e at r = −1 and S_r = S_u = 2 S_e at r = +1. (The printed
+    Both forms pass through S_r = S_e at r = −1 (fully reversed) and S_r = S_u at r = +1
+    (static). Seed eq. (2a) is hyperbolic, S_r = S_u / (A + B r) with A = (1 + S_u/S_e)/2,
+    B = (1 − S_u/S_e)/2; eq. (2b) is linear, S_r = ((S_u + S_e) + (S_u − S_e) r)/2. With the
+    seed's S_u = 2 S_e they read S_r = 4 S_e/(3 − r) and S_r = (3 + r) S_e/2. (The printed
     second form of (2a), "4/(3+r)", is a misprint: the derivation above it, A = 3/2,
     B = −1/2, and the worked example's 4/(3½) at r = −½ both give 3 − r.)
 
@@ -148,6 +150,8 @@ def max_stress_at_ratio(ratio, *, endurance, form="2a") -> float:
         r in [−1, 1].
     endurance : float
         Fully reversed endurance limit S_e, Pa.
+    ultimate : float, optional
+        S_u, Pa (default 2 S_e, the seed's eq. (1)).
     form : {"2a", "2b"}
 
     Returns
@@ -157,7 +161,7 @@ def max_stress_at_ratio(ratio, *, endurance, form="2a") -> float:
 
     References
     ----------
-    Shi, *Engine Dynamics*, pre-reading 1 §(3)(a), eq. (2a), (2b).
+    Shi, *Engine Dynamics*, pre-reading 1 §(3)(a), eq. (2a), (2b), exercises 2-3 (eq. 3a, 3b).
 
     Examples
     --------
@@ -167,9 +171,15 @@ def max_stress_at_ratio(ratio, *, endurance, form="2a") -> float:
     if not -1.0 <= float(ratio) <= 1.0:
         raise ModelError(f"ratio={ratio!r} must lie in [-1, 1]")
     se = check_positive(endurance, "endurance", error=ModelError)
+    su = 2 * se if ultimate is None else check_positive(ultimate, "ultimate", error=ModelError)
+    if su < se:
+        raise ModelError(f"ultimate={su:g} Pa must be >= endurance={se:g} Pa")
     form = check_option(form, "form", ("2a", "2b"), error=ModelError)
     r = float(ratio)
-    return 4 * se / (3 - r) if form == "2a" else (3 + r) * se / 2
+    if form == "2a":
+        k = su / se
+        return su / ((1 + k) / 2 + (1 - k) / 2 * r)
+    return ((su + se) + (su - se) * r) / 2
 
 
 @dataclass(frozen=True)
