@@ -352,7 +352,8 @@ def forced_response(system, speed_rpm, *, torque=None, orders=None, misfire=None
     misfire : int, optional
         Cylinder number (1-based) without gas torque (needs an Excitation).
     imep : float, optional
-        Mean indicated pressure, Pa, for the default excitation.
+        Mean indicated pressure, Pa, for the default excitation (default: the model file's
+        ``imep``, else the engine's ``[engine.combustion]`` load).
     superpose : bool
         Synthesise the periodic response over one cycle for the ``*_total`` peaks (default);
         False gives the sum of the order amplitudes (an upper bound) and is cheaper.
@@ -386,6 +387,8 @@ def forced_response(system, speed_rpm, *, torque=None, orders=None, misfire=None
     if torque is None or hasattr(torque, "harmonics"):
         from .excitation import engine_excitation
 
+        if imep is None:
+            imep = system.operating.get("imep")
         exc = torque if torque is not None else engine_excitation(system, imep=imep)
         harmonics = exc.harmonics(speed, orders, misfire=misfire)
         label = exc.describe()

@@ -9,6 +9,10 @@ where F holds the cylinders' order-q torque phasors (so aᵀF is the phase-vecto
 harmonic torque), C the viscous and K_η = η∘K the hysteretic damping. The dynamic magnifier is
 the resonant over the static modal amplitude, ``M = ω² / (ω aᵀCa + aᵀK_η a)`` (= 1/2ζ).
 
+Nodes left out of the undamped eigen-analysis (rings of viscous and friction dampers,
+centrifugal pendulums) have zero modal amplitude, so their damping does not enter the energy
+balance; the exact solve includes them, and the difference shows in ``method_error``.
+
 The exact value is the peak of the full damped harmonic solve of that order near the critical
 speed (:func:`predict.torsion.forced.harmonic_solve`; two grid passes of 61 speeds, relative
 speed resolution ≈ 1e-5). The relative difference is the energy-balance method error (mode
@@ -75,7 +79,8 @@ def resonance_amplitudes(system, *, torque=None, orders=None, speed_range_rpm=No
     if torque is None:
         from .excitation import engine_excitation
 
-        torque = engine_excitation(system, imep=imep)
+        torque = engine_excitation(system, imep=imep if imep is not None
+                                   else system.operating.get("imep"))
     crit = system.critical_speeds(orders, speed_range_rpm)
     omega_n, shapes, numbers, _, _ = system._eigen
     sf = stress_factor(system)
