@@ -82,9 +82,10 @@ def test_ross_example_friswell_5_9_1():
                                             inner_diameter=0.05, width=0.07, density=7810.0)],
                   bearings=[Bearing(0.0, 1e6), Bearing(1.5, 1e6)])
     rest = rotor.natural_frequencies(0.0, n_modes=6).omega[::2]
-    np.testing.assert_allclose(rest, [86.66, 274.31, 716.78], rtol=2e-5)  # truncated
+    # one unit of the last printed digit (the listed values are partly truncated)
+    np.testing.assert_allclose(rest, [86.66, 274.31, 716.78], atol=0.01)
     spin = rotor.natural_frequencies(4000 * np.pi / 30, n_modes=5).omega
-    np.testing.assert_allclose(spin, [85.39, 87.80, 251.78, 294.71, 600.18], rtol=2e-5)
+    np.testing.assert_allclose(spin, [85.39, 87.80, 251.78, 294.71, 600.18], atol=0.01)
 
 
 def test_iso_21940_11_grade_definition():
