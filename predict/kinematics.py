@@ -277,8 +277,7 @@ def piston_acceleration(theta, *, crank_radius, rod_length, omega, max_order=Non
     n = check_int(max_order, "max_order", minimum=1, error=ModelError)
     if e == 0.0:
         a = series_coefficients(r / l, n)
-        orders = np.arange(n + 1)
-        acc = -r * w * w * (np.cos(np.multiply.outer(th, orders)) @ a)
+        acc = -r * w * w * (np.cos(th) + _clenshaw_even(a, th))
     else:
         cos_c, sin_c = _offset_coefficients(r, l, e, n)
         orders = np.arange(n + 1)
@@ -290,6 +289,16 @@ def piston_acceleration(theta, *, crank_radius, rod_length, omega, max_order=Non
 # --------------------------------------------------------------------------------------------
 # harmonic series
 # --------------------------------------------------------------------------------------------
+def _clenshaw_even(a, th):
+    """Σ_{k≥1} a_{2k} cos 2kθ by Clenshaw's recurrence in y = cos 2θ (N/2 multiply-adds)."""
+    c = a[2::2]
+    y2 = 2.0 * np.cos(2.0 * th)
+    b1 = np.zeros_like(th)
+    b2 = np.zeros_like(th)
+    for ck in c[::-1]:
+        b1, b2 = ck + y2 * b1 - b2, b1
+    # Σ_{k≥1} c_k T_k(y) = y b₁ − b₂ (Chebyshev form of the cosine series, c₀ = 0)
+    return b1 * (0.5 * y2) - b2
 def _check_lam(lam) -> float:
     lam = check_positive(lam, "lam", error=ModelError)
     if lam >= 1.0:
@@ -437,7 +446,7 @@ def truncation_bound(lam, max_order):
     """
     lam = _check_lam(lam)
     n = check_int(max_order, "max_order", minimum=1, error=ModelError)
-    top = n + 2
+    top = n + 2 + n % 2          # even, so the last coefficient examined is a non-zero one
     while True:
         a = series_coefficients(lam, min(top, MAX_SERIES_ORDER))
         tail = np.abs(a[n + 1:])
@@ -499,9 +508,8 @@ class AccelerationSeries:
     def acceleration(self, theta, *, crank_radius, omega):
         """Series acceleration (m/s²) at crank angles ``theta`` (rad)."""
         th = _theta(theta)
-        n = np.arange(self.max_order + 1)
-        return _out(-crank_radius * omega**2 * (np.cos(np.multiply.outer(th, n))
-                                                 @ self.coefficients), theta)
+        return _out(-crank_radius * omega**2 * (np.cos(th) + _clenshaw_even(self.coefficients,
+                                                                            th)), theta)
 
     def to_frame(self):
         """Table with columns ``order``, ``coefficient``."""
