@@ -158,3 +158,48 @@ def test_bad_arguments():
         bal.counterweights(e, balance_factor=1.5)
     with pytest.raises(ModelError, match=r"omega=-1 must lie in"):
         bal.unbalance(e, omega=-1)
+
+
+SAMPLES = sorted(p.stem for p in __import__("pathlib").Path("sample_data/engines").glob("*.toml"))
+
+
+@pytest.mark.parametrize("name", SAMPLES)
+def test_sample_engines_second_route(name):
+    """Every sample engine: order-domain phasors = FFT of the exact time-domain sum (1e-9)."""
+    e = Engine.from_toml(f"sample_data/engines/{name}.toml")
+    w = e.rated_speed_rpm * np.pi / 30
+    orders = (1, 2, 3, 4, 6, 8)
+    ds = bal.unbalance(e, omega=w, orders=orders)
+    th = 2 * np.pi * np.arange(256) / 256
+    sf = bal.shaking_forces(e, th, omega=w)
+    f = np.fft.fft(sf["force_vertical"].values + 1j * sf["force_horizontal"].values) / 256
+    m = np.fft.fft(sf["moment_pitch"].values + 1j * sf["moment_yaw"].values) / 256
+    o = np.asarray(orders)
+    scale = float(np.sum(e.reciprocating_mass + e.rotating_mass) * e.crank_radius) * w**2
+    span = max(float(np.ptp(e.cylinder_positions)), e.crank_radius)
+    np.testing.assert_allclose(ds["force_forward_phasor"].values, f[o], atol=1e-9 * scale)
+    np.testing.assert_allclose(ds["force_backward_phasor"].values, f[256 - o], atol=1e-9 * scale)
+    np.testing.assert_allclose(ds["moment_forward_phasor"].values, m[o],
+                               atol=1e-9 * scale * span)
+    np.testing.assert_allclose(ds["moment_backward_phasor"].values, m[256 - o],
+                               atol=1e-9 * scale * span)
+
+
+def test_predict_balance_cli(capsys):
+    import json
+
+    from analysis.cli import main
+
+    assert main(["predict", "balance", "sample_data/engines/i4.toml", "--json",
+                 "--speed-rpm", "3000", "--shafts", "2"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    rows = {r["order"]: r for r in out["residuals"]}
+    a2 = series_coefficients(0.043 / 0.145, 2)[2]
+    assert rows[2]["force_unbalanced_n"] == pytest.approx(
+        4 * 0.55 * 0.043 * (3000 * np.pi / 30) ** 2 * a2, rel=1e-12)
+    assert rows[2]["force_n"] == 0.0
+    assert len(out["mount_modes"]) == 6 and len(out["transmitted"]) == 5
+    assert main(["predict", "balance", "sample_data/engines/radial5.toml",
+                 "--balance-factor", "0.5"]) == 0
+    text = capsys.readouterr().out
+    assert "balance residuals" in text and "counterweights" in text

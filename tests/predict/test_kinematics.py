@@ -146,3 +146,11 @@ def test_bad_geometry_is_named():
         kin.series_coefficients(1.2, 4)
     with pytest.raises(ModelError, match="exactly one of max_order"):
         kin.acceleration_series(0.3)
+
+
+def test_truncation_bound_of_odd_order_equals_the_even_order_below():
+    # odd coefficients vanish, so truncating after 2k+1 drops exactly what 2k drops
+    for lam in (0.25, 0.45):
+        for n in (2, 4, 10):
+            assert kin.truncation_bound(lam, n + 1) == pytest.approx(
+                kin.truncation_bound(lam, n), rel=1e-15)
