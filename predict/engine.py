@@ -362,14 +362,17 @@ class Engine:
 
     @property
     def crank_angles_deg(self) -> np.ndarray:
+        """Per-cylinder throw angle ahead of throw 1, deg (read-only)."""
         return self._alpha_deg
 
     @property
     def bank_angles_deg(self) -> np.ndarray:
+        """Per-cylinder axis angle from the vertical in the direction of rotation, deg."""
         return self._beta_deg
 
     @property
     def cylinder_positions(self) -> np.ndarray:
+        """Per-cylinder axial position along the crankshaft, m."""
         return self._pos
 
     @property
@@ -384,6 +387,7 @@ class Engine:
 
     @property
     def articulated(self) -> tuple:
+        """Per cylinder: None (plain rod) or its :class:`ArticulatedRod`."""
         return self._articulated
 
     @property
@@ -507,6 +511,14 @@ class Engine:
         Returns
         -------
         ndarray, shape (n_cylinders, len(theta))
+
+        Examples
+        --------
+        >>> e = Engine(crank_angles_deg=[0], crank_radius=0.05, rod_length=0.2,
+        ...            reciprocating_mass=1.0, bore=0.1, compression_ratio=11.0)
+        >>> v = e.cylinder_volume([0.0, np.pi])[0] * 1e6     # cm³
+        >>> [round(float(x), 3) for x in v]
+        [78.54, 863.938]
         """
         eps = compression_ratio if compression_ratio is not None else self.compression_ratio
         if eps is None:

@@ -156,6 +156,14 @@ class TurningMoment:
 
         ω₀ is set so that the *time*-mean speed equals ``omega`` (fixed-point iteration to
         1e-14). Returns the speed at ``angle``.
+
+        Examples
+        --------
+        >>> a = np.arange(360) * 2 * np.pi / 360
+        >>> tm = TurningMoment.from_torque(a, 100 + 50 * np.sin(2 * a), omega=100.0)
+        >>> w = tm.speed(0.5)
+        >>> round(float((w.max() - w.min()) / 100.0), 6)   # ≈ ΔE / (J ω²) = 50 / 5000
+        0.009999
         """
         j = check_positive(inertia, "inertia", error=ModelError)
         e = self.excess_energy()

@@ -288,6 +288,15 @@ class MountedEngine:
         Returns
         -------
         MountModes
+
+        Examples
+        --------
+        >>> m = [Mount(position=[x, y, 0.0], stiffness=[1e6, 1e6, 2e6])
+        ...      for x in (-0.5, 0.5) for y in (-0.3, 0.3)]
+        >>> eng = MountedEngine(mass=400.0, inertia=[20.0, 40.0, 45.0], cg=[0, 0, 0], mounts=m)
+        >>> modes = eng.modes()
+        >>> modes.dominant[-1], round(float(modes.natural_frequencies[-1]), 3)
+        ('ry', 35.588)
         """
         from scipy.linalg import eigh
 
