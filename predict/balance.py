@@ -293,8 +293,10 @@ def shaking_forces(engine, theta, *, omega, counterweights=(), shafts=(), pressu
     >>> e = Engine(crank_angles_deg=[0], crank_radius=0.05, rod_length=0.2,
     ...            reciprocating_mass=2.0, rotating_mass=1.0)
     >>> ds = shaking_forces(e, [0.0, np.pi / 2], omega=100.0)
-    >>> [round(float(v), 3) for v in ds["force_vertical"]], round(float(ds["force_horizontal"][1]), 3)
-    ([1750.0, -258.199], 500.0)
+    >>> [round(float(v), 3) for v in ds["force_vertical"]]
+    [1750.0, -258.199]
+    >>> round(float(ds["force_horizontal"][1]), 3)
+    500.0
     """
     import xarray as xr
 

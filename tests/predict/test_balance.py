@@ -1,6 +1,8 @@
 """Balance: the order-domain rotating-vector result against a second route (exact time-domain
 sum over cylinders + FFT), counterweights, balance shafts, emergent symmetry rules."""
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -160,13 +162,14 @@ def test_bad_arguments():
         bal.unbalance(e, omega=-1)
 
 
-SAMPLES = sorted(p.stem for p in __import__("pathlib").Path("sample_data/engines").glob("*.toml"))
+ENGINES_DIR = Path(__file__).resolve().parents[2] / "sample_data" / "engines"
+SAMPLES = sorted(p.stem for p in ENGINES_DIR.glob("*.toml"))
 
 
 @pytest.mark.parametrize("name", SAMPLES)
 def test_sample_engines_second_route(name):
     """Every sample engine: order-domain phasors = FFT of the exact time-domain sum (1e-9)."""
-    e = Engine.from_toml(f"sample_data/engines/{name}.toml")
+    e = Engine.from_toml(ENGINES_DIR / f"{name}.toml")
     w = e.rated_speed_rpm * np.pi / 30
     orders = (1, 2, 3, 4, 6, 8)
     ds = bal.unbalance(e, omega=w, orders=orders)
@@ -190,7 +193,7 @@ def test_predict_balance_cli(capsys):
 
     from analysis.cli import main
 
-    assert main(["predict", "balance", "sample_data/engines/i4.toml", "--json",
+    assert main(["predict", "balance", str(ENGINES_DIR / "i4.toml"), "--json",
                  "--speed-rpm", "3000", "--shafts", "2"]) == 0
     out = json.loads(capsys.readouterr().out)
     rows = {r["order"]: r for r in out["residuals"]}
@@ -199,7 +202,7 @@ def test_predict_balance_cli(capsys):
         4 * 0.55 * 0.043 * (3000 * np.pi / 30) ** 2 * a2, rel=1e-12)
     assert rows[2]["force_n"] == 0.0
     assert len(out["mount_modes"]) == 6 and len(out["transmitted"]) == 5
-    assert main(["predict", "balance", "sample_data/engines/radial5.toml",
+    assert main(["predict", "balance", str(ENGINES_DIR / "radial5.toml"),
                  "--balance-factor", "0.5"]) == 0
     text = capsys.readouterr().out
     assert "balance residuals" in text and "counterweights" in text

@@ -2,6 +2,7 @@
 crankshaft's motion, sizing round trip, stresses, CLI."""
 
 import json
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -12,6 +13,8 @@ from predict.engine import Engine
 from predict.errors import ModelError
 from predict.forces import engine_torque
 from predict.pressure import synthetic_pressure
+
+ENGINES_DIR = Path(__file__).resolve().parents[2] / "sample_data" / "engines"
 
 
 def _sinusoid(n_points=720, mean=300.0, amp=400.0, order=2, period=4 * np.pi, omega=300.0):
@@ -29,7 +32,7 @@ def test_energy_fluctuation_of_a_harmonic_torque():
 
 
 def test_energy_fluctuation_converges_for_engine_torque():
-    e = Engine.from_toml("sample_data/engines/i4.toml")
+    e = Engine.from_toml(ENGINES_DIR / "i4.toml")
     tr = synthetic_pressure(e)
     w = 3000 * np.pi / 30
     coarse = fw.turning_moment(e, omega=w, pressure=tr, points_per_cycle=1440)
@@ -51,7 +54,7 @@ def test_fluctuation_error_estimate_bounds_the_error_for_a_kinked_torque():
 
 def test_speed_fluctuation_matches_ode_integration():
     """Integrate J dω/dt = T(φ) − T_load, dφ/dt = ω and measure (ω_max − ω_min)/ω_mid."""
-    e = Engine.from_toml("sample_data/engines/single.toml")
+    e = Engine.from_toml(ENGINES_DIR / "single.toml")
     tr = synthetic_pressure(e)
     w = 3000 * np.pi / 30
     tm = fw.turning_moment(e, omega=w, pressure=tr, points_per_cycle=2880)
@@ -101,7 +104,7 @@ def test_flywheel_sizing_round_trip_and_stresses():
 def test_predict_flywheel_cli_json(capsys):
     from analysis.cli import main
 
-    rc = main(["predict", "flywheel", "sample_data/engines/i4.toml", "--speed-rpm", "2000",
+    rc = main(["predict", "flywheel", str(ENGINES_DIR / "i4.toml"), "--speed-rpm", "2000",
                "--json", "--inertia", "0.2"])
     assert rc == 0
     out = json.loads(capsys.readouterr().out)
