@@ -211,13 +211,18 @@ def _solve_block(x, phase, knot_weights, p, m):
     q, w, n_coef = _spline_weights(n, m)
     ab, rhs = _assemble(basis, x, q, w, n_coef, knot_weights, p)
     u = ab.shape[0] - 1
+    # factor in LAPACK's lower band form (dpbtrf 'L'): same matrix, and OpenBLAS's threaded
+    # upper-form path can be ~100x slower on a busy machine
+    low = np.zeros_like(ab)
+    for d in range(u + 1):
+        low[d, : ab.shape[1] - d] = ab[u - d, d:]
     try:
-        factor = cholesky_banded(ab, lower=False, check_finite=False)
+        factor = cholesky_banded(low, lower=True, check_finite=False)
     except np.linalg.LinAlgError:
         raise AnalysisError("Vold-Kalman system is not positive definite; the bandwidth is "
                             "too narrow for float64 at this sample rate (widen bandwidth)") from None
-    z = cho_solve_banded((factor, False), rhs, check_finite=False)
-    z += cho_solve_banded((factor, False), rhs - _banded_matvec(ab, z, u), check_finite=False)
+    z = cho_solve_banded((factor, True), rhs, check_finite=False)
+    z += cho_solve_banded((factor, True), rhs - _banded_matvec(ab, z, u), check_finite=False)
     coef = z.reshape(n_coef, 2 * k)
     cplx = coef[:, 0::2] + 1j * coef[:, 1::2]               # (n_coef, K)
     env = np.zeros((n, k), dtype=complex)
