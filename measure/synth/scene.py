@@ -1,0 +1,359 @@
+"""Scenes of the synthetic test bench: engine, shaft line, mounts, operating profile, sensors.
+
+A scene is read from TOML (paths relative to the scene file)::
+
+    [scene]
+    name = "6L32 run-up"
+    engine = "../engines/marine_6l.toml"      # [engine] (and [mounts], if vibrographs are used)
+    shaftline = "../shaftlines/marine_6l.toml" # optional: torsional channels need it
+    mounts = "../engines/marine_6l.toml"      # optional, default: the engine file
+    seed = 1
+    max_order = 12.0
+    start_angle_deg = 0.0                      # crank angle of cyl 1 from firing TDC at t = 0
+    truth_rate = 20.0                          # Hz, time resolution of the ground truth
+
+    [profile]                                  # steady | runup | coastdown | exponential | table
+    kind = "runup"
+    start_rpm = 200.0
+    end_rpm = 760.0
+    duration = 40.0
+    hold_start = 1.0
+    hold_end = 1.0
+
+    [load]
+    imep = 2.0e6                               # Pa, at rated speed for law = "propeller"
+    law = "propeller"                          # constant | propeller (imep ~ speed^2)
+
+    [imperfections]                            # defaults for every sensor
+    jitter_s = 2e-8
+
+    [[sensor]]
+    kind = "torsiograph"                       # torsiograph | encoder | tacho | vibrograph |
+    name = "tv_free_end"                       # pressure | speed
+    node = "damper housing"
+    quantity = "angle"                         # angle | angular_velocity
+    sample_rate = 2000.0
+
+Sensor keys by kind: *torsiograph* ``node``, ``quantity``, ``sample_rate``; *encoder* and
+*tacho* ``node``, ``pulses_per_rev``, ``missing_teeth``, ``tdc_offset_deg`` and, for a tacho,
+``output = "pulses" | "analogue"`` (``sample_rate`` for the analogue pick-up voltage);
+*vibrograph* ``point = [x, y, z]`` or ``mount = "name"``, ``direction`` (x/y/z),
+``quantity`` (acceleration/velocity/displacement), ``sample_rate``; *pressure* ``cylinder``,
+``sample_rate``; *speed* ``sample_rate``. Any sensor may override the imperfection keys.
+Unknown keys are errors (with a did-you-mean) naming the file and key.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from predict._toml import Table, load_toml
+from predict.errors import ConfigError
+
+from .imperfections import Imperfections
+from .profile import SpeedProfile, exponential_coastdown, from_table, ramp, steady
+
+__all__ = ["Scene", "SensorSpec", "LoadSpec", "SENSOR_KINDS"]
+
+#: sensor kinds and the keys each accepts (besides kind, name and the imperfection keys)
+SENSOR_KINDS = {
+    "torsiograph": ("node", "quantity", "sample_rate", "location"),
+    "encoder": ("node", "pulses_per_rev", "missing_teeth", "tdc_offset_deg", "location"),
+    "tacho": ("node", "pulses_per_rev", "missing_teeth", "tdc_offset_deg", "output",
+              "sample_rate", "location"),
+    "vibrograph": ("point", "mount", "direction", "quantity", "sample_rate", "location"),
+    "pressure": ("cylinder", "sample_rate", "location"),
+    "speed": ("sample_rate", "location"),
+}
+
+_IMPERFECTION_KEYS = ("noise_rms", "drift_rate", "tooth_error_deg", "butt_joint_deg",
+                      "jitter_s", "timer_resolution_s", "dropout_rate", "spurious_rate")
+
+
+@dataclass(frozen=True)
+class SensorSpec:
+    """One sensor of a scene.
+
+    Attributes
+    ----------
+    name : str
+        Channel name in the record.
+    kind : str
+        One of :data:`SENSOR_KINDS`.
+    params : dict
+        Kind-specific settings (SI; angles in keys named ``_deg``).
+    imperfections : Imperfections
+    """
+
+    name: str
+    kind: str
+    params: dict
+    imperfections: Imperfections = field(default_factory=Imperfections)
+
+    @property
+    def sample_rate(self):
+        """Sample rate, Hz (None for pulse trains)."""
+        return self.params.get("sample_rate")
+
+
+@dataclass(frozen=True)
+class LoadSpec:
+    """Engine load along the run.
+
+    Attributes
+    ----------
+    imep : float or None
+        Mean indicated pressure, Pa, at ``reference_rpm`` (None: the engine's combustion data).
+    law : str
+        "constant" or "propeller" (imep proportional to speed squared).
+    reference_rpm : float or None
+        Speed at which ``imep`` applies for the propeller law, rpm.
+    """
+
+    imep: float | None = None
+    law: str = "constant"
+    reference_rpm: float | None = None
+
+    def scale(self, speed_rpm):
+        """Gas-load factor relative to ``imep`` at each speed (1 for a constant load)."""
+        speed_rpm = np.asarray(speed_rpm, float)
+        if self.law == "constant":
+            return np.ones_like(speed_rpm)
+        return (speed_rpm / self.reference_rpm) ** 2
+
+
+@dataclass(frozen=True)
+class Scene:
+    """A synthetic test-bench scene (see the module docstring for the TOML form).
+
+    Attributes
+    ----------
+    name : str
+    engine : predict.engine.Engine
+    shaftline : predict.torsion.TorsionalSystem or None
+    mounts : predict.mounts.MountedEngine or None
+    profile : SpeedProfile
+    load : LoadSpec
+    sensors : tuple of SensorSpec
+    seed : int
+    max_order : float
+    start_angle_deg : float
+    truth_rate : float
+        Hz.
+    source : str
+        Scene file (or "python").
+    settings : dict
+        The scene as read (for the truth's record of parameters).
+    """
+
+    name: str
+    engine: object
+    shaftline: object
+    mounts: object
+    profile: SpeedProfile
+    load: LoadSpec
+    sensors: tuple
+    seed: int = 0
+    max_order: float = 12.0
+    start_angle_deg: float = 0.0
+    truth_rate: float = 20.0
+    source: str = "python"
+    settings: dict = field(default_factory=dict)
+
+    def __post_init__(self):
+        if not self.sensors:
+            raise ConfigError(f"scene {self.name!r} has no sensors; add [[sensor]] tables")
+        names = [s.name for s in self.sensors]
+        dup = sorted({n for n in names if names.count(n) > 1})
+        if dup:
+            raise ConfigError(f"scene {self.name!r}: sensor names must be unique, repeated: "
+                              f"{', '.join(dup)}")
+        needs_shaft = [s.name for s in self.sensors if s.kind in ("torsiograph", "encoder",
+                                                                    "tacho")]
+        if needs_shaft and self.shaftline is None:
+            raise ConfigError(f"scene {self.name!r}: sensors {', '.join(needs_shaft)} need a "
+                              "shaft line ([scene] shaftline = 'path.toml')")
+        needs_mounts = [s.name for s in self.sensors if s.kind == "vibrograph"]
+        if needs_mounts and self.mounts is None:
+            raise ConfigError(f"scene {self.name!r}: vibrograph sensors {', '.join(needs_mounts)}"
+                              " need a mount model ([mounts] in the engine file or "
+                              "[scene] mounts = 'path.toml')")
+        if self.shaftline is not None:
+            nodes = self.shaftline.node_names
+            for s in self.sensors:
+                node = s.params.get("node")
+                if node is not None and node not in nodes:
+                    from predict._validate import suggest
+
+                    raise ConfigError(f"scene {self.name!r}: sensor {s.name!r} node={node!r} is "
+                                      f"not a shaft-line node{suggest(node, nodes)}; nodes: "
+                                      f"{', '.join(nodes)}")
+
+    # ------------------------------------------------------------------------------ TOML
+    @classmethod
+    def from_toml(cls, path):
+        """Read a scene file.
+
+        Raises
+        ------
+        ConfigError
+            Naming the file and the dotted key, for a missing, invalid or unknown key.
+        FileNotFoundError
+            If the scene or a model file it names does not exist.
+
+        Examples
+        --------
+        >>> from pathlib import Path
+        >>> root = Path(__file__).resolve().parents[2]
+        >>> scene = Scene.from_toml(root / "sample_data/scenes/i4_runup.toml")
+        >>> scene.profile.kind, len(scene.sensors) > 0
+        ('runup', True)
+        """
+        path = Path(path)
+        doc = load_toml(path, error=ConfigError)
+        st = doc.table("scene", None)
+        if st is None:
+            raise ConfigError(f"{path}: has no [scene] table")
+        engine_path = _model_path(path, st, "engine", required=True)
+        from predict.engine import Engine
+
+        engine = Engine.from_toml(engine_path)
+        shaftline = None
+        shaft_path = _model_path(path, st, "shaftline", required=False)
+        if shaft_path is not None:
+            from predict.torsion import from_toml as torsion_from_toml
+
+            shaftline = torsion_from_toml(shaft_path)
+        mounts = None
+        mounts_path = _model_path(path, st, "mounts", required=False)
+        if mounts_path is None and "mounts" in load_toml(engine_path).data:
+            mounts_path = engine_path
+        if mounts_path is not None:
+            from predict.mounts import MountedEngine
+
+            mounts = MountedEngine.from_toml(mounts_path)
+        name = st.string("name", path.stem)
+        seed = st.integer("seed", 0, minimum=0)
+        max_order = st.positive("max_order", 12.0)
+        start_angle = st.number("start_angle_deg", 0.0)
+        truth_rate = st.positive("truth_rate", 20.0)
+        st.check_unknown(["description"])
+        profile = _profile(doc.table("profile", None), path)
+        load = _load(doc.table("load", None), engine)
+        defaults = Imperfections()
+        it = doc.table("imperfections", None)
+        if it is not None:
+            defaults = Imperfections.from_table(it)
+            it.check_unknown()
+        sensors = tuple(_sensor(t, defaults) for t in doc.tables("sensor", []))
+        doc.check_unknown(["description"])
+        settings = dict(doc.data)
+        return cls(name=name, engine=engine, shaftline=shaftline, mounts=mounts,
+                   profile=profile, load=load, sensors=sensors, seed=seed, max_order=max_order,
+                   start_angle_deg=start_angle, truth_rate=truth_rate, source=str(path),
+                   settings=settings)
+
+
+def _model_path(scene_path, table, key, *, required):
+    value = table.string(key, ... if required else None)
+    if value is None:
+        return None
+    p = (scene_path.parent / value).resolve()
+    if not p.exists():
+        raise FileNotFoundError(f"{scene_path}: scene.{key} = {value!r}: file {p} does not exist")
+    return p
+
+
+def _profile(t: Table | None, path) -> SpeedProfile:
+    if t is None:
+        raise ConfigError(f"{path}: has no [profile] table (steady, runup, coastdown, "
+                          "exponential or table)")
+    kind = t.string("kind", options=["steady", "runup", "coastdown", "exponential", "table"])
+    try:
+        if kind == "steady":
+            prof = steady(t.positive("speed_rpm"), duration=t.positive("duration"))
+        elif kind in ("runup", "coastdown"):
+            start, end = t.positive("start_rpm"), t.positive("end_rpm")
+            if (kind == "runup") != (end > start):
+                t.fail("end_rpm", f"= {end:g} must be {'above' if kind == 'runup' else 'below'} "
+                                  f"start_rpm = {start:g} for kind = {kind!r}")
+            prof = ramp(start, end, duration=t.positive("duration"),
+                        hold_start=t.number("hold_start", 0.0, low=0.0),
+                        hold_end=t.number("hold_end", 0.0, low=0.0))
+        elif kind == "exponential":
+            prof = exponential_coastdown(t.positive("start_rpm"), t.positive("end_rpm"),
+                                         time_constant=t.positive("time_constant"),
+                                         tolerance_rpm=t.positive("tolerance_rpm", 0.5))
+        else:
+            prof = from_table(t.numbers("time", low=0.0), t.numbers("speed_rpm", low=0.0,
+                                                                    strict_low=True))
+    except ConfigError as exc:
+        if str(exc).startswith(str(path)):
+            raise
+        raise ConfigError(f"{t.where()}: {exc}") from None
+    t.check_unknown(["description"])
+    return prof
+
+
+def _load(t: Table | None, engine) -> LoadSpec:
+    if t is None:
+        return LoadSpec()
+    imep = t.positive("imep", None)
+    law = t.string("law", "constant", options=["constant", "propeller"])
+    ref = t.positive("reference_rpm", None)
+    if law == "propeller":
+        ref = ref or engine.rated_speed_rpm
+        if ref is None:
+            t.fail("reference_rpm", "is needed for law = 'propeller' (the engine has no "
+                                    "rated_speed_rpm)")
+    t.check_unknown(["description"])
+    return LoadSpec(imep=imep, law=law, reference_rpm=ref)
+
+
+def _sensor(t: Table, defaults: Imperfections) -> SensorSpec:
+    kind = t.string("kind", options=list(SENSOR_KINDS))
+    name = t.string("name")
+    if not name or not name.replace("_", "").isalnum():
+        t.fail("name", f"= {name!r} must be letters, digits and underscores (a channel name)")
+    p: dict = {}
+    if kind in ("torsiograph", "encoder", "tacho"):
+        p["node"] = t.string("node")
+    if kind == "torsiograph":
+        p["quantity"] = t.string("quantity", "angle", options=["angle", "angular_velocity"])
+        p["sample_rate"] = t.positive("sample_rate")
+    if kind in ("encoder", "tacho"):
+        p["pulses_per_rev"] = t.integer("pulses_per_rev", minimum=1)
+        p["missing_teeth"] = t.integer("missing_teeth", 0, minimum=0)
+        if p["missing_teeth"] and p["missing_teeth"] >= p["pulses_per_rev"] - 1:
+            t.fail("missing_teeth", f"= {p['missing_teeth']} must be less than "
+                                    f"pulses_per_rev - 1 = {p['pulses_per_rev'] - 1}")
+        p["tdc_offset_deg"] = t.number("tdc_offset_deg", 0.0)
+    if kind == "tacho":
+        p["output"] = t.string("output", "pulses", options=["pulses", "analogue"])
+        if p["output"] == "analogue":
+            p["sample_rate"] = t.positive("sample_rate")
+    if kind == "vibrograph":
+        if ("point" in t) == ("mount" in t):
+            t.fail("point", "give exactly one of point = [x, y, z] (m) or mount = 'name'")
+        if "point" in t:
+            p["point"] = t.numbers("point", length=3).tolist()
+        else:
+            p["mount"] = t.string("mount")
+        p["direction"] = t.string("direction", "z", options=["x", "y", "z"])
+        p["quantity"] = t.string("quantity", "acceleration",
+                                 options=["acceleration", "velocity", "displacement"])
+        p["sample_rate"] = t.positive("sample_rate")
+    if kind == "pressure":
+        p["cylinder"] = t.integer("cylinder", 1, minimum=1)
+        p["sample_rate"] = t.positive("sample_rate")
+    if kind == "speed":
+        p["sample_rate"] = t.positive("sample_rate")
+    location = t.string("location", None)
+    if location is not None:
+        p["location"] = location
+    imperfections = Imperfections.from_table(t, defaults)
+    t.check_unknown(list(_IMPERFECTION_KEYS))
+    return SensorSpec(name=name, kind=kind, params=p, imperfections=imperfections)

@@ -1,0 +1,157 @@
+"""Vibrograph channels at the engine mounts: balance residuals and torque reaction through the
+mount model.
+
+The engine block is a rigid body on elastic mounts (:class:`predict.mounts.MountedEngine`). Per
+order it is shaken by
+
+* the free inertia forces and moments of :func:`predict.balance.unbalance` (integer orders,
+  amplitude exactly proportional to ``Omega**2``), and
+* the reaction to the crankshaft torque, the roll moment ``-sum_c T_q,c`` about the crankshaft
+  axis (all orders of the cycle, gas part scaled with the load plus ``Omega**2`` times the
+  inertia part; :mod:`predict.torsion.excitation`).
+
+The motion of a point is ``Re[(load H_gas(Omega) + Omega**2 H_in(Omega)) e^{i q psi(t)}]`` with
+the harmonic response ``H`` of the mounted block at ``q Omega`` (:meth:`MountedEngine.response`,
+exact 6x6 solve) tabulated on a speed grid and interpolated along the run: a **quasi-steady**
+response at the instantaneous speed. It is exact at constant speed; during a sweep it omits the
+transient of the mount modes, of relative order ``alpha q / (2 zeta omega_m**2)`` near a mount
+resonance (``zeta`` = loss factor / 2; well-damped rubber mounts keep it small), which the
+module states rather than models.
+
+Frame: x along the crankshaft, y horizontal the way the top of the crank moves, z up; the
+block's roll in the direction of rotation is a rotation about ``-x``.
+
+References
+----------
+Liang Shoupan, *Engine dynamics* (發動機動力學), 1948, ch. 4 (effects of unbalanced forces on
+the foundation) and ch. 9 (vibrographs).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from predict.errors import ConfigError
+
+__all__ = ["MountChannels"]
+
+TWO_PI = 2.0 * np.pi
+_AXIS = {"x": 0, "y": 1, "z": 2}
+
+
+def _roll_harmonics(engine, excitation, orders):
+    """Total crankshaft torque per order (gas part, inertia part per unit Omega**2), N·m.
+
+    ``T(psi) = Re[(gas + Omega**2 inertia) e^{i q psi}]``, the sum over the cylinders of their
+    torque harmonics delayed by the firing angles.
+    """
+    g = excitation.harmonics(np.array([0.0]), orders)[0]            # (n_o, z)
+    i1 = excitation.harmonics(np.array([1.0]), orders)[0] - g
+    phase = np.exp(-1j * np.deg2rad(np.outer(orders, engine.firing_angles_deg())))
+    return (g * phase).sum(axis=1), (i1 * phase).sum(axis=1)
+
+
+class MountChannels:
+    """Per-order harmonic responses of sensor points on the mounted block.
+
+    Parameters
+    ----------
+    mounted : predict.mounts.MountedEngine
+    engine : predict.engine.Engine
+    excitation : predict.torsion.excitation.Excitation or None
+        Cylinder torque harmonics (None: no torque reaction).
+    orders : numpy.ndarray
+        Orders of the cycle to model.
+    points : numpy.ndarray (p, 3)
+        Sensor points, m.
+    speed_grid : numpy.ndarray
+        Crankshaft speeds (rad/s) to tabulate the responses on.
+
+    Attributes
+    ----------
+    gas, inertia : numpy.ndarray (n_orders, p, 3, n_grid), complex
+        Displacement (m) per unit load and per unit ``Omega**2`` at each grid speed.
+    """
+
+    def __init__(self, mounted, engine, excitation, orders, points, speed_grid):
+        from predict.balance import unbalance
+        from predict.mounts import excitation_from_unbalance
+
+        self.orders = np.asarray(orders, float)
+        self.points = np.atleast_2d(np.asarray(points, float))
+        self.speed_grid = np.asarray(speed_grid, float)
+        n_o, n_p, n_g = self.orders.size, self.points.shape[0], self.speed_grid.size
+        self.gas = np.zeros((n_o, n_p, 3, n_g), complex)
+        self.inertia = np.zeros((n_o, n_p, 3, n_g), complex)
+        theta_f = float(engine.firing_tdc_shaft_angle)
+        integer = [int(round(q)) for q in self.orders if abs(q - round(q)) < 1e-9 and q >= 1]
+        ub = unbalance(engine, omega=1.0, orders=tuple(integer)) if integer else None
+        if excitation is not None:
+            roll_gas, roll_in = _roll_harmonics(engine, excitation, self.orders)
+        else:
+            roll_gas = roll_in = np.zeros(n_o, complex)
+        exc_f, exc_m, exc_p, exc_g, exc_i = [], [], [], [], []
+        for i, q in enumerate(self.orders):
+            force = np.zeros(3, complex)
+            moment = np.zeros(3, complex)
+            point = np.zeros(3)
+            n = int(round(q))
+            if ub is not None and abs(q - n) < 1e-9 and n in integer:
+                ex = excitation_from_unbalance(ub, n)
+                shift = np.exp(1j * n * theta_f)          # shaft angle theta = psi + theta_f
+                force, moment, point = ex["force"] * shift, ex["moment"] * shift, ex["point"]
+            # roll reaction on the block: -(crankshaft torque) in the direction of rotation,
+            # i.e. +torque about the x axis
+            m_in = moment.copy()
+            m_in[0] += roll_in[i]
+            exc_f.append(force)
+            exc_m.append(m_in)
+            exc_p.append(point)
+            exc_g.append(roll_gas[i])
+        # orders whose excitation cancels (balanced engines, minor orders of the torque
+        # reaction) are skipped: relative 1e-9 of the largest excitation of each kind
+        lever = max(1.0, float(np.ptp(np.asarray(engine.cylinder_positions))))
+        size_in = np.array([np.abs(f).max() * lever + np.abs(m).max()
+                            for f, m in zip(exc_f, exc_m)])
+        size_gas = np.abs(np.array(exc_g))
+        keep_in = size_in > 1e-9 * max(size_in.max(), 1e-300)
+        keep_gas = size_gas > 1e-9 * max(size_gas.max(), 1e-300)
+        for i, q in enumerate(self.orders):
+            freq = q * self.speed_grid / TWO_PI
+            if keep_in[i]:
+                r = mounted.response(np.broadcast_to(exc_f[i], (n_g, 3)),
+                                     np.broadcast_to(exc_m[i], (n_g, 3)), freq,
+                                     point=exc_p[i], at=self.points)
+                self.inertia[i] = np.moveaxis(r.displacement, 0, -1)
+            if keep_gas[i]:
+                m_gas = np.array([exc_g[i], 0.0, 0.0], complex)
+                r = mounted.response(np.zeros((n_g, 3)), np.broadcast_to(m_gas, (n_g, 3)), freq,
+                                     point=exc_p[i], at=self.points)
+                self.gas[i] = np.moveaxis(r.displacement, 0, -1)
+
+    def transfer(self, order_index, point_index, direction, quantity, speed, load):
+        """Complex amplitude of one point's motion along the run (quasi-steady).
+
+        Returns ``A(t)`` such that the signal is ``Re[A(t) e^{i q psi(t)}]``, SI units of the
+        quantity (m, m/s or m/s^2).
+        """
+        axis = _AXIS[direction]
+        q = self.orders[order_index]
+        g = self.gas[order_index, point_index, axis]
+        h = self.inertia[order_index, point_index, axis]
+        grid = self.speed_grid
+        if grid.size == 1:
+            disp = load * g[0] + speed**2 * h[0]
+        else:
+            disp = (load * (np.interp(speed, grid, g.real) + 1j * np.interp(speed, grid, g.imag))
+                    + speed**2 * (np.interp(speed, grid, h.real)
+                                  + 1j * np.interp(speed, grid, h.imag)))
+        w = q * speed
+        if quantity == "displacement":
+            return disp
+        if quantity == "velocity":
+            return 1j * w * disp
+        if quantity == "acceleration":
+            return -(w**2) * disp
+        raise ConfigError(f"quantity={quantity!r} is not one of 'acceleration', 'velocity', "
+                          "'displacement'")
