@@ -18,6 +18,11 @@ Interpolation error for a tone at ``f`` sampled at ``fs`` (``h = 2π f/fs``): li
 (peak, relative), cubic ≈ 3h⁴/128, band-limited < 1e-4 up to 0.4 fs and ≈ 1e-7 below 0.1 fs.
 The bench suite ``orders`` measures these against a closed form.
 
+Half orders of a four-stroke engine (one cycle = 720°) need no separate grid: the angle samples
+run continuously from the first sample, and an analysis block of an even number of revolutions
+(``revolutions`` in :mod:`analysis.orders`, or ``revolutions_per_cycle=2`` in
+:func:`analysis.synchronous_average`) puts every half order on a bin.
+
 Long records are processed in chunks of ``chunk`` input samples (overlapped by the filter's
 settling length), so the working memory is bounded whatever the record length.
 

@@ -52,3 +52,17 @@ def test_against_mpmath_quadrature():
     for k in (2, 4, 6, 8):
         ref = mpmath.quad(lambda t: f(t) * mpmath.cos(k * t), [0, mpmath.pi / 2, mpmath.pi]) * 2 / (2 * mpmath.pi) * 2
         assert h.a[k] == pytest.approx(float(ref), abs=1e-13)
+
+
+def test_12_ordinate_schedule_on_the_book_example_shows_its_aliasing():
+    """Runge's 12-ordinate schedule on the same curve: a₂ agrees with the 24-ordinate value
+    to the size of a₁₀ (aliased onto 2), while a₄ picks up a₈ (8 aliases onto 12 − 8 = 4) —
+    the stated error of an n-ordinate analysis."""
+    from analysis.harmonic import runge12
+
+    theta = 2 * np.pi * np.arange(12) / 12
+    h12 = runge12(normalised_piston_acceleration(theta))
+    h48 = harmonics(normalised_piston_acceleration, 48)
+    assert h12.a[2] == pytest.approx(h48.a[2] + h48.a[10] + h48.a[14], abs=1e-12)
+    assert h12.a[4] == pytest.approx(h48.a[4] + h48.a[8] + h48.a[16] + h48.a[20], abs=1e-12)
+    assert abs(h12.a[4] - h48.a[4]) == pytest.approx(abs(h48.a[8]), rel=0.05)
