@@ -397,8 +397,9 @@ class Engine:
 
     @property
     def reference_position(self) -> float:
-        """Axial reference point for moments: midpoint of the first and last cylinders, m."""
-        return float(0.5 * (self._pos[0] + self._pos[-1]))
+        """Axial reference point for moments: midpoint between the first and last cylinder
+        along the shaft (the extreme cylinder positions), m."""
+        return float(0.5 * (self._pos.min() + self._pos.max()))
 
     @property
     def cycle_angle(self) -> float:
