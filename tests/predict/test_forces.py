@@ -130,3 +130,16 @@ def test_pressure_errors():
                                                              cycle=2))
     with pytest.raises(ModelError, match=r"cylinder=2 must be <= 1"):
         forces.cylinder_torque(e, 0.0, omega=1.0, cylinder=2)
+
+
+def test_two_stroke_mean_torque_and_trace():
+    e = Engine(crank_angles_deg=[0, 120, 240], crank_radius=0.2, rod_length=0.8,
+               reciprocating_mass=210.0, cylinder_positions=[0, 0.5, 1.0], cycle=2,
+               firing_order=[1, 3, 2], bore=0.32, compression_ratio=15.0)
+    tr = synthetic_pressure(e, imep=1.8e6, intake_pressure=2.5e5, exhaust_pressure=2.3e5)
+    assert tr.angle[-1] < 2 * np.pi and tr.imep(e) == pytest.approx(1.8e6, rel=1e-10)
+    n = 2880
+    theta = np.arange(n) * 2 * np.pi / n
+    torque = forces.engine_torque(e, theta, omega=60.0, pressure=tr)
+    assert torque.mean() == pytest.approx(3 * tr.work(e) / (2 * np.pi), rel=2e-5)
+    np.testing.assert_allclose(np.diff(np.sort(e.firing_angles_deg())), [120, 120])
