@@ -34,6 +34,7 @@ References
 
 from __future__ import annotations
 
+import contextlib
 import logging
 import math
 from dataclasses import dataclass, field, replace
@@ -41,9 +42,9 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 import scipy.linalg
 
-from .._validate import (check_finite_array, check_int, check_nonnegative, check_option,
-                         check_positive)
+from .._validate import check_finite_array, check_int, check_option, check_positive
 from ..errors import ModelError
+from .elements import STEEL, Bearing, Disk, Material, ShaftSection, element_matrices
 from .results import CampbellDiagram, CriticalSpeeds, LateralModes, UnbalanceResponse
 
 __all__ = ["Material", "STEEL", "ShaftSection", "Disk", "Bearing", "Rotor", "THEORIES"]
@@ -54,260 +55,55 @@ THEORIES = ("timoshenko", "euler-bernoulli")
 _TOL = 1e-9  # m: positions closer than this are the same node
 
 
-@dataclass(frozen=True)
-class Material:
-    """Isotropic linear-elastic material.
+_CONTROLLER: list = []  # lazily created threadpoolctl controller (empty list: not tried yet)
 
-    Parameters
-    ----------
-    youngs_modulus : float
-        E, Pa.
-    density : float
-        ρ, kg/m³.
-    poisson_ratio : float, optional
-        ν; with ``shear_modulus`` omitted, G = E / (2 (1 + ν)).
-    shear_modulus : float, optional
-        G, Pa (takes precedence; then ν = E/(2G) − 1).
 
-    Examples
-    --------
-    >>> round(Material(2.0e11, 7800.0, poisson_ratio=0.25).shear_modulus / 1e9, 3)
-    80.0
+def _small_blas(n_dof: int):
+    """Single-threaded BLAS for small dense problems when threadpoolctl is available.
+
+    Threaded BLAS on matrices of a few hundred rows costs more in synchronisation than it
+    gains, badly so on a loaded machine (measured 5-20x slower); large models keep the
+    default threading. Without threadpoolctl this is a no-op.
     """
-
-    youngs_modulus: float
-    density: float
-    poisson_ratio: float | None = 0.3
-    shear_modulus: float | None = None
-
-    def __post_init__(self):
-        put = object.__setattr__
-        put(self, "youngs_modulus", check_positive(self.youngs_modulus, "youngs_modulus",
-                                                   error=ModelError))
-        put(self, "density", check_positive(self.density, "density", error=ModelError))
-        if self.shear_modulus is not None:
-            g = check_positive(self.shear_modulus, "shear_modulus", error=ModelError)
-            put(self, "shear_modulus", g)
-            put(self, "poisson_ratio", self.youngs_modulus / (2 * g) - 1)
-        else:
-            if self.poisson_ratio is None:
-                raise ModelError("give poisson_ratio or shear_modulus")
-            nu = float(self.poisson_ratio)
-            if not -1.0 < nu < 0.5:
-                raise ModelError(f"poisson_ratio={nu!r} must lie in (-1, 0.5)")
-            put(self, "poisson_ratio", nu)
-            put(self, "shear_modulus", self.youngs_modulus / (2 * (1 + nu)))
+    if n_dof > 400:
+        return contextlib.nullcontext()
+    if not _CONTROLLER:
+        try:
+            from threadpoolctl import ThreadpoolController
+            _CONTROLLER.append(ThreadpoolController())
+        except ImportError:  # optional
+            _CONTROLLER.append(None)
+    ctl = _CONTROLLER[0]
+    return contextlib.nullcontext() if ctl is None else ctl.limit(limits=1, user_api="blas")
 
 
-#: structural steel used when a section names no material
-STEEL = Material(youngs_modulus=2.11e11, density=7810.0, poisson_ratio=0.3)
+def _hermitian_eigh(h_re, h_im, s):
+    """Eigenpairs of the Hermitian pencil (h_re + i h_im) x = λ s x, s real positive definite,
+    through the real symmetric form [[h_re, −h_im], [h_im, h_re]] of twice the size (every
+    eigenvalue appears twice; [x_r; x_i] and [−x_i; x_r] are x and i x). Real LAPACK is used
+    because small complex solves are much slower under threaded BLAS.
 
-
-@dataclass(frozen=True)
-class ShaftSection:
-    """A uniform length of circular shaft.
-
-    Parameters
-    ----------
-    length : float
-        m.
-    outer_diameter : float
-        m.
-    inner_diameter : float
-        Bore, m (0 = solid).
-    material : Material
-    n_elements : int, optional
-        Elements in this section (before splitting at disks/bearings); default from the
-        rotor's ``max_element_length``.
-
-    Examples
-    --------
-    >>> s = ShaftSection(length=1.0, outer_diameter=0.1)
-    >>> round(s.shear_coefficient, 4)  # Cowper, solid, nu = 0.3
-    0.8864
+    Returns ascending eigenvalues and complex eigenvectors (columns), one per complex pair.
+    Raises numpy.linalg.LinAlgError if ``s`` is not positive definite.
     """
-
-    length: float
-    outer_diameter: float
-    inner_diameter: float = 0.0
-    material: Material = STEEL
-    n_elements: int | None = None
-
-    def __post_init__(self):
-        put = object.__setattr__
-        put(self, "length", check_positive(self.length, "length", error=ModelError))
-        put(self, "outer_diameter", check_positive(self.outer_diameter, "outer_diameter",
-                                                   error=ModelError))
-        inner = check_nonnegative(self.inner_diameter, "inner_diameter", error=ModelError)
-        if inner >= self.outer_diameter:
-            raise ModelError(f"inner_diameter={inner!r} must be < outer_diameter="
-                             f"{self.outer_diameter!r}")
-        put(self, "inner_diameter", inner)
-        if not isinstance(self.material, Material):
-            raise ModelError(f"material must be a Material, got {type(self.material).__name__}")
-        if self.n_elements is not None:
-            put(self, "n_elements", check_int(self.n_elements, "n_elements", minimum=1,
-                                              error=ModelError))
-
-    @property
-    def area(self) -> float:
-        """Cross-section area, m²."""
-        return math.pi * (self.outer_diameter**2 - self.inner_diameter**2) / 4
-
-    @property
-    def area_moment(self) -> float:
-        """Second moment of area about a diameter, m⁴."""
-        return math.pi * (self.outer_diameter**4 - self.inner_diameter**4) / 64
-
-    @property
-    def shear_coefficient(self) -> float:
-        """Cowper's shear coefficient κ of a (hollow) circular section."""
-        nu = self.material.poisson_ratio
-        m2 = (self.inner_diameter / self.outer_diameter) ** 2
-        return 6 * (1 + nu) * (1 + m2) ** 2 / ((7 + 6 * nu) * (1 + m2) ** 2 + (20 + 12 * nu) * m2)
-
-
-@dataclass(frozen=True)
-class Disk:
-    """A rigid disk at a position along the shaft.
-
-    Parameters
-    ----------
-    position : float
-        Axial position, m from the shaft's left end.
-    mass : float
-        kg.
-    diametral_inertia : float
-        Moment of inertia about a diameter through its centre, kg·m².
-    polar_inertia : float
-        Moment of inertia about the spin axis, kg·m².
-
-    Examples
-    --------
-    >>> d = Disk.from_geometry(position=0.5, outer_diameter=0.4, width=0.05, density=7810.0)
-    >>> round(d.mass, 3), round(d.polar_inertia / d.diametral_inertia, 3)
-    (49.072, 1.959)
-    """
-
-    position: float
-    mass: float
-    diametral_inertia: float = 0.0
-    polar_inertia: float = 0.0
-
-    def __post_init__(self):
-        put = object.__setattr__
-        put(self, "position", check_nonnegative(self.position, "position", error=ModelError))
-        put(self, "mass", check_positive(self.mass, "mass", error=ModelError))
-        put(self, "diametral_inertia", check_nonnegative(self.diametral_inertia,
-                                                         "diametral_inertia", error=ModelError))
-        put(self, "polar_inertia", check_nonnegative(self.polar_inertia, "polar_inertia",
-                                                     error=ModelError))
-
-    @classmethod
-    def from_geometry(cls, *, position, outer_diameter, width, inner_diameter=0.0,
-                      density=7810.0) -> "Disk":
-        """Disk of uniform density: m = ρ π (D² − d²) w / 4, I_p = m (D² + d²)/8,
-        I_d = I_p/2 + m w²/12."""
-        outer = check_positive(outer_diameter, "outer_diameter", error=ModelError)
-        width = check_positive(width, "width", error=ModelError)
-        inner = check_nonnegative(inner_diameter, "inner_diameter", error=ModelError)
-        if inner >= outer:
-            raise ModelError(f"inner_diameter={inner!r} must be < outer_diameter={outer!r}")
-        mass = check_positive(density, "density", error=ModelError) * math.pi * (
-            outer**2 - inner**2) * width / 4
-        ip = mass * (outer**2 + inner**2) / 8
-        return cls(position=position, mass=mass, polar_inertia=ip,
-                   diametral_inertia=ip / 2 + mass * width**2 / 12)
-
-
-@dataclass(frozen=True)
-class Bearing:
-    """Linear bearing (spring + damper to ground) at a position along the shaft.
-
-    Parameters
-    ----------
-    position : float
-        m from the left end.
-    kxx, kyy, kxy, kyx : float
-        Stiffness coefficients, N/m (``kyy`` defaults to ``kxx``). ``inf`` makes that
-        direction rigid (the degree of freedom is removed; no cross-coupling then).
-    cxx, cyy, cxy, cyx : float
-        Damping coefficients, N·s/m (``cyy`` defaults to ``cxx``).
-    clamp : bool
-        Also fix the slopes (a built-in end, e.g. for a cantilever).
-
-    Examples
-    --------
-    >>> Bearing(position=0.0, kxx=float("inf")).rigid
-    (True, True)
-    """
-
-    position: float
-    kxx: float
-    kyy: float | None = None
-    kxy: float = 0.0
-    kyx: float = 0.0
-    cxx: float = 0.0
-    cyy: float | None = None
-    cxy: float = 0.0
-    cyx: float = 0.0
-    clamp: bool = False
-
-    def __post_init__(self):
-        put = object.__setattr__
-        put(self, "position", check_nonnegative(self.position, "position", error=ModelError))
-        for name in ("kxx", "kyy"):
-            value = self.kxx if (name == "kyy" and self.kyy is None) else getattr(self, name)
-            value = float(value)
-            if not (value == math.inf or (math.isfinite(value) and value >= 0)):
-                raise ModelError(f"{name}={value!r} must be >= 0 N/m (or inf for rigid)")
-            put(self, name, value)
-        if self.cyy is None:
-            put(self, "cyy", self.cxx)
-        for name in ("kxy", "kyx", "cxy", "cyx"):
-            value = float(getattr(self, name))
-            if not math.isfinite(value):
-                raise ModelError(f"{name}={value!r} must be finite")
-            put(self, name, value)
-        for name in ("cxx", "cyy"):
-            put(self, name, check_nonnegative(getattr(self, name), name, error=ModelError))
-        if any(self.rigid) and (self.kxy or self.kyx or self.cxy or self.cyx):
-            raise ModelError("a rigid bearing direction cannot carry cross-coupling terms")
-
-    @property
-    def rigid(self) -> tuple[bool, bool]:
-        """Whether the x and y directions are rigid."""
-        return (self.kxx == math.inf, self.kyy == math.inf)
-
-
-# -- element matrices (one bending plane, dofs w1, θ1, w2, θ2) --------------------------------
-
-def _element(length, ei, rho_a, rho_i, phi):
-    """Stiffness, translational mass and rotary mass of a Timoshenko beam element.
-
-    φ = 12 EI / (κ G A L²) (0 = Euler-Bernoulli). Przemieniecki §5.6, §11.6; Friswell et al.
-    (2010) eq. 5.66-5.69.
-    """
-    L, p = length, phi
-    k = ei / ((1 + p) * L**3) * np.array([
-        [12, 6 * L, -12, 6 * L],
-        [6 * L, (4 + p) * L**2, -6 * L, (2 - p) * L**2],
-        [-12, -6 * L, 12, -6 * L],
-        [6 * L, (2 - p) * L**2, -6 * L, (4 + p) * L**2]])
-    a = 13 / 35 + 7 * p / 10 + p**2 / 3
-    b = (11 / 210 + 11 * p / 120 + p**2 / 24) * L
-    c = 9 / 70 + 3 * p / 10 + p**2 / 6
-    d = (13 / 420 + 3 * p / 40 + p**2 / 24) * L
-    e = (1 / 105 + p / 60 + p**2 / 120) * L**2
-    f = (1 / 140 + p / 60 + p**2 / 120) * L**2
-    mt = rho_a * L / (1 + p) ** 2 * np.array([
-        [a, b, c, -d], [b, e, d, -f], [c, d, a, -b], [-d, -f, -b, e]])
-    g = (1 / 10 - p / 2) * L
-    h = (2 / 15 + p / 6 + p**2 / 3) * L**2
-    j = (-1 / 30 - p / 6 + p**2 / 6) * L**2
-    mr = rho_i / (L * (1 + p) ** 2) * np.array([
-        [6 / 5, g, -6 / 5, g], [g, h, -g, j], [-6 / 5, -g, 6 / 5, -g], [g, j, -g, h]])
-    return k, mt, mr
+    n = s.shape[0]
+    big = np.block([[h_re, -h_im], [h_im, h_re]])
+    zero = np.zeros_like(s)
+    lam, vec = scipy.linalg.eigh(big, np.block([[s, zero], [zero, s]]))
+    cvec = vec[:n] + 1j * vec[n:]
+    tol = 1e-9 * max(np.abs(lam).max(), 1e-300)
+    values, vectors = [], []
+    i = 0
+    while i < lam.size:
+        j = i + 1
+        while j < lam.size and lam[j] - lam[i] <= tol + 1e-9 * abs(lam[i]):
+            j += 1
+        m = (j - i) // 2 or 1
+        u, _, _ = np.linalg.svd(cvec[:, i:j], full_matrices=False)
+        values.extend([lam[i:j].mean()] * m)
+        vectors.append(u[:, :m])
+        i = j
+    return np.asarray(values), np.concatenate(vectors, axis=1)
 
 
 @dataclass(frozen=True)
@@ -430,7 +226,7 @@ class Rotor:
             if self.theory == "timoshenko":
                 phi = 12 * ei / (sec.shear_coefficient * mat.shear_modulus * sec.area * L**2)
             rho_i = mat.density * sec.area_moment if self.rotary_inertia else 0.0
-            k, mt, mr = _element(L, ei, mat.density * sec.area, rho_i, phi)
+            k, mt, mr = element_matrices(L, ei, mat.density * sec.area, rho_i, phi)
             iu = np.array([4 * e, 4 * e + 2, 4 * e + 4, 4 * e + 6])
             iv = iu + 1
             for idx in (iu, iv):
@@ -509,6 +305,10 @@ class Rotor:
 
     # -- eigen-analysis --------------------------------------------------------------------
     def _eig(self, model: _Model, speed: float, n_modes: int):
+        with _small_blas(model.K.shape[0]):
+            return self._eig_dense(model, speed, n_modes)
+
+    def _eig_dense(self, model: _Model, speed: float, n_modes: int):
         K, M = model.K, model.M
         D = model.C + speed * model.G
         scale = 1.0 / np.sqrt(np.diag(M))  # balance translations against slopes
@@ -528,7 +328,7 @@ class Rotor:
             a = np.block([[-Ds, -Ks], [Ks, np.zeros((n, n))]])
             b = np.block([[Ms, np.zeros((n, n))], [np.zeros((n, n)), Ks]])
             try:
-                lam, vec = scipy.linalg.eigh(-1j * a, b)
+                lam, vec = _hermitian_eigh(np.zeros_like(a), -a, b)  # −i a, a real skew
             except np.linalg.LinAlgError:
                 pass  # singular K (free rotor): fall back to the general solver
             else:
@@ -647,32 +447,10 @@ class Rotor:
         Ks, Ms, Gs = (scale[:, None] * A * scale[None, :] for A in (K, M, G))
         symmetric = np.allclose(Ks, Ks.T, rtol=0, atol=1e-12 * np.abs(Ks).max())
         rows = []
-        for k in orders:
-            B = k**2 * Ms - 1j * k * Gs
-            if symmetric:
-                try:
-                    mu, vec = scipy.linalg.eigh(B, Ks.astype(complex))
-                except np.linalg.LinAlgError:
-                    raise ModelError("the rotor is not supported (singular stiffness): add "
-                                     "bearings before asking for critical speeds") from None
-                keep = mu > 1e-14 * np.abs(mu).max()
-                om = 1.0 / np.sqrt(mu[keep])
-                vec = vec[:, keep]
-            else:
-                lam, vec = scipy.linalg.eig(Ks, B)
-                keep = (np.isfinite(lam) & (lam.real > 0)
-                        & (np.abs(lam.imag) < 1e-8 * np.abs(lam)))
-                om, vec = np.sqrt(lam[keep].real), vec[:, keep]
-            order = np.argsort(om)
-            om = om[order]
-            full = self._circularise(om, self._full(model, scale[:, None] * vec[:, order]))
-            labels = self._whirl(full)[1]
-            if speed_range_rpm is not None:
-                lo, hi = np.asarray(speed_range_rpm, dtype=float) * np.pi / 30
-                inside = (om >= lo) & (om <= hi)
-                om, labels = om[inside], labels[inside]
-            om, labels = om[:n_modes], labels[:n_modes]
-            rows.extend((k, w, o) for o, w in zip(om, labels))
+        with _small_blas(K.shape[0]):
+            for k in orders:
+                rows.extend(self._criticals_for_order(model, float(k), Ks, Ms, Gs, scale,
+                                                      symmetric, n_modes, speed_range_rpm))
         omega = np.array([r[2] for r in rows])
         mode = np.ones(len(rows), dtype=int)
         seen: dict = {}
@@ -683,6 +461,33 @@ class Rotor:
                               whirl=tuple(r[1] for r in rows), mode=mode,
                               method="hermitian eigen-solve K φ = Ω² (k² M − i k G) φ",
                               n_elements=model.n_elements, theory=self.theory)
+
+    def _criticals_for_order(self, model, k, Ks, Ms, Gs, scale, symmetric, n_modes,
+                             speed_range_rpm):
+        """Critical speeds of one order: rows (order, whirl, Ω)."""
+        if symmetric:
+            try:
+                mu, vec = _hermitian_eigh(k**2 * Ms, -k * Gs, Ks)
+            except np.linalg.LinAlgError:
+                raise ModelError("the rotor is not supported (singular stiffness): add "
+                                 "bearings before asking for critical speeds") from None
+            keep = mu > 1e-14 * np.abs(mu).max()
+            om = 1.0 / np.sqrt(mu[keep])
+            vec = vec[:, keep]
+        else:
+            lam, vec = scipy.linalg.eig(Ks, k**2 * Ms - 1j * k * Gs)
+            keep = (np.isfinite(lam) & (lam.real > 0)
+                    & (np.abs(lam.imag) < 1e-8 * np.abs(lam)))
+            om, vec = np.sqrt(lam[keep].real), vec[:, keep]
+        order = np.argsort(om)
+        om = om[order]
+        full = self._circularise(om, self._full(model, scale[:, None] * vec[:, order]))
+        labels = self._whirl(full)[1]
+        if speed_range_rpm is not None:
+            lo, hi = np.asarray(speed_range_rpm, dtype=float) * np.pi / 30
+            inside = (om >= lo) & (om <= hi)
+            om, labels = om[inside], labels[inside]
+        return [(k, w, o) for o, w in zip(om[:n_modes], labels[:n_modes])]
 
     def campbell(self, speeds, *, n_modes: int = 6, orders=(1.0,)) -> CampbellDiagram:
         """Campbell diagram: natural frequencies and whirl at each spin speed.
@@ -780,6 +585,12 @@ class Rotor:
         nodes = [self._node(z, float(p), "probes") for p in probes]
         f = force[model.free]
         out = np.empty((speeds.size, len(nodes), 2), dtype=complex)
+        with _small_blas(model.K.shape[0]):
+            self._solve_response(model, speeds, f, nodes, out)
+        return UnbalanceResponse(speeds=speeds, positions=np.asarray(probes, dtype=float),
+                                 response=out)
+
+    def _solve_response(self, model, speeds, f, nodes, out):
         for i, s in enumerate(speeds):
             dyn = model.K - s**2 * model.M + 1j * s * (model.C + s * model.G)
             try:
@@ -789,8 +600,6 @@ class Rotor:
                                  "the response is unbounded; add bearing damping") from None
             out[i, :, 0] = q[[4 * n for n in nodes]]
             out[i, :, 1] = q[[4 * n + 1 for n in nodes]]
-        return UnbalanceResponse(speeds=speeds, positions=np.asarray(probes, dtype=float),
-                                 response=out)
 
     @staticmethod
     def _node(z, pos, what) -> int:
