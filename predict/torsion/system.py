@@ -180,19 +180,23 @@ class TorsionalSystem:
             i = int(np.flatnonzero(k < 0)[0])
             raise ModelError(f"stiffnesses[{i}]={float(k[i])!r} must be >= 0 (N·m/rad)")
 
-        def per(values, name, size, default, low=0.0):
+        def per(values, name, size, default, low=0.0, allow_nan=False):
             if values is None:
                 return np.full(size, default, float)
-            arr = check_finite_array(np.broadcast_to(np.asarray(values, float), (size,))
-                                     if np.ndim(values) == 0 else values, name, ndim=1,
-                                     error=ModelError) if not (np.ndim(values) and np.isnan(
-                                         np.asarray(values, float)).any()) else np.asarray(
-                                             values, float)
-            if arr.size != size:
+            try:
+                arr = np.array(np.broadcast_to(np.asarray(values, float), (size,))
+                               if np.ndim(values) == 0 else values, dtype=float)
+            except (TypeError, ValueError):
+                raise ModelError(f"{name} must be numeric") from None
+            if arr.shape != (size,):
                 raise ModelError(f"{name} has {arr.size} values, expected {size}")
+            bad = np.isinf(arr) | (np.isnan(arr) & (not allow_nan))
+            if bad.any():
+                raise ModelError(f"{name} contains NaN/inf, first at index "
+                                 f"{int(np.flatnonzero(bad)[0])}")
             if low is not None and np.any(arr[np.isfinite(arr)] < low):
                 raise ModelError(f"{name} must be >= {low:g}, got {arr.tolist()}")
-            return arr.astype(float)
+            return arr
 
         self._j = j
         self._edges = e
@@ -203,8 +207,10 @@ class TorsionalSystem:
         self._k_speed2 = per(edge_stiffness_speed2, "edge_stiffness_speed2", m, 0.0)
         self._node_ratio = per(node_ratio, "node_ratio", n, 1.0, low=None)
         self._edge_ratio = per(edge_ratio, "edge_ratio", m, 1.0, low=None)
-        self._d_out = per(edge_outer_diameter, "edge_outer_diameter", m, np.nan)
-        self._d_in = per(edge_inner_diameter, "edge_inner_diameter", m, np.nan)
+        self._d_out = per(edge_outer_diameter, "edge_outer_diameter", m, np.nan,
+                          allow_nan=True)
+        self._d_in = per(edge_inner_diameter, "edge_inner_diameter", m, np.nan,
+                         allow_nan=True)
         for arr in (self._j, self._edges, self._k, self._node_damping, self._edge_damping,
                     self._edge_eta, self._k_speed2, self._node_ratio, self._edge_ratio,
                     self._d_out, self._d_in):

@@ -220,5 +220,9 @@ def test_validation_messages():
         chain([np.nan, 1], [1])
     with pytest.raises(ModelError, match="units='rpm' is not one of 'hz', 'rad/s', 'cpm'"):
         chain([1, 1], [1]).natural_frequencies("rpm")
+    with pytest.raises(ModelError, match=r"node_damping must be >= 0, got \[-1.0, 0.0\]"):
+        chain([1, 1], [1]).replace(node_damping=[-1.0, 0.0])
+    with pytest.raises(ModelError, match="edge_damping contains NaN/inf, first at index 0"):
+        chain([1, 1], [1]).replace(edge_damping=[np.nan])
     with pytest.raises(ModelError, match="holzer_table: the system is branched"):
         TorsionalSystem([1, 1, 1, 1], [(0, 1), (0, 2), (0, 3)], [1, 1, 1]).holzer_table(1.0)
