@@ -136,6 +136,25 @@ def _check_orders(orders) -> np.ndarray:
     return arr
 
 
+def _check_order_range(top_order: float, samples_per_rev: int, x, fs, rpm, *,
+                       divisor: int = 4) -> None:
+    """Orders must lie in the anti-alias pass band (``samples_per_rev/4``; a map may show up to
+    the angle-domain Nyquist order ``samples_per_rev/2``) and below the record's Nyquist
+    frequency."""
+    if top_order > samples_per_rev / divisor + 1e-12:
+        what = "the anti-alias pass band" if divisor == 4 else "the angle-domain Nyquist order"
+        raise AnalysisError(
+            f"order {top_order:g} exceeds samples_per_rev/{divisor} = "
+            f"{samples_per_rev / divisor:g} ({what}); use samples_per_rev >= "
+            f"{int(np.ceil(divisor * top_order))}")
+    values, fs_, _, label = _as_signal(x, fs)
+    speed = _as_rpm(rpm, values.shape[0])
+    f_top = top_order * float(speed.max()) / 60.0
+    if f_top >= 0.5 * fs_:
+        raise AnalysisError(f"order {top_order:g} reaches {f_top:.6g} Hz at {speed.max():.6g} "
+                            f"rpm, above the Nyquist frequency {0.5 * fs_:.6g} Hz of {label}")
+
+
 def _frames(n: int, length: int, overlap: float) -> np.ndarray:
     """Start indices of frames of ``length`` samples with fractional ``overlap``."""
     hop = max(1, int(round(length * (1.0 - overlap))))
@@ -245,6 +264,8 @@ def order_track(x, *, fs=None, rpm, orders, amplitude: str = "peak", method: str
         ds.attrs.update(res.attrs)
         ds.attrs.update({"amplitude_convention": amplitude})
         return ds
+    _check_order_range(float(orders.max()), check_int(samples_per_rev, "samples_per_rev",
+                                                       minimum=4, error=AnalysisError), x, fs, rpm)
     y, starts, length = _angle_blocks(x, fs, rpm, samples_per_rev, revolutions, overlap,
                                       interpolation)
     w = get_window(window, length)
@@ -338,7 +359,9 @@ def order_map(x, *, fs=None, rpm, samples_per_rev: int = 64, revolutions: int = 
         ``'power'``: mean square per bin (units²) so that band sums are exact
         (:func:`band_amplitude`).
     max_order : float, optional
-        Highest order kept (default ``samples_per_rev/4``, the anti-alias pass band).
+        Highest order kept (default ``samples_per_rev/4``, the anti-alias pass band; at most
+        ``samples_per_rev/2``, the bins above ``samples_per_rev/4`` being in the filter's
+        transition band).
     rpm_bins : int or array_like, optional
         Average the blocks in speed bins (count or edges in rpm; power average). The result then
         has dims (``rpm``, ``order``); otherwise (``time``, ``order``) with ``rpm`` along time.
@@ -361,11 +384,13 @@ def order_map(x, *, fs=None, rpm, samples_per_rev: int = 64, revolutions: int = 
     """
     scaling = check_option(scaling, "scaling", ("amplitude", "power"), error=AnalysisError)
     factor = amplitude_factor(amplitude)
-    y, starts, length = _angle_blocks(x, fs, rpm, samples_per_rev, revolutions, overlap,
-                                      interpolation)
-    spr = y.attrs["samples_per_rev"]
+    spr = check_int(samples_per_rev, "samples_per_rev", minimum=4, error=AnalysisError)
     top = spr / 4.0 if max_order is None else check_positive(max_order, "max_order",
                                                              error=AnalysisError)
+    if max_order is not None:
+        _check_order_range(top, spr, x, fs, rpm, divisor=2)
+    y, starts, length = _angle_blocks(x, fs, rpm, samples_per_rev, revolutions, overlap,
+                                      interpolation)
     n_orders = min(length // 2 + 1, int(np.floor(top * revolutions)) + 1)
     w = get_window(window, length)
     values = _map_values(y, starts, length, w, scaling, factor, n_orders)

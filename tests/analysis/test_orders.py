@@ -125,6 +125,12 @@ def test_errors_name_the_argument():
         order_track(np.zeros(1000), fs=1000.0, rpm=np.r_[np.ones(999), -1.0], orders=[1])
     with pytest.raises(AnalysisError, match="fewer than one block"):
         order_track(np.zeros(2000), fs=1000.0, rpm=600.0, orders=[1], revolutions=64)
+    with pytest.raises(AnalysisError, match=r"order 20 exceeds samples_per_rev/4 = 16 .*"
+                                            r"use samples_per_rev >= 80"):
+        order_track(np.zeros(20000), fs=1000.0, rpm=600.0, orders=[1, 20])
+    with pytest.raises(AnalysisError, match=r"order 12 reaches 600 Hz at 3000 rpm, above the "
+                                            r"Nyquist frequency 500 Hz"):
+        order_track(np.zeros(20000), fs=1000.0, rpm=3000.0, orders=[12])
     with pytest.raises(AnalysisError, match="window='hanning2' is not a scipy window"):
         order_map(np.zeros(20000), fs=1000.0, rpm=600.0, window="hanning2", revolutions=2)
 
