@@ -49,6 +49,7 @@ def run(args) -> int:
                              "order": truth["critical_order"].values,
                              "speed_rpm": truth["critical_speed_rpm"].values,
                              "frequency_hz": truth["critical_frequency_hz"].values,
+                             "damping_ratio": truth["critical_damping_ratio"].values,
                              "major": truth["critical_major"].values})
     summary = {
         "scene": result.scene.name, "output": str(out), "truth_written": keeps_truth,

@@ -56,8 +56,11 @@ class SyntheticRun:
     truth : xarray.Dataset
         ``amplitude`` and ``phase`` over (``channel``, ``order``, ``time``) with ``rpm`` along
         ``time`` and ``units`` along ``channel``; ``amplitude_steady`` (torsional channels);
-        ``critical_*`` over ``critical``; ``natural_frequency_hz``/``damping_ratio`` over
-        ``mode``; attrs with the scene and fidelity.
+        ``critical_*`` over ``critical`` (resonance peaks of the damped model the record was
+        made with: mode, order, speed_rpm, frequency_hz, damping_ratio, major);
+        ``predicted_critical_*`` over ``predicted`` (undamped critical speeds of
+        :mod:`predict.torsion`, for comparison); ``natural_frequency_hz``/``damping_ratio``
+        over ``mode``; attrs with the scene and fidelity.
     scene : Scene
     fidelity : dict
         Settings used and error estimates (integration rate, modal split, interpolation).
@@ -456,17 +459,28 @@ def _truth_dataset(scene, orders, t_truth, rpm_truth, rows, modal, fidelity):
                                           "forced_response, equivalent viscous model)"})
     if scene.shaftline is not None:
         prof = scene.profile
-        table = scene.shaftline.critical_speeds(orders, (float(prof.speed_rpm.min()),
-                                                         float(prof.speed_rpm.max())))
+        span = (float(prof.speed_rpm.min()), float(prof.speed_rpm.max()))
+        pred = scene.shaftline.critical_speeds(orders, span)
         data_vars.update({
-            "critical_mode": ("critical", table["mode"].to_numpy(int)),
-            "critical_order": ("critical", table["order"].to_numpy(float)),
-            "critical_speed_rpm": ("critical", table["speed_rpm"].to_numpy(float),
-                                   {"units": "rpm"}),
-            "critical_frequency_hz": ("critical", table["frequency_hz"].to_numpy(float),
-                                      {"units": "Hz"}),
-            "critical_major": ("critical", table["major"].to_numpy(bool)),
-            "critical_vector_sum": ("critical", table["vector_sum"].to_numpy(float))})
+            "predicted_critical_mode": ("predicted", pred["mode"].to_numpy(int)),
+            "predicted_critical_order": ("predicted", pred["order"].to_numpy(float)),
+            "predicted_critical_speed_rpm": ("predicted", pred["speed_rpm"].to_numpy(float),
+                                             {"units": "rpm", "long_name": "undamped critical "
+                                              "speeds of predict.torsion (the prediction)"}),
+            "predicted_critical_major": ("predicted", pred["major"].to_numpy(bool))})
+        if modal is not None:
+            table = modal.critical_speeds(orders, span,
+                                          major=scene.shaftline.major_orders(orders))
+            data_vars.update({
+                "critical_mode": ("critical", table["mode"].to_numpy(int)),
+                "critical_order": ("critical", table["order"].to_numpy(float)),
+                "critical_speed_rpm": ("critical", table["speed_rpm"].to_numpy(float),
+                                       {"units": "rpm", "long_name": "resonance peaks of the "
+                                        "damped model the record was synthesized with"}),
+                "critical_frequency_hz": ("critical", table["frequency_hz"].to_numpy(float),
+                                          {"units": "Hz"}),
+                "critical_damping_ratio": ("critical", table["damping_ratio"].to_numpy(float)),
+                "critical_major": ("critical", table["major"].to_numpy(bool))})
     if modal is not None:
         fn, zeta = modal.natural_frequencies()
         data_vars["natural_frequency_hz"] = ("mode", fn, {"units": "Hz", "long_name":

@@ -216,12 +216,44 @@ class ModalModel:
                    regularised=regularised)
 
     def natural_frequencies(self):
-        """Damped natural frequencies (Hz) and damping ratios of the oscillating modes."""
+        """Natural frequencies ``|lambda| / 2 pi`` (Hz) and damping ratios ``-Re lambda /
+        |lambda|`` of the oscillating modes, ascending. The amplitude peak of a mode's
+        resonance lies at ``f_n sqrt(1 - 2 zeta**2)`` (displacement)."""
         lam = self.eigenvalues[self.eigenvalues.imag > 1e-9]
-        order = np.argsort(lam.imag)
+        order = np.argsort(np.abs(lam))
         lam = lam[order]
         wn = np.abs(lam)
         return wn / TWO_PI, -lam.real / wn
+
+    def critical_speeds(self, orders, speed_range_rpm, major=None):
+        """Critical speeds of the damped model: every (oscillating mode, order) crossing.
+
+        ``speed_rpm = 60 f_n sqrt(1 - 2 zeta**2) / q``, the speed of the displacement peak of
+        the mode's resonance curve.
+
+        Returns
+        -------
+        pandas.DataFrame
+            ``mode`` (1 = lowest oscillating mode), ``order``, ``speed_rpm``,
+            ``frequency_hz``, ``damping_ratio``, ``major`` (from ``major``, a boolean per
+            order, or False), sorted by speed.
+        """
+        import pandas as pd
+
+        fn, zeta = self.natural_frequencies()
+        orders = np.asarray(orders, float)
+        major = np.zeros(orders.size, bool) if major is None else np.asarray(major, bool)
+        lo, hi = speed_range_rpm
+        rows = []
+        for m, (f, z) in enumerate(zip(fn, zeta), start=1):
+            peak = f * np.sqrt(max(1.0 - 2.0 * z * z, 0.0))
+            for k, q in enumerate(orders):
+                rpm = 60.0 * peak / q
+                if lo <= rpm <= hi:
+                    rows.append((m, float(q), rpm, f, z, bool(major[k])))
+        frame = pd.DataFrame(rows, columns=["mode", "order", "speed_rpm", "frequency_hz",
+                                            "damping_ratio", "major"])
+        return frame.sort_values(["speed_rpm", "mode"], ignore_index=True)
 
     def node_index(self, name):
         """Index of a node by name (error lists the names)."""
@@ -330,8 +362,9 @@ class ModalModel:
                 else:
                     gain = (step - e) / den
                 drive = (b_gas[jm] * c_gas + b_in[jm] * c_in) * gain
+                # steady state of the initial speed: no start-up transient
                 z0 = (b_gas[jm] * load_fn(speed[:1])[0] + b_in[jm] * speed[0] ** 2) \
-                    * carrier[0] / den[0]
+                    * carrier[0] / (1j * order * speed[0] - lam)
                 z = np.empty(time.size, complex)
                 z[0] = z0
                 z[1:] = lfilter([1.0], [1.0, -e], drive, zi=[e * z0])[0]
