@@ -88,6 +88,9 @@ def test_runup_orders_within_half_percent_rms():
     for o, a in truth.items():
         err = res.amplitude.sel(order=o).values[sel.values] / a - 1
         assert np.sqrt(np.mean(err ** 2)) < 5e-3, o
+    # the reported noise error matches the observed scatter (order 4.5) within a factor 1.5
+    scatter = np.sqrt(np.mean((res.amplitude.sel(order=4.5).values[sel.values] - 0.25) ** 2))
+    assert 1 / 1.5 < float(res.amplitude_noise[sel].mean()) / scatter < 1.5
 
 
 def test_order_map_rpm_bins_and_campbell():
