@@ -24,6 +24,7 @@ import hashlib
 import logging
 import os
 import warnings
+from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 import numpy as np
@@ -33,6 +34,7 @@ from predict.errors import CrankbenchError, RecordError
 
 from ._atomic import atomic_path, check_overwrite
 from .readers import EXTENSIONS, format_of_magic, module_for
+from .readers._common import REGULAR_KEY
 from .record import RecordWarning, nonfinite_spans, validate
 
 __all__ = ["read", "write", "open", "read_truth", "iter_blocks", "sha256_of", "EXTENSIONS"]
@@ -180,22 +182,27 @@ def read(path, *, channels=None, allow_nonfinite: bool = False) -> xr.Dataset:
     m/s^2 9.80665 r.h5
     """
     path, module = _check_input(path)
-    try:
-        ds = module.read(path, channels=channels)
-    except CrankbenchError as exc:
-        raise _named(path, exc) from None
-    except (MemoryError, KeyboardInterrupt):
-        raise
-    except Exception as exc:  # libraries raise anything on a corrupt file
-        raise _wrap(path, module, exc) from exc
-    if allow_nonfinite:
-        ds = _mask_nonfinite(ds, path)
-    ds.attrs["source"] = path.name
-    ds.attrs["sha256"] = sha256_of(path)
-    try:
-        return validate(ds, allow_nonfinite=allow_nonfinite)
-    except RecordError as exc:
-        raise _named(path, exc) from None
+    # hash on a second thread while the reader parses (hashlib releases the GIL)
+    with ThreadPoolExecutor(max_workers=1) as pool:
+        digest = pool.submit(sha256_of, path)
+        try:
+            ds = module.read(path, channels=channels)
+        except CrankbenchError as exc:
+            raise _named(path, exc) from None
+        except (MemoryError, KeyboardInterrupt):
+            raise
+        except Exception as exc:  # libraries raise anything on a corrupt file
+            raise _wrap(path, module, exc) from exc
+        if allow_nonfinite:
+            ds = _mask_nonfinite(ds, path)
+        regular = frozenset(ds.encoding.pop(REGULAR_KEY, ()))
+        try:
+            validate(ds, allow_nonfinite=allow_nonfinite, _regular_dims=regular)
+        except RecordError as exc:
+            raise _named(path, exc) from None
+        ds.attrs["source"] = path.name
+        ds.attrs["sha256"] = digest.result()
+    return ds
 
 
 def write(record: xr.Dataset, path, *, truth: xr.Dataset | None = None,

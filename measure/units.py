@@ -30,6 +30,7 @@ __all__ = [
     "to_si",
     "sensitivity_to_si",
     "unit_factor",
+    "to_si_owned",
 ]
 
 #: Canonical SI spellings allowed in a Record's ``units`` attribute.
@@ -284,6 +285,18 @@ def to_si(values, unit: str, *, channel: str | None = None):
         return _scale(values, value), si, "sensitivity"
     factor, si, hint = unit_factor(unit, channel=channel)
     return _scale(values, factor), si, hint
+
+
+def to_si_owned(values, unit: str, *, channel: str | None = None):
+    """:func:`to_si` for arrays the caller owns: scales in place, no copy when factor is 1."""
+    found = _lookup(unit) if isinstance(unit, str) else None
+    if (found is None or not isinstance(values, np.ndarray) or values.dtype.kind != "f"
+            or not values.flags.writeable):
+        return to_si(values, unit, channel=channel)
+    factor, si, hint = found
+    if factor != 1.0:
+        values *= values.dtype.type(factor)
+    return values, si, hint
 
 
 def _scale(values, factor: float):

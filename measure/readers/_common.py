@@ -10,7 +10,7 @@ import xarray as xr
 from predict.errors import RecordError
 
 from ..record import is_pulse_dim, time_coordinate
-from ..units import QUANTITIES, SI_UNITS, sensitivity_to_si, to_si
+from ..units import QUANTITIES, SI_UNITS, sensitivity_to_si, to_si_owned
 
 __all__ = ["clean_attr", "clean_attrs", "regular_start", "channel_meta", "dims_of",
            "si_channel", "build_dataset", "META_KEYS"]
@@ -83,6 +83,8 @@ def meta_json(meta: dict) -> str:
 def si_channel(name: str, values, meta: dict, *, file: str):
     """Convert one channel read from a file to SI; returns ``(values, attrs)``.
 
+    ``values`` is owned by the reader (freshly read): it is scaled in place.
+
     ``meta`` holds the file's metadata for the channel: ``units`` (any known spelling),
     optional ``quantity``, ``sensitivity`` (+ ``sensitivity_units``) and the other Record keys.
     """
@@ -91,7 +93,7 @@ def si_channel(name: str, values, meta: dict, *, file: str):
         raise RecordError(f"{file}: channel {name!r} has no unit in the file; expected one of "
                           f"{', '.join(SI_UNITS)} or a usual spelling (g, mm/s, rpm, bar...)")
     try:
-        values, si, hint = to_si(values, str(unit), channel=name)
+        values, si, hint = to_si_owned(values, str(unit), channel=name)
     except RecordError as exc:
         raise RecordError(f"{file}: {exc}") from None
     attrs = {k: meta[k] for k in META_KEYS if k in meta and meta[k] is not None}
@@ -128,16 +130,27 @@ def si_channel(name: str, values, meta: dict, *, file: str):
     return values, attrs
 
 
+#: Dataset.encoding key where a reader lists the time dims it built as start + i/fs;
+#: ``measure.io.read`` pops it and skips their step-by-step scan.
+REGULAR_KEY = "crankbench_regular_dims"
+
+
 def build_dataset(channels: list[tuple[str, str, np.ndarray, dict]], coords: dict,
-                  attrs: dict) -> xr.Dataset:
-    """Assemble ``[(name, dim, values, attrs)]`` and ``{dim: time array}`` into a Dataset."""
+                  attrs: dict, *, regular=()) -> xr.Dataset:
+    """Assemble ``[(name, dim, values, attrs)]`` and ``{dim: time array}`` into a Dataset.
+
+    ``regular`` names the dims whose coordinate was built by ``time_coordinate``.
+    """
     data_vars = {}
     for name, dim, values, vattrs in channels:
         data_vars[name] = xr.Variable((dim,), values, vattrs)
     coord_vars = {dim: (dim, np.asarray(t, dtype=np.float64),
                         {"units": "s", "long_name": "time from record start"})
                   for dim, t in coords.items() if not is_pulse_dim(dim)}
-    return xr.Dataset(data_vars, coords=coord_vars, attrs=attrs)
+    ds = xr.Dataset(data_vars, coords=coord_vars, attrs=attrs)
+    if regular:
+        ds.encoding[REGULAR_KEY] = sorted(set(regular) & set(coord_vars))
+    return ds
 
 
 def select(names: list[str], channels, *, file: str) -> list[str]:

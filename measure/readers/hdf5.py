@@ -217,6 +217,13 @@ def _coordinate(dim: str, info: dict, file: str, *, lazy: bool):
                       "explicit or index")
 
 
+def _read_all(ds) -> np.ndarray:
+    out = np.empty(ds.shape, dtype=ds.dtype)
+    if out.size:
+        ds.read_direct(out)
+    return out
+
+
 def read(path, *, channels=None) -> xr.Dataset:
     """Read a crankbench HDF5 record fully into memory."""
     h5py = _h5()
@@ -228,7 +235,7 @@ def read(path, *, channels=None) -> xr.Dataset:
         for name in names:
             ds = f["channels"][name]
             dim, attrs = _channel_attrs(ds, name, dims, file)
-            values, attrs = si_channel(name, ds[...], attrs, file=file)
+            values, attrs = si_channel(name, _read_all(ds), attrs, file=file)
             out.append((name, dim, values, attrs))
             used[dim] = True
         coords = {}
@@ -236,9 +243,10 @@ def read(path, *, channels=None) -> xr.Dataset:
             c = _coordinate(dim, dims[dim], file, lazy=False)
             if c is not None:
                 coords[dim] = c
+        regular = [d for d in coords if dims[d].get("kind") == "regular"]
         attrs = {k: _from_attr(v) for k, v in clean_attrs(f.attrs).items()
                  if k not in ("crankbench_format", "crankbench_format_version", "channel_order")}
-    return build_dataset(out, coords, attrs)
+    return build_dataset(out, coords, attrs, regular=regular)
 
 
 class _LazyH5:

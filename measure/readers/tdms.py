@@ -223,7 +223,8 @@ def read(path, *, channels=None) -> xr.Dataset:
         values, vattrs = si_channel(name, values, meta, file=file)
         out.append((name, dim, values, vattrs))
     out.sort(key=lambda e: wanted.index(e[0]))
-    return build_dataset(out, coords, attrs)
+    regular = {e[2] for e in entries if e[4] is not None and e[4][0] == "regular"}
+    return build_dataset(out, coords, attrs, regular=regular)
 
 
 class _LazyTdms:

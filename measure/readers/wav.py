@@ -269,7 +269,7 @@ def read(path, *, channels=None) -> xr.Dataset:
     out += more
     coords.update(more_coords)
     out.sort(key=lambda e: wanted.index(e[0]))
-    return build_dataset(out, coords, attrs)
+    return build_dataset(out, coords, attrs, regular=["time"])
 
 
 class _LazyWav:
