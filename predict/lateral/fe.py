@@ -273,7 +273,15 @@ class Rotor:
         return out
 
     @staticmethod
-    def _circularise(values: np.ndarray, full_vecs: np.ndarray, rtol: float = 1e-6):
+    @staticmethod
+    def _planes(vecs: np.ndarray):
+        """(u, v, φu, φv) parts used for the whirl direction. Slopes count too (rad as m/m) so
+        that tilting-only modes (a single pinned element) still have an orbit; a tilt whirls
+        in the same sense as the translation it accompanies."""
+        return vecs[0::4] + 0j, vecs[1::4] + 0j, vecs[2::4] + 0j, vecs[3::4] + 0j
+
+    @classmethod
+    def _circularise(cls, values: np.ndarray, full_vecs: np.ndarray, rtol: float = 1e-6):
         """Within clusters of repeated eigenvalues (isotropic rotor, no gyroscopic split),
         rotate the basis to the circular forward/backward combinations: eigenvectors of the
         whirl form Σ 2 Im(u v̄) relative to the displacement norm inside the cluster."""
@@ -286,19 +294,25 @@ class Rotor:
                 j += 1
             if j - i > 1:
                 phi = out[:, i:j]
-                u, v = phi[0::4], phi[1::4]
-                whirl = 1j * (u.conj().T @ v) - 1j * (v.conj().T @ u)
-                norm = u.conj().T @ u + v.conj().T @ v
-                _, rot = scipy.linalg.eigh(whirl, norm)
+                u, v, pu, pv = cls._planes(phi)
+                whirl = 1j * (u.conj().T @ v + pu.conj().T @ pv) - 1j * (
+                    v.conj().T @ u + pv.conj().T @ pu)
+                norm = (u.conj().T @ u + v.conj().T @ v + pu.conj().T @ pu
+                        + pv.conj().T @ pv)
+                try:
+                    _, rot = scipy.linalg.eigh(whirl, norm)
+                except np.linalg.LinAlgError:  # dependent basis: leave as computed
+                    rot = np.eye(j - i)
                 out[:, i:j] = phi @ rot
             i = j
         return out
 
-    @staticmethod
-    def _whirl(model_full_vecs: np.ndarray):
-        u, v = model_full_vecs[0::4], model_full_vecs[1::4]
-        num = 2 * np.sum(np.imag(u * np.conj(v)), axis=0)
-        den = np.sum(np.abs(u) ** 2 + np.abs(v) ** 2, axis=0)
+    @classmethod
+    def _whirl(cls, model_full_vecs: np.ndarray):
+        u, v, pu, pv = cls._planes(model_full_vecs)
+        num = 2 * np.sum(np.imag(u * np.conj(v)) + np.imag(pu * np.conj(pv)), axis=0)
+        den = np.sum(np.abs(u) ** 2 + np.abs(v) ** 2 + np.abs(pu) ** 2 + np.abs(pv) ** 2,
+                     axis=0)
         index = np.where(den > 0, num / np.where(den > 0, den, 1.0), 0.0)
         labels = np.where(index > 0.1, "forward", np.where(index < -0.1, "backward", "mixed"))
         return index, labels
