@@ -478,11 +478,10 @@ def order_spectrum(x, *, fs=None, rpm, samples_per_rev: int = 64, revolutions=No
     1.5
     """
     if revolutions is None:
-        values, fs_, _, _ = _as_signal(x, fs)
-        speed = _as_rpm(rpm, values.shape[0])
-        from .resample import shaft_angle
-
-        revolutions = max(1, int(shaft_angle(speed, fs_)[-1] / (2 * np.pi)) - 2)
+        # whole revolutions available after resampling (the anti-alias filter trims the ends)
+        y = angle_resample(x, fs=fs, rpm=rpm, samples_per_rev=samples_per_rev,
+                           interpolation=interpolation)
+        revolutions = max(1, y.shape[0] // int(samples_per_rev))
     m = order_map(x, fs=fs, rpm=rpm, samples_per_rev=samples_per_rev, revolutions=revolutions,
                   overlap=overlap, window=window, amplitude=amplitude, scaling=scaling,
                   max_order=max_order, interpolation=interpolation)
