@@ -134,6 +134,10 @@ class Engine:
     combustion : dict, optional
         Keyword arguments for :func:`predict.pressure.synthetic_pressure` (from the
         ``[engine.combustion]`` TOML table).
+    rod_inertia_correction : float or sequence of float
+        J_G − m h k l² of each plain rod (kg·m², usually negative), the inertia through which
+        the residual couple of the two-point rod acts (:meth:`predict.masses.Rod.two_point`);
+        adds −ΔJ ω² φ' φ'' to the crank torque. 0 (default) keeps the two-point model.
 
     References
     ----------
@@ -152,7 +156,8 @@ class Engine:
                  rotating_mass=0.0, cylinder_positions=None, bank_angles_deg=None, cycle=4,
                  firing_order=None, bore=None, name="engine", pin_offset=0.0,
                  firing_angles_deg=None, articulated=None, compression_ratio=None,
-                 rated_speed_rpm=None, combustion=None, source=None):
+                 rated_speed_rpm=None, combustion=None, rod_inertia_correction=0.0,
+                 source=None):
         alpha = check_finite_array(crank_angles_deg, "crank_angles_deg", ndim=1, min_length=1,
                                    error=ModelError)
         n = alpha.size
@@ -194,6 +199,17 @@ class Engine:
             rated_speed_rpm, "rated_speed_rpm", error=ModelError)
         self.combustion = dict(combustion or {})
         self._articulated = self._check_articulated(articulated)
+        corr = np.asarray(rod_inertia_correction, dtype=float)
+        if corr.ndim == 0:
+            corr = np.full(n, float(corr))
+        corr = check_finite_array(corr, "rod_inertia_correction", ndim=1, error=ModelError)
+        if corr.size != n:
+            raise ModelError(f"rod_inertia_correction has {corr.size} values, expected {n}")
+        bad = [i for i in range(n) if corr[i] != 0.0 and self._articulated[i] is not None]
+        if bad:
+            raise ModelError(f"rod_inertia_correction[{bad[0]}] must be 0: the residual couple "
+                             "is modelled for plain rods only")
+        self._rod_corr = _readonly(corr)
         self._firing_order, self._firing = self._resolve_firing(firing_order, firing_angles_deg)
 
     # ------------------------------------------------------------------ validation helpers
@@ -386,6 +402,43 @@ class Engine:
         return self._rot
 
     @property
+    def rod_inertia_correction(self) -> np.ndarray:
+        """Per-cylinder residual-couple inertia J_G − m h k l², kg·m²."""
+        return self._rod_corr
+
+    def rod_motion(self, theta):
+        """Rod angle derivatives of every plain-rod cylinder at shaft angle θ.
+
+        Returns
+        -------
+        dphi, d2phi : ndarray, shape (n_cylinders, len(theta))
+            dφ/dθ and d²φ/dθ² (rad/rad, rad/rad²); zero rows for articulated cylinders.
+
+        Examples
+        --------
+        >>> e = Engine(crank_angles_deg=[0], crank_radius=0.05, rod_length=0.2,
+        ...            reciprocating_mass=1.0)
+        >>> d1, d2 = e.rod_motion([0.0])
+        >>> float(d1[0, 0])   # λ at TDC
+        0.25
+        """
+        th = check_finite_array(theta, "theta", error=ModelError).reshape(-1)
+        r, l, e = self.crank_radius, self.rod_length, self.pin_offset
+        alpha = np.deg2rad(self._alpha_deg)
+        beta = np.deg2rad(self._beta_deg)
+        d1 = np.zeros((self._n, th.size))
+        d2 = np.zeros_like(d1)
+        for i in range(self._n):
+            if self._articulated[i] is not None:
+                continue
+            psi = th + alpha[i] - beta[i]
+            s = (r * np.sin(psi) - e) / l
+            c = np.sqrt(1.0 - s * s)
+            d1[i] = r * np.cos(psi) / (l * c)
+            d2[i] = (l * s * d1[i] ** 2 - r * np.sin(psi)) / (l * c)
+        return d1, d2
+
+    @property
     def articulated(self) -> tuple:
         """Per cylinder: None (plain rod) or its :class:`ArticulatedRod`."""
         return self._articulated
@@ -553,6 +606,7 @@ class Engine:
             "rotating_mass_kg": self._rot,
             "firing_angle_deg": self._firing,
             "articulated_on": [0 if a is None else a.master + 1 for a in self._articulated],
+            "rod_inertia_correction_kgm2": self._rod_corr,
         })
 
     def plot(self, ax=None):
@@ -585,7 +639,8 @@ class Engine:
         ``stroke``), ``rod_length``, ``reciprocating_mass``, ``rotating_mass``,
         ``cylinder_positions`` (or ``cylinder_spacing`` for one row), ``bank_angles_deg``,
         ``cycle``, ``firing_order``, ``firing_angles_deg``, ``bore``, ``pin_offset``,
-        ``compression_ratio``, ``rated_speed_rpm``, ``[engine.combustion]`` and
+        ``compression_ratio``, ``rated_speed_rpm``, ``rod_inertia_correction``,
+        ``[engine.combustion]`` and
         ``[[engine.articulated]]`` (``cylinder``, ``master``, ``link_radius``,
         ``link_angle_deg``, ``rod_length``; cylinders 1-based). Other top-level tables
         (``[shaftline]``, ``[mounts]``…) are left to their own loaders.
@@ -618,11 +673,11 @@ class Engine:
             t.fail("stroke", "give either stroke or crank_radius, not both")
         radius = t.positive("stroke") / 2 if "stroke" in t else t.positive("crank_radius")
 
-        def masses(key, default):
+        def masses(key, default, low=0.0):
             value = t.raw(key, default)
             if isinstance(value, list):
-                return t.numbers(key, length=n, low=0.0)
-            return t.number(key, default, low=0.0)
+                return t.numbers(key, length=n, low=low)
+            return t.number(key, default, low=low)
 
         if "cylinder_positions" in t and "cylinder_spacing" in t:
             t.fail("cylinder_spacing", "give either cylinder_positions or cylinder_spacing")
@@ -670,6 +725,7 @@ class Engine:
             compression_ratio=t.number("compression_ratio", None, low=1.0, strict_low=True),
             rated_speed_rpm=t.positive("rated_speed_rpm", None),
             combustion=combustion,
+            rod_inertia_correction=masses("rod_inertia_correction", 0.0, low=None),
             articulated=arts,
             source=str(path),
         )

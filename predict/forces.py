@@ -217,6 +217,8 @@ def crank_forces(engine, crank_angle, *, omega, pressure=None, cylinder=1,
     Returns
     -------
     CrankForces
+        Two-point rod model: the residual couple of the rod (``rod_inertia_correction``) is
+        not in these forces; :func:`cylinder_torque` includes its torque.
 
     References
     ----------
@@ -267,8 +269,10 @@ def cylinder_torque(engine, theta, *, omega, pressure=None, cylinder=1,
                     crankcase_pressure=CRANKCASE_PRESSURE):
     """Single-cylinder tangential (gas + reciprocating inertia) torque, N·m.
 
-    T(θ) = [(p − p_cc) A + m_rec ω² x''(θ)] · (−x'(θ)), θ the crank angle from this cylinder's
-    firing TDC, x the exact piston position (virtual work; exact for any rod geometry).
+    T(θ) = [(p − p_cc) A + m_rec ω² x''(θ)] · (−x'(θ)) − ΔJ ω² φ'(θ) φ''(θ), θ the crank angle
+    from this cylinder's firing TDC, x the exact piston position, φ the rod angle and ΔJ the
+    engine's ``rod_inertia_correction`` (the residual couple of the two-point rod; 0 by
+    default) — virtual work, exact for any rod geometry.
 
     Parameters
     ----------
@@ -310,7 +314,11 @@ def cylinder_torque(engine, theta, *, omega, pressure=None, cylinder=1,
     force = engine.reciprocating_mass[i] * w * w * d2x
     if pressure is not None:
         force = force + gas_force(engine, flat, pressure, crankcase_pressure=crankcase_pressure)
-    out = (force * -dx).reshape(ang.shape)
+    out = force * -dx
+    if engine.rod_inertia_correction[i] != 0.0:
+        d1, d2 = (v[i] for v in engine.rod_motion(shaft))
+        out = out - engine.rod_inertia_correction[i] * w * w * d1 * d2
+    out = out.reshape(ang.shape)
     return float(out) if ang.ndim == 0 else out
 
 
@@ -363,6 +371,11 @@ def engine_torque(engine, theta, *, omega, pressure=None,
         for i, tr in enumerate(traces):
             force[i] += (tr.at(flat - fire[i]) - pcc) * area
     parts = force * -dx
+    corr = engine.rod_inertia_correction
+    if np.any(corr != 0.0):
+        # residual couple ΔM = ΔJ φ̈ through virtual work: −ΔJ ω² φ' φ''
+        d1, d2 = engine.rod_motion(engine.shaft_angle(flat))
+        parts = parts - corr[:, None] * w * w * d1 * d2
     if per_cylinder:
         return parts.reshape((engine.n_cylinders,) + ang.shape)
     out = parts.sum(axis=0).reshape(ang.shape)

@@ -143,3 +143,41 @@ def test_two_stroke_mean_torque_and_trace():
     torque = forces.engine_torque(e, theta, omega=60.0, pressure=tr)
     assert torque.mean() == pytest.approx(3 * tr.work(e) / (2 * np.pi), rel=2e-5)
     np.testing.assert_allclose(np.diff(np.sort(e.firing_angles_deg())), [120, 120])
+
+
+def test_rod_residual_couple_torque_is_minus_derivative_of_its_kinetic_energy():
+    """With the residual-couple inertia ΔJ the extra torque is −d/dθ(½ ΔJ φ̇²) (energy)."""
+    from predict.masses import Rod
+
+    rod = Rod(mass=0.6, length=0.145, cg_from_big_end=0.04, inertia_cg=0.0021)
+    dj = rod.two_point().inertia_error
+    base = dict(crank_angles_deg=[0, 180, 180, 0], crank_radius=0.043, rod_length=0.145,
+                reciprocating_mass=0.55, firing_order=[1, 3, 4, 2], bore=0.086)
+    plain = Engine(**base)
+    corrected = Engine(**base, rod_inertia_correction=dj)
+    th = np.linspace(0, 4 * np.pi, 181)
+    extra = forces.engine_torque(corrected, th, omega=W) - forces.engine_torque(plain, th,
+                                                                                 omega=W)
+    h = 1e-5
+    fire = np.deg2rad(plain.firing_angles_deg())
+
+    def ek(t):
+        return sum(0.5 * dj * kin.rod_angular_velocity(t - f, crank_radius=0.043,
+                                                       rod_length=0.145, omega=W) ** 2
+                   for f in fire)
+
+    ref = -(ek(th + h) - ek(th - h)) / (2 * h)
+    np.testing.assert_allclose(extra, ref, atol=1e-6 * np.abs(ref).max())
+    assert np.abs(extra).max() > 0.01
+    # single cylinder: same energy relation for cylinder 1 alone
+    one = forces.cylinder_torque(corrected, th, omega=W) - forces.cylinder_torque(plain, th,
+                                                                                  omega=W)
+
+    def ek1(t):
+        return 0.5 * dj * kin.rod_angular_velocity(t, crank_radius=0.043, rod_length=0.145,
+                                                   omega=W) ** 2
+
+    np.testing.assert_allclose(one, -(ek1(th + h) - ek1(th - h)) / (2 * h),
+                               atol=1e-6 * np.abs(one).max())
+    with pytest.raises(ModelError, match=r"rod_inertia_correction has 2 values, expected 4"):
+        Engine(**base, rod_inertia_correction=[dj, dj])
