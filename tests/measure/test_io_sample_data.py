@@ -62,13 +62,11 @@ def test_tacho_is_60_minus_2(sample_data):
     assert np.sum(ratio > 2.5) == pytest.approx(len(edges) / 58, abs=1)
 
 
-def test_generator_refuses_overwrite(tmp_path, sample_data):
-    script = str(sample_data / "make_records.py")
-    first = subprocess.run([sys.executable, script, "--out", str(tmp_path)], capture_output=True,
-                           text=True)
-    assert first.returncode == 0, first.stderr
-    again = subprocess.run([sys.executable, script, "--out", str(tmp_path)], capture_output=True,
-                           text=True)
-    assert again.returncode == 1 and "pass --overwrite" in again.stderr
-    assert io.read(tmp_path / "i4_runup.h5").attrs["sha256"] == io.read(
-        sample_data / "records" / "i4_runup.h5").attrs["sha256"]
+def test_generator_refuses_overwrite(tmp_path):
+    script = Path(__file__).resolve().parents[2] / "sample_data" / "make_records.py"
+    (tmp_path / "i4_runup.tdms").write_bytes(b"keep me")
+    res = subprocess.run([sys.executable, str(script), "--out", str(tmp_path)],
+                         capture_output=True, text=True)
+    assert res.returncode == 1 and "pass --overwrite to replace them" in res.stderr
+    assert (tmp_path / "i4_runup.tdms").read_bytes() == b"keep me"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["i4_runup.tdms"]
