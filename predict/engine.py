@@ -114,8 +114,10 @@ class Engine:
     cycle : {2, 4}
         Strokes per cycle.
     firing_order : sequence of int, optional
-        Cylinder numbers (1-based) in firing order. Checked to be a permutation; None picks the
-        most even firing consistent with the geometry.
+        Cylinder numbers (1-based) in firing order. Checked to be a permutation consistent with
+        the crank and bank angles; each cylinder fires at whichever of its TDCs gives the most
+        even firing in that order (beyond 16 cylinders: the earliest one). None picks the most
+        even firing consistent with the geometry (up to 16 cylinders).
     bore : float, optional
         Cylinder bore, m (needed for gas forces).
     name : str
@@ -286,9 +288,11 @@ class Engine:
                     f"bank angles: no choice of TDCs makes the cylinders fire in this order "
                     f"within one {self.cycle}-stroke cycle of {period:g} deg (each cylinder's "
                     f"TDCs after cylinder 1's: {', '.join(f'{v:g}' for v in d)} deg, +360k)")
-            best = self._assign_firing(None, d, period)
             gaps = np.diff(np.concatenate([np.sort(f), [period]]))
-            best_gaps = np.diff(np.concatenate([np.sort(best), [period]]))
+            best_gaps = gaps
+            if n <= 16:
+                best = self._assign_firing(None, d, period)
+                best_gaps = np.diff(np.concatenate([np.sort(best), [period]]))
             if gaps.max() > best_gaps.max() + 1e-6:
                 log.warning("engine %r: firing order %s gives uneven intervals %s deg; the "
                             "geometry allows intervals no larger than %g deg", self.name,
@@ -309,7 +313,7 @@ class Engine:
             if order is not None and np.any(np.diff(f[np.asarray(order) - 1]) <= 0):
                 return None
             return f
-        if n > 20:
+        if n > 16:
             if order is None:
                 raise ModelError(f"an engine with {n} cylinders needs an explicit firing_order")
             f = np.zeros(n)
