@@ -223,7 +223,8 @@ def match_criticals(measured, predicted, *, gate=0.15, tolerance=0.03,
     significant_fraction : float
         An unmatched predicted critical is *significant* (flagged) when its predicted
         amplitude is at least this fraction of the largest predicted amplitude; without
-        amplitudes, when it is a major order (or always, without that column either).
+        amplitudes, when it is a major order (or always, without that column either). A
+        boolean ``significant`` column in ``predicted`` overrides this.
 
     Returns
     -------
@@ -335,7 +336,9 @@ def match_criticals(measured, predicted, *, gate=0.15, tolerance=0.03,
         .reset_index(drop=True)
     if len(unmatched_predicted):
         amps = pred["amplitude"].to_numpy(float)
-        if np.isfinite(amps).any() and np.nanmax(amps) > 0:
+        if "significant" in unmatched_predicted:
+            sig = unmatched_predicted["significant"].to_numpy(bool)
+        elif np.isfinite(amps).any() and np.nanmax(amps) > 0:
             sig = unmatched_predicted["amplitude"].to_numpy(float) >= \
                 significant_fraction * np.nanmax(amps)
         elif "major" in unmatched_predicted:

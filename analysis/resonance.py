@@ -482,7 +482,7 @@ def _modal_fit(x, c, x0_fn, x0_zeta, p, complex_data):
 
     theta0 = np.array([np.log(x0_fn), np.log(max(x0_zeta, 1e-4))])
     try:
-        sol = least_squares(fun, theta0, method="lm", xtol=1e-12, ftol=1e-12, max_nfev=400)
+        sol = least_squares(fun, theta0, method="lm", xtol=1e-10, ftol=1e-10, max_nfev=120)
     except (ValueError, np.linalg.LinAlgError):
         return None
     if not np.all(np.isfinite(sol.x)):
@@ -535,11 +535,14 @@ def _swept_fit(x, c, order, rate, fn0, zeta0, p, complex_data):
         _, res = solve(theta)
         return np.concatenate([res.real, res.imag]) if complex_data else res
 
-    theta0 = np.array([np.log(fn0), np.log(max(zeta0, 1e-3))])
+    theta0 = np.array([np.log(fn0), np.log(min(max(zeta0, 2e-3), 0.4))])
+    lower = [np.log(x.min()), np.log(1e-3)]
+    upper = [np.log(x.max()), np.log(0.45)]
+    theta0 = np.clip(theta0, np.add(lower, 1e-9), np.subtract(upper, 1e-9))
     try:
         # the simulation's step count changes with ζ: difference over a resolvable step
-        sol = least_squares(fun, theta0, method="lm", diff_step=1e-4, xtol=1e-10, ftol=1e-12,
-                            max_nfev=200)
+        sol = least_squares(fun, theta0, method="trf", bounds=(lower, upper), diff_step=1e-4,
+                            xtol=1e-9, ftol=1e-10, max_nfev=60)
     except (ValueError, np.linalg.LinAlgError, FloatingPointError):
         return None
     if not np.all(np.isfinite(sol.x)):
@@ -750,6 +753,7 @@ def _track_arrays(track, order):
 
 
 def find_resonances(track, *, orders=None, response=None, min_snr=5.0, min_prominence=0.05,
+                    min_amplitude_fraction=1e-3,
                     max_damping=0.2, min_confidence=0.3, baseline_degree=3,
                     max_points=3000, sweep_correction=True, sweep_hysteresis=0.02):
     """Find and identify resonances in an order track.
@@ -771,6 +775,9 @@ def find_resonances(track, *, orders=None, response=None, min_snr=5.0, min_promi
     min_prominence : float
         Minimum height of the peak above its surroundings as a fraction of the peak value
         (dimensionless): rejects ripples on a large smooth track.
+    min_amplitude_fraction : float
+        Minimum resonant amplitude as a fraction of the largest amplitude of any analysed
+        order: bumps at the floor of weak orders (leakage of strong ones) are not sought.
     max_damping : float
         Peaks wider than this damping ratio are treated as growth with speed, not resonance.
     min_confidence : float
@@ -868,6 +875,11 @@ def find_resonances(track, *, orders=None, response=None, min_snr=5.0, min_promi
                 raise AnalysisError(f"order {o:g} is not in the track; available: "
                                     f"{', '.join(f'{v:g}' for v in all_orders)}")
 
+    min_amplitude_fraction = check_range(min_amplitude_fraction, "min_amplitude_fraction", 0.0,
+                                         1.0, error=AnalysisError)
+    sel = track["amplitude"].sel(order=orders) if len(orders) else track["amplitude"]
+    global_max = float(np.nanmax(np.abs(sel.values))) if sel.size else 0.0
+    floor_abs = min_amplitude_fraction * global_max
     found, curves = [], []
     for order in orders:
         rpm, time, amp, comp = _track_arrays(track, order)
@@ -898,7 +910,7 @@ def find_resonances(track, *, orders=None, response=None, min_snr=5.0, min_promi
             sigma = _robust_noise(resid)
             floor = 1e-9 * max(np.max(np.abs(a)), 1e-300)
             sigma = max(sigma, floor)
-            peaks, props = find_peaks(resid, prominence=min_snr * sigma)
+            peaks, props = find_peaks(resid, prominence=max(min_snr * sigma, floor_abs))
             if peaks.size == 0:
                 continue
             order_idx = np.argsort(props["prominences"])[::-1]
@@ -917,6 +929,7 @@ def find_resonances(track, *, orders=None, response=None, min_snr=5.0, min_promi
     found.sort(key=lambda r: (r.order, r.sweep, r.speed_rpm))
     settings = {"response": response, "min_snr": min_snr, "min_prominence": min_prominence,
                 "max_damping": max_damping, "min_confidence": min_confidence,
+                "min_amplitude_fraction": min_amplitude_fraction,
                 "baseline_degree": baseline_degree, "max_points": max_points,
                 "sweep_correction": bool(sweep_correction),
                 "sweep_hysteresis": sweep_hysteresis}
@@ -973,6 +986,8 @@ def _identify(x, a, c, base, resid, i, p, response, order, sigma, prom, max_damp
             reach += xa * np.sqrt(40.0 * np.pi * s_norm)
         if abs(x_pk - xa) < reach and prom < 0.5 * pr:
             return None  # ripple beside a larger peak
+        if abs(x_pk - xa) < max(hw, half_width):
+            return None  # the same peak seen from another sample
     try:
         zeta_hp, n_hp = half_power_damping(x1, x2, response=response)
     except AnalysisError:
@@ -1024,7 +1039,14 @@ def _identify(x, a, c, base, resid, i, p, response, order, sigma, prom, max_damp
     if np.isfinite(rate) and rate != 0:
         alpha = order * rate / 60.0
         eta = abs(alpha) / (zeta * speed * order / 60.0) ** 2
+        effect = None
         if eta >= 0.02:
+            fn_hz = speed * order / 60.0
+            effect = _sweep_effect(zeta, alpha / (2 * np.pi * fn_hz**2), p, fn_hz,
+                                   complex_data=c is not None)
+        # correct only where the sweep matters (peak loss > 0.2 % or shift > 0.05 %)
+        if effect is not None and (effect["loss"] > 2e-3 or
+                                   abs(effect["shift"]) > 5e-4 * fn_hz):
             if sweep_correction and method == "modal fit":
                 data = c[win] if c is not None else a[win]
                 swept = _swept_fit(x[win], data, order, rate, speed, zeta, p, c is not None)
@@ -1054,6 +1076,8 @@ def _identify(x, a, c, base, resid, i, p, response, order, sigma, prom, max_damp
                 amp_corr = steady_peak
             elif corrected:
                 amp_corr = a_pk - r_pk + r_pk / max(1.0 - loss, 1e-6)
+        elif effect is not None:
+            loss, shift = effect["loss"], effect["shift"] * 60.0 / order
         else:
             loss, shift = 0.0, 0.0
     confidence = quality * (1.0 - np.exp(-snr / 10.0)) * (1.0 if complete else 0.5)

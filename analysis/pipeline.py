@@ -1,0 +1,602 @@
+"""The end-to-end chain: record + shaft-line model → order analysis → prediction → comparison.
+
+:func:`analyse` takes a Record (or a record file) and a shaft-line TOML and returns a
+:class:`PipelineResult`: the order track of the torsional channel, the resonances found in
+it, the predicted critical speeds with their resonance amplitudes at the measured node, the
+assignment of one to the other, and the limit checks (vibratory stress against the model's
+``[limits]``, vibration severity of any vibrograph channel). :func:`analysis.report.build`
+turns the result into the test report. The CLI commands ``demo``, ``compare``, ``report`` and
+``batch`` are thin layers over these two calls.
+
+Steps and their fidelity knobs:
+
+1. speed reference per sample (:func:`analysis.speedref.speed_reference`);
+2. order tracking of every engine order up to ``max_order`` — Vold–Kalman (joint, default;
+   ``bandwidth_orders`` sets its −3 dB width) or computed order tracking (``revolutions``);
+3. :func:`analysis.find_resonances` (baseline stripping, modal fit, sweep correction);
+4. the model's critical speeds in the measured speed range and the steady-state forced
+   response (exact harmonic solve) at the measured node with the run's load law, refined
+   around each critical (``refine_points`` speeds within ±6 %);
+5. :func:`analysis.match_criticals`;
+6. limit checks: measured vibratory stress = measured order amplitude × the model's stress per
+   unit node amplitude of that order (the classical torsiograph evaluation), summed over orders
+   (an upper bound on the superposed stress), against the continuous/transient limits.
+"""
+
+from __future__ import annotations
+
+import logging
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from predict._validate import check_option, check_positive, suggest
+from predict.errors import AnalysisError, ConfigError, RecordError
+
+__all__ = ["LoadCase", "PipelineResult", "analyse", "torsional_channel"]
+
+log = logging.getLogger("crankbench")
+
+_TORSIONAL = ("angle", "angular_velocity")
+
+
+@dataclass(frozen=True)
+class LoadCase:
+    """Engine load along the run for the predicted excitation.
+
+    Attributes
+    ----------
+    imep : float or None
+        Mean indicated pressure, Pa (at ``reference_rpm`` for the propeller law); None takes
+        the model's ``imep`` (``[shaftline] imep``) or the engine's combustion data.
+    law : {'constant', 'propeller'}
+        Propeller law: gas load ∝ speed².
+    reference_rpm : float or None
+        Speed where ``imep`` applies for the propeller law (default: the engine's rated
+        speed).
+    """
+
+    imep: float | None = None
+    law: str = "constant"
+    reference_rpm: float | None = None
+
+    def __post_init__(self):
+        check_option(self.law, "law", ("constant", "propeller"), error=ConfigError)
+        if self.imep is not None:
+            check_positive(self.imep, "imep", error=ConfigError)
+
+    def scale(self, speed_rpm):
+        """Gas-load factor at each speed."""
+        speed_rpm = np.asarray(speed_rpm, float)
+        if self.law == "constant":
+            return np.ones_like(speed_rpm)
+        return (speed_rpm / self.reference_rpm) ** 2
+
+    @classmethod
+    def from_any(cls, load, engine=None):
+        """From None, a LoadCase, a dict, or an object with imep/law/reference_rpm."""
+        if load is None:
+            return cls()
+        if isinstance(load, cls):
+            out = load
+        elif isinstance(load, dict):
+            out = cls(**load)
+        else:
+            out = cls(imep=getattr(load, "imep", None), law=getattr(load, "law", "constant"),
+                      reference_rpm=getattr(load, "reference_rpm", None))
+        if out.law == "propeller" and out.reference_rpm is None:
+            ref = getattr(engine, "rated_speed_rpm", None)
+            if ref is None:
+                raise ConfigError("load law 'propeller' needs reference_rpm (the engine has no "
+                                  "rated_speed_rpm)")
+            out = cls(imep=out.imep, law=out.law, reference_rpm=float(ref))
+        return out
+
+
+@dataclass(frozen=True)
+class PipelineResult:
+    """Everything the chain produced for one record (see :func:`analyse`).
+
+    Attributes
+    ----------
+    source : str
+        Record file (or the record's ``source`` attr).
+    record_sha256 : str
+    model_path : str
+    channel, node, quantity, units : str
+        Analysed torsional channel, the shaft-line node it measures, its quantity and units.
+    speed_channel : str
+    speed_range_rpm : tuple
+    sweep_rate_rpm_per_s : float
+        Median |d(rpm)/dt| over the record.
+    track : xarray.Dataset
+        Order track of the channel.
+    resonances : ResonanceTable
+    predicted : pandas.DataFrame
+        Critical speeds in range with ``amplitude`` (predicted resonance amplitude at the node,
+        channel units, peak), ``speed_rpm``, ``mode``, ``order``, ``frequency_hz``.
+    response : xarray.DataArray
+        Predicted order amplitude at the node over (``order``, ``rpm``), channel units.
+    comparison : CriticalComparison
+    limits : tuple of LimitCheck
+    system : TorsionalSystem
+    record : xarray.Dataset
+        The record analysed (for figures; not copied).
+    settings : dict
+        Every parameter used.
+    timings : dict
+        Seconds per step.
+    """
+
+    source: str
+    record_sha256: str
+    model_path: str
+    channel: str
+    node: str
+    quantity: str
+    units: str
+    speed_channel: str
+    speed_range_rpm: tuple
+    sweep_rate_rpm_per_s: float
+    track: object
+    resonances: object
+    predicted: object
+    response: object
+    comparison: object
+    limits: tuple
+    system: object = field(repr=False)
+    record: object = field(repr=False)
+    settings: dict = field(default_factory=dict)
+    timings: dict = field(default_factory=dict)
+
+    @property
+    def passed(self) -> bool:
+        """True when prediction and measurement agree and every limit check passed."""
+        return self.comparison.agrees and all(c.passed for c in self.limits)
+
+    def summary(self) -> dict:
+        """One flat row for batch tables and ``--json``."""
+        s = self.comparison.summary()
+        worst = max((c.value for c in self.limits if c.units == "1"), default=float("nan"))
+        return {"record": self.source, "sha256": self.record_sha256, "channel": self.channel,
+                "node": self.node, "speed_min_rpm": self.speed_range_rpm[0],
+                "speed_max_rpm": self.speed_range_rpm[1],
+                "sweep_rate_rpm_per_s": self.sweep_rate_rpm_per_s,
+                "resonances": len(self.resonances), "matched": s["matched"],
+                "unmatched_measured": s["unmatched_measured"],
+                "unmatched_predicted_significant": s["unmatched_predicted_significant"],
+                "max_abs_deviation_pct": s["max_abs_deviation_pct"],
+                "model_agrees": s["agrees"],
+                "limits_passed": all(c.passed for c in self.limits),
+                "worst_limit_ratio": worst, "passed": self.passed,
+                "elapsed_s": float(sum(self.timings.values()))}
+
+
+def torsional_channel(record, channel=None) -> str:
+    """The channel to analyse: ``channel`` if given, else the first angle/angular-velocity one.
+
+    Raises
+    ------
+    RecordError
+        Unknown channel (with a did-you-mean) or no torsional channel in the record.
+    """
+    names = [str(n) for n in record.data_vars]
+    if channel is not None:
+        if channel not in names:
+            raise RecordError(f"record has no channel {channel!r}{suggest(channel, names)}; "
+                              f"channels: {', '.join(names)}")
+        return channel
+    for n in names:
+        if record[n].attrs.get("quantity") in _TORSIONAL and record[n].ndim == 1:
+            return n
+    raise RecordError(f"record has no torsional channel (quantity 'angle' or "
+                      f"'angular_velocity'); channels: {', '.join(names)}; give --channel")
+
+
+def _node_of(record, channel, system):
+    attrs = record[channel].attrs
+    for key in ("node", "location"):
+        value = attrs.get(key)
+        if value in system.node_names:
+            return value
+    log.info("channel %r names no shaft-line node (attrs 'node'/'location'); assuming the "
+             "first node %r", channel, system.node_names[0])
+    return system.node_names[0]
+
+
+def _load_record(record):
+    if isinstance(record, (str, Path)):
+        import measure
+
+        path = Path(record)
+        return measure.read(path), str(path)
+    if hasattr(record, "data_vars"):
+        return record, str(record.attrs.get("source", "record"))
+    raise RecordError(f"record must be a path or an xarray.Dataset Record, got "
+                      f"{type(record).__name__}")
+
+
+def _load_model(model):
+    if isinstance(model, (str, Path)):
+        from predict.torsion import from_toml
+
+        return from_toml(model), str(model)
+    if hasattr(model, "critical_speeds"):
+        return model, str(getattr(model, "operating", {}).get("source", "model"))
+    raise ConfigError(f"model must be a shaft-line TOML path or a TorsionalSystem, got "
+                      f"{type(model).__name__}")
+
+
+def predicted_response(system, speed_rpm, orders, node, *, load, quantity="angle"):
+    """Steady-state order amplitudes at ``node`` and the complex stress of each section.
+
+    Returns (amplitude (n_s, n_o), stress (n_s, n_o, n_edges) complex Pa — NaN where a
+    section has no diameter —, the ForcedResponse).
+    """
+    from predict.torsion.forced import stress_factor
+
+    from predict.torsion.excitation import engine_excitation
+
+    imep = load.imep if load.imep is not None else system.operating.get("imep")
+    exc = engine_excitation(system, imep=imep, orders=orders)
+    omega = np.asarray(speed_rpm, float) * np.pi / 30.0
+    scale = load.scale(speed_rpm)
+    torque = (exc.gas[None, :] * scale[:, None]
+              + (omega**2)[:, None] * exc.inertia[None, :])[:, :, None]
+    torque = np.repeat(torque, exc.n_cylinders, axis=2)
+    res = system.forced_response(speed_rpm, torque=torque, orders=orders, superpose=False)
+    i = system.node_names.index(node)
+    amp = np.abs(res.angle[:, :, i])
+    if quantity == "angular_velocity":
+        amp = amp * omega[:, None] * np.asarray(orders)[None, :]
+    stress = res.torque * stress_factor(system)[None, None, :]
+    return amp, stress, res
+
+
+def _prediction(system, orders, node, quantity, units, load, lo, hi, base_points, *,
+                fraction=0.05, max_fit=8):
+    """Critical speeds in range, identified on the predicted response like the measurement.
+
+    The predicted steady-state order response at ``node`` is passed through the same
+    resonance finder as the measured track (SDOF modal fit), so measured and predicted
+    critical speeds, damping and amplitudes are estimated the same way; each predicted
+    resonance is assigned the mode of the nearest undamped critical of its order.
+    """
+    import xarray as xr
+
+    from .resonance import find_resonances
+
+    crit = system.critical_speeds(orders, (lo, hi))
+    grid = np.linspace(lo, hi, int(base_points))
+    amp, pred_stress, res = predicted_response(system, grid, orders, node, load=load,
+                                           quantity=quantity)
+    i = system.node_names.index(node)
+    comp = res.angle[:, :, i].T  # (order, rpm)
+    if quantity == "angular_velocity":
+        comp = comp * 1j * (grid * np.pi / 30.0)[None, :] * np.asarray(orders)[:, None]
+    track = xr.Dataset({"amplitude": (("order", "rpm"), np.abs(comp), {"units": units}),
+                        "phase": (("order", "rpm"), np.angle(comp), {"units": "rad"})},
+                       coords={"order": orders, "rpm": grid})
+    # identify (fit) only the strongest orders: those whose raw peak near a critical is at
+    # least ``fraction`` of the largest, at most ``max_fit`` orders
+    raw = []
+    for _, c in crit.iterrows():
+        near = np.abs(grid - c.speed_rpm) <= 0.06 * c.speed_rpm
+        raw.append(float(amp[near, orders.index(float(c.order))].max()) if near.any() else 0.0)
+    raw = np.asarray(raw)
+    fit_orders = []
+    if raw.size:
+        best = {}
+        for q, a in zip(crit.order, raw):
+            if a >= fraction * raw.max():
+                best[float(q)] = max(best.get(float(q), 0.0), a)
+        fit_orders = sorted(sorted(best, key=best.get, reverse=True)[:max_fit])
+    import pandas as pd
+
+    found = find_resonances(track, orders=fit_orders, response="velocity"
+                            if quantity == "angular_velocity" else "displacement",
+                            min_amplitude_fraction=0.0, min_snr=1e-6, min_prominence=0.01,
+                            sweep_correction=False).to_frame() if fit_orders else \
+        pd.DataFrame(columns=["order", "speed_rpm", "frequency_hz", "amplitude",
+                              "damping_ratio"])
+    rows = []
+    for _, c in crit.iterrows():
+        cand = found[np.isclose(found["order"], c.order)] if len(found) else found
+        row = dict(mode=int(c["mode"]), order=float(c.order),
+                   speed_rpm_undamped=float(c.speed_rpm),
+                   frequency_hz_undamped=float(c.frequency_hz),
+                   vector_sum=float(c.vector_sum), major=bool(c.major))
+        j = orders.index(float(c.order))
+        if len(cand):
+            k = int(np.argmin(np.abs(cand["speed_rpm"].to_numpy() - c.speed_rpm)))
+            r = cand.iloc[k]
+            # the resonance belongs to this critical if no other critical of the order is closer
+            others = crit[np.isclose(crit.order, c.order)]["speed_rpm"].to_numpy()
+            if np.argmin(np.abs(others - r.speed_rpm)) == np.argmin(np.abs(others - c.speed_rpm)) \
+                    and abs(r.speed_rpm / c.speed_rpm - 1) < 0.15:
+                row.update(speed_rpm=float(r.speed_rpm), frequency_hz=float(r.frequency_hz),
+                           amplitude=float(r.amplitude), damping_ratio=float(r.damping_ratio),
+                           identified=True)
+                rows.append(row)
+                continue
+        near = np.abs(grid - c.speed_rpm) <= 0.03 * c.speed_rpm
+        row.update(speed_rpm=float(c.speed_rpm), frequency_hz=float(c.frequency_hz),
+                   amplitude=float(amp[near, j].max()) if near.any() else float("nan"),
+                   damping_ratio=float("nan"), identified=False)
+        rows.append(row)
+    cols = ["mode", "order", "speed_rpm", "frequency_hz", "amplitude", "damping_ratio",
+            "speed_rpm_undamped", "frequency_hz_undamped", "vector_sum", "major", "identified"]
+    predicted = pd.DataFrame(rows, columns=cols)
+    # a critical is expected in the measurement when its resonance shows in the prediction
+    big = predicted["amplitude"].max() if len(predicted) else 0.0
+    predicted["significant"] = predicted["identified"] & (predicted["amplitude"] >= 0.05 * big)
+    response_da = xr.DataArray(amp.T, dims=("order", "rpm"), coords={"order": orders, "rpm": grid},
+                               attrs={"units": units, "amplitude": "peak", "node": node})
+    return predicted, response_da, grid, pred_stress
+
+
+def _track(x, fs, rpm, orders, *, method, bandwidth_orders, revolutions):
+    from .orders import order_track
+
+    if method == "vkf":
+        return order_track(x, fs=fs, rpm=rpm, orders=orders, method="vkf",
+                           bandwidth_orders=bandwidth_orders)
+    return order_track(x, fs=fs, rpm=rpm, orders=orders, method="cot", revolutions=revolutions,
+                       overlap=0.9)
+
+
+def analyse(record, model, *, channel=None, speed_channel=None, orders=None, max_order=12.0,
+            method="vkf", bandwidth_orders=0.25, revolutions=4, load=None, gate=0.15,
+            tolerance=0.03, amplitude_tolerance=0.5, machine_class="III",
+            operating_range_rpm=None, base_points=1500, order_fraction=0.05, max_tracked=8,
+            resonance_options=None, progress=None) -> PipelineResult:
+    """Run the chain on one record against one shaft-line model.
+
+    Parameters
+    ----------
+    record : path-like or xarray.Dataset
+        Record file (any supported format) or Record.
+    model : path-like or TorsionalSystem
+        Shaft-line TOML (``[shaftline]`` naming its engine) or a built system.
+    channel : str, optional
+        Torsional channel (default: the first with quantity 'angle' or 'angular_velocity').
+    speed_channel : str, optional
+        Speed source (default: found in the record).
+    orders : sequence of float, optional
+        Orders to track (default: those of the engine's orders up to ``max_order`` whose
+        predicted resonance amplitude in the range is at least ``order_fraction`` of the
+        largest, at most ``max_tracked`` of them).
+    max_order : float
+    method : {'vkf', 'cot'}
+        Order tracker: Vold–Kalman (time resolution for sweeps) or computed order tracking.
+    bandwidth_orders : float
+        VKF −3 dB bandwidth in orders.
+    revolutions : int
+        COT block length, revolutions.
+    load : LoadCase or dict, optional
+        Load law of the predicted excitation (default: the model's imep, constant).
+    gate, tolerance, amplitude_tolerance : float
+        Matching settings (:func:`analysis.match_criticals`).
+    machine_class : str
+        ISO 10816-1 class for vibrograph channels.
+    operating_range_rpm : (float, float), optional
+        Continuous-operation range for the stress check.
+    base_points : int
+        Fidelity of the predicted resonance curves: speeds over the range (uniform).
+    order_fraction : float
+        See ``orders``.
+    max_tracked : int
+        At most this many orders are tracked (the strongest predicted); the joint VKF costs
+        O(N K²) in the number of orders K.
+    resonance_options : dict, optional
+        Passed to :func:`analysis.find_resonances`.
+    progress : callable, optional
+        ``progress(step_name)`` called before each step (CLI progress bars).
+
+    Returns
+    -------
+    PipelineResult
+
+    Raises
+    ------
+    RecordError, ConfigError, ModelError, AnalysisError
+        Naming the file, channel or key at fault.
+    """
+    from .compare import match_criticals
+    from .resonance import find_resonances
+    from .speedref import find_speed_channel, speed_reference
+
+    check_option(method, "method", ("vkf", "cot"), error=ConfigError)
+    timings = {}
+
+    def step(name):
+        if progress is not None:
+            progress(name)
+        timings[name] = time.perf_counter()
+
+    def done(name):
+        timings[name] = time.perf_counter() - timings[name]
+
+    step("read")
+    rec, source = _load_record(record)
+    system, model_path = _load_model(model)
+    load = LoadCase.from_any(load, getattr(system, "engine", None))
+    channel = torsional_channel(rec, channel)
+    var = rec[channel]
+    quantity = var.attrs.get("quantity", "angle")
+    if quantity not in _TORSIONAL:
+        raise RecordError(f"channel {channel!r} has quantity {quantity!r}; expected 'angle' or "
+                          "'angular_velocity' for the torsional comparison")
+    units = str(var.attrs.get("units", "rad"))
+    node = _node_of(rec, channel, system)
+    speed_channel = speed_channel or find_speed_channel(rec, channel)
+    rpm = speed_reference(rec, channel, speed_channel=speed_channel)
+    fs = float(var.attrs.get("sample_rate") or 1.0 / np.median(np.diff(rec[var.dims[0]].values)))
+    x = np.asarray(var.values, float)
+    ok = np.isfinite(x) & np.isfinite(rpm)
+    if ok.sum() < 0.9 * x.size:
+        raise RecordError(f"channel {channel!r}: {x.size - ok.sum()} of {x.size} samples are "
+                          "not finite (or outside the speed reference)")
+    x, rpm_ok = np.where(ok, x, 0.0), np.where(ok, rpm, np.nanmedian(rpm))
+    lo, hi = float(np.nanmin(rpm)), float(np.nanmax(rpm))
+    t = np.arange(x.size) / fs
+    rate = np.abs(np.gradient(rpm_ok, t))
+    moving = rate > 0.2
+    sweep_rate = float(np.median(rate[moving])) if moving.any() else 0.0
+    all_orders = [float(o) for o in (system.default_orders() if orders is None else orders)
+                  if o <= max_order + 1e-9 and o * hi / 60.0 < 0.4 * fs]
+    if not all_orders:
+        raise AnalysisError(f"no order up to {max_order:g} lies below 0.4 × the sample rate "
+                            f"({fs:g} Hz) at {hi:.0f} rpm")
+    done("read")
+
+    step("prediction")
+    predicted, response_da, grid, pred_stress = _prediction(
+        system, all_orders, node, quantity, units, load, lo, hi, base_points,
+        fraction=order_fraction, max_fit=max_tracked if orders is None else len(all_orders))
+    if orders is None:
+        # track the orders whose predicted resonances matter, largest first
+        big = predicted["amplitude"].max() if len(predicted) else 0.0
+        strong = predicted[predicted["amplitude"] >= order_fraction * big]
+        ranked = strong.groupby("order")["amplitude"].max().sort_values(ascending=False)
+        orders = sorted(float(o) for o in ranked.index[:max_tracked]) or all_orders
+        dropped = [float(o) for o in ranked.index[max_tracked:]]
+        if dropped:
+            log.info("tracking the %d strongest orders; not tracked: %s", max_tracked,
+                     ", ".join(f"{o:g}" for o in sorted(dropped)))
+        # criticals of orders not tracked cannot be found: not expected
+        predicted.loc[~predicted["order"].isin(orders), "significant"] = False
+    else:
+        orders = all_orders
+    done("prediction")
+
+    step("order tracking")
+    track = _track(x, fs, rpm_ok, orders, method=method, bandwidth_orders=bandwidth_orders,
+                   revolutions=revolutions)
+    done("order tracking")
+
+    step("resonances")
+    resonances = find_resonances(track, **(resonance_options or {}))
+    done("resonances")
+
+    step("comparison")
+    comparison = match_criticals(resonances, predicted, gate=gate, tolerance=tolerance,
+                                 amplitude_tolerance=amplitude_tolerance,
+                                 speed_range_rpm=(lo, hi))
+    done("comparison")
+
+    step("limits")
+    limits = _limit_checks(rec, system, track, grid, pred_stress, response_da, all_orders,
+                           channel, machine_class, operating_range_rpm)
+    done("limits")
+
+    ppr = next((int(rec[n].attrs["pulses_per_rev"]) for n in rec.data_vars
+                if "pulses_per_rev" in rec[n].attrs), None)
+    settings = {
+        "channel": channel, "node": node, "quantity": quantity, "units": units,
+        "speed channel": speed_channel, "tacho pulses per rev": ppr,
+        "sample rate (Hz)": fs, "orders predicted": ", ".join(f"{o:g}" for o in all_orders),
+        "order tracking": track.attrs.get("method", method),
+        "amplitude convention": track.attrs.get("amplitude_convention", "peak"),
+        "VKF bandwidth (orders)" if method == "vkf" else "COT block (revolutions)":
+            bandwidth_orders if method == "vkf" else revolutions,
+        "order resolution": (f"{bandwidth_orders:g} orders (−3 dB)" if method == "vkf"
+                             else f"{1 / revolutions:g} orders"),
+        "window": track.attrs.get("window", "— (VKF)" if method == "vkf" else "hann"),
+        "speed range (rpm)": f"{lo:.1f} – {hi:.1f}",
+        "sweep rate (rpm/s, median)": sweep_rate,
+        "estimated sweep peak loss (max over resonances)": max(
+            (r.sweep_peak_loss for r in resonances if np.isfinite(r.sweep_peak_loss)),
+            default=0.0),
+        "load": f"{load.law}" + (f", imep {load.imep / 1e5:.4g} bar" if load.imep else
+                                 ", model imep") +
+                (f" at {load.reference_rpm:g} rpm" if load.law == "propeller" else ""),
+        "matching gate": gate, "speed tolerance": tolerance,
+        "amplitude tolerance": amplitude_tolerance,
+        "predicted curves": f"{grid.size} speeds, steady-state harmonic solve at {node}",
+        "orders tracked": ", ".join(f"{o:g}" for o in orders),
+        "resonance finder": resonances.settings,
+    }
+    return PipelineResult(
+        source=source, record_sha256=str(rec.attrs.get("sha256", "")), model_path=model_path,
+        channel=channel, node=node, quantity=quantity, units=units, speed_channel=speed_channel,
+        speed_range_rpm=(lo, hi), sweep_rate_rpm_per_s=sweep_rate, track=track,
+        resonances=resonances, predicted=predicted, response=response_da,
+        comparison=comparison, limits=tuple(limits), system=system, record=rec,
+        settings=settings, timings=timings)
+
+
+def _limit_checks(rec, system, track, grid, pred_stress, response, orders, channel, machine_class,
+                  operating_range_rpm):
+    """Measured stress vs the model's limits; vibration severity of vibrograph channels.
+
+    Stress: the predicted complex stress of each order in each section, scaled by the ratio
+    of measured to predicted amplitude of that order at the measured node (ratio 1 for orders
+    not tracked, or where the prediction is below 5 % of its maximum over speed; clipped to
+    [0, 10]), superposed over one engine cycle with the model's phases (32 samples per period
+    of the highest order: peak under-estimated by at most 1 − cos(π/32) = 0.5 %).
+    """
+    from .limits import check_torsional_stress, check_vibration_severity, vibration_severity
+
+    checks = []
+    limits = getattr(system, "limits", None)
+    if limits is not None:
+        names = list(system.edge_names)
+        pred_amp = np.asarray(response.values, float).T  # (n_s, n_o)
+        cols = [names.index(s) for s in limits.sections] if limits.sections else \
+            [i for i in range(len(names)) if np.isfinite(pred_stress[:, :, i]).all()]
+        rpm = np.asarray(track["rpm"].values, float)
+        edges = np.linspace(rpm.min(), rpm.max(), 301)
+        centre = 0.5 * (edges[1:] + edges[:-1])
+        idx = np.clip(np.searchsorted(edges, rpm) - 1, 0, 299)
+        ratio = np.ones((centre.size, len(orders)))
+        tracked = np.asarray(track["amplitude"].values, float)  # (order, time)
+        for jt, q in enumerate(np.asarray(track["order"].values, float)):
+            j = int(np.argmin(np.abs(np.asarray(orders) - q)))
+            meas = np.full(centre.size, -np.inf)
+            np.maximum.at(meas, idx, tracked[jt])
+            meas[~np.isfinite(meas)] = np.nan
+            pred = np.interp(centre, grid, pred_amp[:, j])
+            ok = np.isfinite(meas) & (pred >= 0.05 * pred_amp[:, j].max()) & (pred > 0)
+            ratio[ok, j] = np.clip(meas[ok] / pred[ok], 0.0, 10.0)
+        # one engine cycle, 32 samples per period of the highest order
+        q = np.asarray(orders, float)
+        cycle = 4.0 * np.pi if np.any(np.abs(q - np.round(q)) > 1e-9) else 2.0 * np.pi
+        theta = np.linspace(0.0, cycle, int(32 * q.max() * cycle / (2 * np.pi)), endpoint=False)
+        basis = np.exp(1j * np.outer(q, theta))  # (n_o, n_theta)
+        best = None
+        for c in cols:
+            sc = pred_stress[:, :, c]
+            at = np.stack([np.interp(centre, grid, sc[:, j].real)
+                           + 1j * np.interp(centre, grid, sc[:, j].imag)
+                           for j in range(len(orders))], axis=1)
+            total = np.max(np.abs(np.real((ratio * at) @ basis)), axis=1)
+            if best is None or total.max() > best[1].max():
+                best = (names[c], total)
+        if best is not None:
+            checks.append(check_torsional_stress(
+                centre, best[1], limits, section=best[0], operating_range_rpm=operating_range_rpm,
+                name=f"measured torsional stress ({channel})"))
+    for name in rec.data_vars:
+        v = rec[name]
+        q = v.attrs.get("quantity")
+        if q in ("velocity", "acceleration") and v.ndim == 1 and "sample_rate" in v.attrs:
+            from .speedref import speed_reference
+
+            try:
+                rpm = speed_reference(rec, str(name))
+            except (AnalysisError, RecordError):
+                rpm = None
+            fs = float(v.attrs["sample_rate"])
+            band = (2.0, 1000.0) if (rpm is not None and np.nanmax(rpm) <= 600) else (10.0, 1000.0)
+            band = (band[0], min(band[1], 0.45 * fs))
+            window = min(1.0, v.size / fs)
+            sev = vibration_severity(np.asarray(v.values, float), fs=fs, rpm=rpm, quantity=q,
+                                     band_hz=band, window_s=window)
+            checks.append(check_vibration_severity(
+                sev, machine_class=machine_class,
+                name=f"vibration severity {name}" + (f" ({v.attrs['location']})"
+                                                     if v.attrs.get("location") else "")))
+    return checks
