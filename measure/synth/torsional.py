@@ -283,7 +283,10 @@ class ModalModel:
             Gas-torque scale factor as a function of speed (rad/s), vectorised; default 1.
         nodes : sequence of int
         method : {"split", "full"}
-            ``"full"`` integrates every mode in time. ``"split"`` (default) integrates the modes
+            ``"full"`` integrates every mode in time (except zero eigenvalues, rigid-body
+            rotation and free damper-ring offsets, which cannot resonate and are always taken
+            quasi-statically so that no constant angle offset from the start is kept in the
+            orders). ``"split"`` (default) integrates the modes
             whose damped natural frequency lies at or below the highest order frequency
             ``q Omega`` of the run, widened by ``margin`` half-power bandwidths (at least 5 %),
             including the rigid-body and real modes; the stiff modes above the swept band and
@@ -312,14 +315,18 @@ class ModalModel:
         b_in = self.modal_input @ inertia
         lam_all = self.eigenvalues
         active = (b_gas != 0) | (b_in != 0)
+        # zero eigenvalues (rigid rotation of a free line, a damper ring's free offset) cannot
+        # resonate; integrated, they would keep a constant offset from the start-up (an angle
+        # that belongs to the mean motion), so they always respond quasi-statically
+        zero = np.abs(lam_all) <= 1e-9 * max(np.abs(lam_all).max(), 1.0)
         if method == "full":
-            resonant = active
+            resonant = active & ~zero
         else:
             hi = order * speed.max()
             width = np.maximum(margin * np.abs(lam_all.real), 0.05 * np.abs(lam_all))
             # modes at or below the swept band (free vibration they pick up lingers), not the
             # stiff modes above it, nor the negative-frequency halves of the pairs
-            resonant = active & (lam_all.imag >= 0) & (lam_all.imag - width <= hi)
+            resonant = active & ~zero & (lam_all.imag >= 0) & (lam_all.imag - width <= hi)
         quasi = active & ~resonant
         nodes = list(nodes)
         out_x = np.zeros((len(nodes), time.size), complex)
