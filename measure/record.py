@@ -430,7 +430,7 @@ def make_record(
     coords = {}
     data_vars = {}
     for clock in clocks:
-        coords[clock["dim"]] = (clock["dim"], clock["time"], {"units": "s",
+        coords[clock["dim"]] = (clock["dim"], pd.Index(clock["time"], copy=False), {"units": "s",
                                                              "long_name": "time from record start"})
         for name in clock["names"]:
             ch = built[name]

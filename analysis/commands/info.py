@@ -83,5 +83,5 @@ def run(args) -> int:
     columns += [c for c in ("location", "direction", "pulses_per_rev", "missing_teeth")
                 if c in frame.columns]
     frame = frame[columns].rename(columns={"sample_rate": "sample_rate_Hz"})
-    print_table(frame.fillna(""))
+    print_table(frame.astype(object).where(frame.notna(), ""))
     return 0

@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 
 import numpy as np
+import pandas as pd
 import xarray as xr
 
 from predict.errors import RecordError
@@ -144,7 +145,8 @@ def build_dataset(channels: list[tuple[str, str, np.ndarray, dict]], coords: dic
     data_vars = {}
     for name, dim, values, vattrs in channels:
         data_vars[name] = xr.Variable((dim,), values, vattrs)
-    coord_vars = {dim: (dim, np.asarray(t, dtype=np.float64),
+    # a pandas Index built without copying: xarray would otherwise copy and re-check the array
+    coord_vars = {dim: (dim, pd.Index(np.asarray(t, dtype=np.float64), copy=False),
                         {"units": "s", "long_name": "time from record start"})
                   for dim, t in coords.items() if not is_pulse_dim(dim)}
     ds = xr.Dataset(data_vars, coords=coord_vars, attrs=attrs)
