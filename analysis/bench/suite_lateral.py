@@ -22,6 +22,8 @@ Rows:
 
 from __future__ import annotations
 
+import contextlib
+import io
 import logging
 import time
 import warnings
@@ -153,7 +155,9 @@ def _fe_rows(quick: bool) -> list[Row]:
 def _ross_rows(quick: bool) -> list[Row]:
     try:
         logging.getLogger("ross").setLevel(logging.ERROR)
-        with warnings.catch_warnings():
+        # ROSS's dependencies print set-up chatter on import; keep it out of --json output
+        with warnings.catch_warnings(), contextlib.redirect_stdout(io.StringIO()), \
+                contextlib.redirect_stderr(io.StringIO()):
             warnings.simplefilter("ignore")
             import ross as rs
     except Exception as exc:  # noqa: BLE001 - optional, any import failure means skip

@@ -12,6 +12,10 @@ Submodules, imported on use so ``import predict.lateral`` does no work:
     Beam finite elements (Euler-Bernoulli or Timoshenko) with disks, bearings as springs and
     the gyroscopic effect: natural frequencies, Campbell diagram with forward/backward whirl,
     critical speeds, unbalance response.
+``elements``
+    Material, shaft sections, disks, bearings and the beam element matrices.
+``results``
+    Result objects (modes, critical speeds, Campbell diagram, unbalance response).
 ``toml``
     The ``[rotor]`` model-file loader.
 """
@@ -36,7 +40,11 @@ _LAZY = {
     "Disk": "fe",
     "Bearing": "fe",
     "Material": "fe",
+    "STEEL": "fe",
+    "element_matrices": "elements",
+    "lumped_exact": "approx",
     "load_rotor": "toml",
+    "RotorModel": "toml",
 }
 
 __all__ = sorted(_LAZY)
