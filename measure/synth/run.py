@@ -349,6 +349,9 @@ def _steady_state(system, excitation, orders, rpm, load, nodes):
 
 def _mount_channels(scene, sensors, excitation, orders, psi0, t_truth, rpm_truth, load_truth,
                     rng, channels, truth_rows):
+    import math
+
+    from .torsional import _cis
     from .vibrograph import MountChannels
 
     mounted = scene.mounts
@@ -367,45 +370,76 @@ def _mount_channels(scene, sensors, excitation, orders, psi0, t_truth, rpm_truth
             points.append(names[s.params["mount"]])
     prof = scene.profile
     speeds = prof.speed_rpm * RPM
-    grid = np.linspace(speeds.min(), speeds.max(), 150 if np.ptp(speeds) > 0 else 1)
+    n_grid = 150 if np.ptp(speeds) > 0 else 1
+    grid = np.linspace(speeds.min(), speeds.max(), n_grid)
     mc = MountChannels(mounted, scene.engine, excitation, orders, np.array(points), grid)
-    step = orders[0]
+    load_fn = lambda w: scene.load.scale(w / RPM)  # noqa: E731
+    step = float(orders[0])
+    # per sensor: response tables on the speed grid and the orders worth synthesising
+    tables, keep = [], []
     for p, s in enumerate(sensors):
-        fs = float(s.sample_rate)
+        tab = np.array([mc.table(k, p, s.params["direction"], s.params["quantity"], load_fn)
+                        for k in range(orders.size)])                      # (n_o, n_grid)
+        amp = np.abs(tab)
+        tables.append(tab)
+        keep.append(np.flatnonzero(amp.max(axis=1) > 1e-9 * max(amp.max(), 1e-300)))
+        # truth on the truth grid
+        at = np.array([np.interp(rpm_truth * RPM, grid, tab[k].real)
+                       + 1j * np.interp(rpm_truth * RPM, grid, tab[k].imag)
+                       if n_grid > 1 else np.full(t_truth.size, tab[k, 0])
+                       for k in range(orders.size)])
+        units = {"acceleration": "m/s^2", "velocity": "m/s", "displacement": "m"}[
+            s.params["quantity"]]
+        truth_rows.append((s.name, units, s.kind, np.abs(at), np.angle(at), None))
+    # sensors sharing a sample rate share the crank angle, speed and carriers
+    by_rate: dict = {}
+    for p, s in enumerate(sensors):
+        by_rate.setdefault(float(s.sample_rate), []).append(p)
+    data = {}
+    chunk = 1 << 19
+    for fs, members in by_rate.items():
         n = int(np.floor(prof.duration * fs)) + 1
-        direction, quantity = s.params["direction"], s.params["quantity"]
-        units = {"acceleration": "m/s^2", "velocity": "m/s", "displacement": "m"}[quantity]
-        # decide the orders worth synthesising from the truth grid (relative 1e-9)
-        amp_truth = np.array([np.abs(mc.transfer(k, p, direction, quantity, rpm_truth * RPM,
-                                                 load_truth)) for k in range(orders.size)])
-        phase_truth = np.array([np.angle(mc.transfer(k, p, direction, quantity,
-                                                     rpm_truth * RPM, load_truth))
-                                for k in range(orders.size)])
-        keep = np.flatnonzero(amp_truth.max(axis=1) > 1e-9 * max(amp_truth.max(), 1e-300))
-        data = np.zeros(n)
-        chunk = 1 << 20
+        for p in members:
+            data[p] = np.zeros(n)
+        needed = sorted(set().union(*[set(keep[p].tolist()) for p in members]))
+        if not needed:
+            continue
+        multiples = [int(round(orders[k] / step)) for k in needed]
+        base_mult = math.gcd(*multiples)
         for a in range(0, n, chunk):
             ts = np.arange(a, min(n, a + chunk)) / fs
             psi = psi0 + prof.angle(ts)
             spd = prof.speed(ts)
-            load = scene.load.scale(spd / RPM)
-            base = np.exp(1j * step * psi)
+            if n_grid > 1:
+                u = np.clip((spd - grid[0]) / (grid[1] - grid[0]), 0.0, n_grid - 1 - 1e-9)
+                j = u.astype(np.int64)
+                w = u - j
+            base = _cis(base_mult * step * psi)
             carrier = np.ones_like(base)
             power = 0
-            for k in keep:
-                target = int(round(orders[k] / step))
-                while power < target:
+            for k, m in zip(needed, multiples):
+                while power < m // base_mult:
                     carrier *= base
                     power += 1
-                data[a:a + ts.size] += (mc.transfer(k, p, direction, quantity, spd, load)
-                                        * carrier).real
-        ts = np.arange(n) / fs
-        data = add_noise_and_drift(data, ts, s.imperfections, rng)
-        channels[s.name] = dict(data=data, sample_rate=fs, units=units, quantity=quantity,
-                                location=s.params.get("location", s.params.get("mount",
-                                                      f"point {points[p]}")),
-                                direction=direction)
-        truth_rows.append((s.name, units, s.kind, amp_truth, phase_truth, None))
+                for p in members:
+                    if k not in keep[p]:
+                        continue
+                    tab = tables[p][k]
+                    if n_grid > 1:
+                        amp = tab[j] + w * (tab[j + 1] - tab[j])
+                    else:
+                        amp = tab[0]
+                    data[p][a:a + ts.size] += (amp * carrier).real
+    for p, s in enumerate(sensors):
+        fs = float(s.sample_rate)
+        ts = np.arange(data[p].size) / fs
+        values = add_noise_and_drift(data[p], ts, s.imperfections, rng)
+        units = truth_rows[-len(sensors) + p][1]
+        channels[s.name] = dict(data=values, sample_rate=fs, units=units,
+                                quantity=s.params["quantity"],
+                                location=s.params.get("location", s.params.get(
+                                    "mount", f"point {points[p]}")),
+                                direction=s.params["direction"])
 
 
 def _pressure_channel(scene, s, psi0, rng):

@@ -129,6 +129,25 @@ class MountChannels:
                                      point=exc_p[i], at=self.points)
                 self.gas[i] = np.moveaxis(r.displacement, 0, -1)
 
+    def table(self, order_index, point_index, direction, quantity, load_fn=None):
+        """The response of one point per unit ``e^{i q psi}`` on the speed grid.
+
+        ``(load(Omega) H_gas + Omega**2 H_in) (i q Omega)**p`` with ``p`` = 0, 1, 2 for
+        displacement, velocity, acceleration: a smooth function of speed only, ready to be
+        interpolated along the run. ``load_fn(Omega)`` gives the gas-load factor (default 1).
+        """
+        axis = _AXIS[direction]
+        q = self.orders[order_index]
+        grid = self.speed_grid
+        load = np.ones_like(grid) if load_fn is None else load_fn(grid)
+        disp = load * self.gas[order_index, point_index, axis] + \
+            grid**2 * self.inertia[order_index, point_index, axis]
+        power = {"displacement": 0, "velocity": 1, "acceleration": 2}.get(quantity)
+        if power is None:
+            raise ConfigError(f"quantity={quantity!r} is not one of 'acceleration', 'velocity', "
+                              "'displacement'")
+        return disp * (1j * q * grid) ** power
+
     def transfer(self, order_index, point_index, direction, quantity, speed, load):
         """Complex amplitude of one point's motion along the run (quasi-steady).
 
