@@ -35,7 +35,7 @@ from .._validate import check_finite_array, check_int, check_positive
 from ..errors import ModelError
 
 __all__ = ["Excitation", "tangential_torque", "torque_harmonics", "engine_excitation",
-           "harmonic_coefficient_table"]
+           "harmonic_coefficient_table", "excitation_from_coefficients"]
 
 
 def tangential_torque(engine, psi, *, omega, pressure, crankcase_pressure=1.0e5):
@@ -303,3 +303,62 @@ def harmonic_coefficient_table(engine, imep_values, *, orders=None):
     frame.index.name = "imep_pa"
     frame.attrs["model"] = "own: synthetic Wiebe single-zone trace (predict.pressure)"
     return frame
+
+
+def excitation_from_coefficients(engine, *, orders, imep_values, coefficients, imep,
+                                 phases_deg=None, source="user table") -> Excitation:
+    """Excitation from a table of tangential-pressure harmonic coefficients vs IMEP.
+
+    Published tables (e.g. Ker Wilson vol. 2, or the engine maker's) give |G_q|/(A r) in Pa
+    against mean indicated pressure; the gas harmonic at ``imep`` is interpolated linearly in
+    IMEP and multiplied by A·r. The inertia part comes from the engine's reciprocating mass.
+    Without ``phases_deg`` the gas harmonics are taken in phase (0°): per-order amplitudes and
+    vector sums are right, the cycle superposition of several orders is then only indicative.
+
+    Parameters
+    ----------
+    engine : Engine
+    orders : array_like (n_o,)
+    imep_values : array_like (n_p,)
+        Ascending IMEP of the table rows, Pa.
+    coefficients : array_like (n_p, n_o)
+        Tangential-pressure coefficients, Pa.
+    imep : float
+        Operating IMEP, Pa.
+    phases_deg : array_like (n_o,), optional
+        Phase of each gas harmonic, deg (``T(ψ) = Re Σ G_q e^{iqψ}``).
+    source : str
+        Citation of the table.
+
+    Returns
+    -------
+    Excitation
+    """
+    orders = check_finite_array(orders, "orders", ndim=1, min_length=1, error=ModelError)
+    p = check_finite_array(imep_values, "imep_values", ndim=1, min_length=1, error=ModelError)
+    c = check_finite_array(coefficients, "coefficients", ndim=2, error=ModelError)
+    if c.shape != (p.size, orders.size):
+        raise ModelError(f"coefficients have shape {c.shape}, expected (len(imep_values), "
+                         f"len(orders)) = ({p.size}, {orders.size})")
+    if p.size > 1 and np.any(np.diff(p) <= 0):
+        raise ModelError("imep_values must be strictly ascending")
+    imep = check_positive(imep, "imep", error=ModelError)
+    if engine.bore is None:
+        raise ModelError(f"engine {engine.name!r} has no bore; the coefficients need A·r")
+    area_r = np.pi * engine.bore ** 2 / 4 * engine.crank_radius
+    mag = np.array([np.interp(imep, p, c[:, i]) for i in range(orders.size)]) * area_r
+    ph = np.zeros(orders.size) if phases_deg is None else np.deg2rad(check_finite_array(
+        phases_deg, "phases_deg", ndim=1, error=ModelError))
+    gas = mag * np.exp(1j * ph)
+    n = 1440
+    period = np.pi * engine.cycle
+    psi = np.arange(n) * period / n
+    # no gas force (cylinder = crankcase pressure): the inertia torque at ω = 1 rad/s
+    unit = _series(tangential_torque(engine, psi, omega=1.0, pressure=1.0e5,
+                                     crankcase_pressure=1.0e5), period, orders)
+    inertia = np.where(np.isclose(orders, np.round(orders)), unit, 0.0)
+    return Excitation(orders=np.asarray(orders, float), gas=gas, inertia=inertia,
+                      n_cylinders=engine.n_cylinders,
+                      source=f"{source}, imep {imep / 1e5:.3g} bar"
+                             + ("" if phases_deg is not None else " (phases assumed 0)"))
+
