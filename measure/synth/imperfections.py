@@ -109,7 +109,15 @@ def tooth_angles(pulses_per_rev, imperfections, rng):
 
 
 def add_noise_and_drift(data, time, imperfections, rng):
-    """Add white noise and linear DC drift to a sampled channel (new array)."""
+    """Add white noise and linear DC drift to a sampled channel (new array).
+
+    Examples
+    --------
+    >>> out = add_noise_and_drift(np.zeros(3), [0.0, 1.0, 2.0], Imperfections(drift_rate=0.5),
+    ...                           np.random.default_rng(0))
+    >>> out.tolist()
+    [0.0, 0.5, 1.0]
+    """
     out = np.array(data, dtype=float, copy=True)
     if imperfections.noise_rms > 0:
         out += imperfections.noise_rms * rng.standard_normal(out.size)
@@ -119,7 +127,15 @@ def add_noise_and_drift(data, time, imperfections, rng):
 
 
 def degrade_edges(edges, imperfections, rng):
-    """Jitter, drop, add spurious and quantise edge times (sorted result, s)."""
+    """Jitter, drop, add spurious and quantise edge times (sorted result, s).
+
+    Examples
+    --------
+    >>> t = degrade_edges([0.10004, 0.20007], Imperfections(timer_resolution_s=1e-4),
+    ...                   np.random.default_rng(0))
+    >>> np.round(t, 6).tolist()                      # rounded down to whole 100 us ticks
+    [0.1, 0.2]
+    """
     t = np.array(edges, dtype=float, copy=True)
     if imperfections.jitter_s > 0:
         t += imperfections.jitter_s * rng.standard_normal(t.size)

@@ -60,6 +60,18 @@ def wheel_edges(profile, *, start_angle, ratio, grid_time, vibration, vibration_
         Edge times, s.
     clean : numpy.ndarray
         The true edge times (tooth errors included, timing imperfections not).
+
+    Examples
+    --------
+    >>> from measure.synth.profile import steady
+    >>> from measure.synth.imperfections import Imperfections
+    >>> edges, _ = wheel_edges(steady(600.0, duration=1.0), start_angle=0.0, ratio=1.0,
+    ...                        grid_time=np.linspace(0, 1, 11), vibration=None,
+    ...                        vibration_velocity=None, pulses_per_rev=4, missing_teeth=0,
+    ...                        tdc_offset=0.0, imperfections=Imperfections(),
+    ...                        rng=np.random.default_rng(0))
+    >>> edges[:3].round(6).tolist()                  # 10 rev/s, 4 teeth: every 25 ms
+    [0.0, 0.025, 0.05]
     """
     n = int(pulses_per_rev)
     end = float(grid_time[-1] if duration is None else duration)
@@ -110,6 +122,17 @@ def analogue_pickup(edges, *, time, pulses_per_rev, missing_teeth, profile, ampl
     -------
     numpy.ndarray
         Voltage, V, on ``time``.
+
+    Examples
+    --------
+    >>> from measure.synth.profile import steady
+    >>> from measure.tacho import detect_edges
+    >>> edges = np.arange(1, 40) * 0.025
+    >>> t = np.arange(20_000) / 20_000.0
+    >>> v = analogue_pickup(edges, time=t, pulses_per_rev=4, missing_teeth=0,
+    ...                     profile=steady(600.0, duration=1.0))
+    >>> bool(np.allclose(detect_edges(v, fs=20_000.0)[:3], edges[1:4], atol=1e-6))
+    True
     """
     time = np.asarray(time, float)
     u = np.interp(time, edges, np.arange(edges.size), left=np.nan, right=np.nan)

@@ -182,6 +182,12 @@ class Scene:
                               " need a mount model ([mounts] in the engine file or "
                               "[scene] mounts = 'path.toml')")
         if self.shaftline is not None:
+            cyl = len(self.shaftline.cylinder_nodes)
+            if cyl and cyl != self.engine.n_cylinders:
+                raise ConfigError(f"scene {self.name!r}: the shaft line has {cyl} cylinder "
+                                  f"nodes but the engine {self.engine.name!r} has "
+                                  f"{self.engine.n_cylinders} cylinders; use the engine the "
+                                  "shaft line was built for")
             nodes = self.shaftline.node_names
             for s in self.sensors:
                 node = s.params.get("node")

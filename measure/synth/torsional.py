@@ -122,6 +122,17 @@ def order_forcing(system, excitation, orders, *, misfire=None):
     gas, inertia : numpy.ndarray, shape (n_orders, n_nodes), complex
         Torque at each node (referred, N·m) for ``T = Re[(gas + Omega**2 inertia) e^{i q psi}]``,
         cylinder ``c`` delayed by its firing angle.
+
+    Examples
+    --------
+    >>> from pathlib import Path
+    >>> from predict.torsion import from_toml
+    >>> from predict.torsion.excitation import engine_excitation
+    >>> root = Path(__file__).resolve().parents[2]
+    >>> s = from_toml(root / "sample_data/shaftlines/marine_6l.toml")
+    >>> gas, inertia = order_forcing(s, engine_excitation(s, imep=2e6, orders=[3.0]), [3.0])
+    >>> gas.shape, bool(np.allclose(np.abs(gas[0, 2:8]), np.abs(gas[0, 2])))
+    ((1, 13), True)
     """
     from predict.torsion.forced import cylinder_forcing
 
@@ -181,6 +192,15 @@ class ModalModel:
         A free shaft line without any absolute damping has a defective (non-diagonalisable)
         rigid-body block; a damping ``1e-6 omega_1 J_i`` to ground is then added at every node
         (changes responses by about ``1e-6 omega_1 / omega``) and ``regularised`` is set.
+
+        Examples
+        --------
+        >>> from predict.torsion import TorsionalSystem
+        >>> s = TorsionalSystem([2.0], [(-1, 0)], [2.0 * (2 * np.pi * 20) ** 2],
+        ...                     node_damping=[2 * 0.02 * 2.0 * 2 * np.pi * 20])
+        >>> fn, zeta = ModalModel.from_system(s).natural_frequencies()
+        >>> round(float(fn[0]), 9), round(float(zeta[0]), 9)
+        (20.0, 0.02)
         """
         visc = equivalent_viscous_system(system)
         j = np.asarray(visc.inertias, float)

@@ -71,6 +71,18 @@ class MountChannels:
     ----------
     gas, inertia : numpy.ndarray (n_orders, p, 3, n_grid), complex
         Displacement (m) per unit load and per unit ``Omega**2`` at each grid speed.
+
+    Examples
+    --------
+    >>> from pathlib import Path
+    >>> from predict.engine import Engine
+    >>> from predict.mounts import MountedEngine
+    >>> f = Path(__file__).resolve().parents[2] / "sample_data/engines/i4.toml"
+    >>> mc = MountChannels(MountedEngine.from_toml(f), Engine.from_toml(f), None, [1.0, 2.0],
+    ...                    [[0.2, 0.05, 0.1]], [314.159])
+    >>> a = np.abs(mc.table(1, 0, "z", "acceleration"))[0]     # order 2 at 3000 rpm
+    >>> bool(a > 10.0), float(np.abs(mc.table(0, 0, "z", "acceleration"))[0])  # order 1 balanced
+    (True, 0.0)
     """
 
     def __init__(self, mounted, engine, excitation, orders, points, speed_grid):
