@@ -35,7 +35,7 @@ from predict.errors import CrankbenchError, RecordError
 from ._atomic import atomic_path, check_overwrite
 from .readers import EXTENSIONS, format_of_magic, module_for
 from .readers._common import REGULAR_KEY
-from .record import RecordWarning, nonfinite_spans, validate
+from .record import CLIP_QUANTITIES, RecordWarning, clipped_spans, nonfinite_spans, validate
 
 __all__ = ["read", "write", "open", "read_truth", "iter_blocks", "sha256_of", "EXTENSIONS"]
 
@@ -142,6 +142,31 @@ def _mask_nonfinite(ds: xr.Dataset, path: Path) -> xr.Dataset:
     return ds
 
 
+def _flag_clipping(ds: xr.Dataset, path: Path) -> None:
+    for name, var in ds.data_vars.items():
+        if (var.dtype.kind != "f" or var.chunks is not None
+                or var.attrs.get("quantity") not in CLIP_QUANTITIES):
+            continue
+        spans = clipped_spans(var.values)
+        if not spans:
+            continue
+        values = var.values
+        t = ds[var.dims[0]].values
+        flat = []
+        for a, b in spans:
+            flat += [float(t[a]), float(t[b - 1])]
+        text = "; ".join(f"{t[a]:.6g}..{t[b - 1]:.6g} s" for a, b in spans[:5])
+        more = f" and {len(spans) - 5} more" if len(spans) > 5 else ""
+        hi, lo = float(np.nanmax(values)), float(np.nanmin(values))
+        warnings.warn(
+            f"{path.name}: channel {name!r} looks clipped (amplifier/ADC saturation): "
+            f"{sum(b - a for a, b in spans)} sample(s) in {len(spans)} flat run(s) at its "
+            f"extremes {hi:.6g} / {lo:.6g} {var.attrs.get('units', '')}: {text}{more}; spans "
+            "listed in attr clipped_spans_s — amplitudes there are too low",
+            RecordWarning, stacklevel=3)
+        var.attrs["clipped_spans_s"] = np.asarray(flat)
+
+
 def read(path, *, channels=None, allow_nonfinite: bool = False) -> xr.Dataset:
     """Read a record file into a validated Record, by extension.
 
@@ -155,6 +180,13 @@ def read(path, *, channels=None, allow_nonfinite: bool = False) -> xr.Dataset:
         Accept NaN/inf dropouts: they are masked as NaN, listed in the channel attr
         ``masked_spans_s`` (start, end pairs in s) and reported by a :class:`RecordWarning`
         naming channel and span. By default they are an error.
+
+    Notes
+    -----
+    Clipping (runs of >= 3 samples flat at a vibration-type channel's own maximum or minimum,
+    see :func:`measure.record.clipped_spans`) is reported by a :class:`RecordWarning` naming
+    channel and spans, which are listed in the channel attr ``clipped_spans_s``; the samples
+    are kept as recorded.
 
     Returns
     -------
@@ -200,6 +232,7 @@ def read(path, *, channels=None, allow_nonfinite: bool = False) -> xr.Dataset:
             validate(ds, allow_nonfinite=allow_nonfinite, _regular_dims=regular)
         except RecordError as exc:
             raise _named(path, exc) from None
+        _flag_clipping(ds, path)
         ds.attrs["source"] = path.name
         ds.attrs["sha256"] = digest.result()
     return ds
@@ -241,7 +274,10 @@ def write(record: xr.Dataset, path, *, truth: xr.Dataset | None = None,
     for suffix in sidecars:
         check_overwrite(Path(str(path) + suffix), overwrite)
     with atomic_path(path, overwrite=overwrite) as tmp:
-        extras = module.write(record, tmp, truth=truth) or {}
+        try:
+            extras = module.write(record, tmp, truth=truth) or {}
+        except CrankbenchError as exc:  # name the target, not the temporary file
+            raise type(exc)(str(exc).replace(str(tmp), str(path))) from None
         for suffix, payload in extras.items():
             with atomic_path(Path(str(path) + suffix), overwrite=overwrite) as side:
                 side.write_bytes(payload)

@@ -39,6 +39,7 @@ __all__ = [
     "list_channels",
     "is_pulse_dim",
     "nonfinite_spans",
+    "clipped_spans",
     "time_coordinate",
 ]
 
@@ -87,6 +88,45 @@ def nonfinite_spans(values: np.ndarray) -> list[tuple[int, int]]:
     starts = np.flatnonzero(edges == 1)
     stops = np.flatnonzero(edges == -1)
     return [(int(a), int(b)) for a, b in zip(starts, stops)]
+
+
+#: Quantities whose flat runs at the extremes mean saturation (speed plateaus are legitimate).
+CLIP_QUANTITIES = ("acceleration", "velocity", "displacement", "pressure", "voltage", "force",
+                   "torque", "angular_velocity", "angle")
+
+
+def clipped_spans(values: np.ndarray, *, min_run: int = 3) -> list[tuple[int, int]]:
+    """Index spans ``[start, stop)`` where the signal sits flat at its own maximum or minimum.
+
+    A saturated amplifier or ADC holds its limit value for consecutive samples; a run of at
+    least ``min_run`` equal samples at the channel's global extreme is taken as clipping.
+    NaN/inf are ignored; a constant channel (max == min) returns no span.
+
+    Examples
+    --------
+    >>> x = np.array([0, 0.5, 1, 1, 1, 0.5, 0, -0.5, -1, -1, -1, -1, 0, 1, 0])
+    >>> clipped_spans(x)
+    [(2, 5), (8, 12)]
+    """
+    x = np.asarray(values)
+    if x.dtype.kind != "f":
+        x = x.astype(np.float64)
+    finite = np.isfinite(x)
+    if not finite.any():
+        return []
+    hi, lo = np.max(x, where=finite, initial=-np.inf), np.min(x, where=finite, initial=np.inf)
+    if hi == lo:
+        return []
+    spans = []
+    for level in (hi, lo):
+        at = x == level
+        if at.sum() < min_run:
+            continue
+        edges = np.diff(np.concatenate(([0], at.view(np.int8), [0])))
+        starts, stops = np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)
+        keep = stops - starts >= min_run
+        spans += [(int(a), int(b)) for a, b in zip(starts[keep], stops[keep])]
+    return sorted(spans)
 
 
 def _describe_spans(spans, t) -> str:

@@ -25,7 +25,7 @@ import xarray as xr
 
 from predict.errors import RecordError
 
-from ..record import is_pulse_dim, time_coordinate
+from ..record import is_pulse_dim, nonfinite_spans, time_coordinate
 from ._common import build_dataset, channel_meta, clean_attr, dims_of, regular_start, select, \
     si_channel
 
@@ -99,6 +99,13 @@ def write(record: xr.Dataset, path, *, truth=None) -> dict:
         for i, name in enumerate(names):
             var = record[name]
             values = np.asarray(var.values, dtype=np.float64)
+            spans = nonfinite_spans(values)
+            if spans:
+                a, b = spans[0]
+                raise RecordError(
+                    f"{file}: channel {name!r} has NaN/inf samples ({len(spans)} span(s), first "
+                    f"samples {a}..{b - 1}); UFF 58 cannot store NaN/inf (they would be written "
+                    "as numbers) — write .h5/.nc/.csv/.mf4/.tdms/.wav, or fill the spans")
             meta = channel_meta(var, dim=dim)
             meta.pop("units", None)
             meta["dtype"] = str(var.dtype)

@@ -1,8 +1,8 @@
 """Generate the bad-record corpus ``tests/corpus/bad/records/`` (issue 10, file formats).
 
 Every file is small (< 100 kB) and broken in one documented way: zero length, truncated,
-wrong magic bytes, header/body mismatch, NaN/inf runs, non-monotonic or duplicated time,
-sample rate 0 or negative, unknown unit strings, plus a few CSV/WAV-specific faults. Each one is
+wrong magic bytes, header/body mismatch, NaN/inf runs, clipping, non-monotonic or duplicated
+time, sample rate 0 or negative, unknown unit strings, plus a few CSV/WAV-specific faults. Each one is
 read in ``tests/measure/test_bad_files.py`` with the asserted message (or, where the data is
 usable in part, the masked result and its warning).
 
@@ -202,6 +202,16 @@ def make_all(out: Path) -> list[Path]:
         cols = [dict(side["channels"][0], units="m/s/s")]
         Path(str(out / "unknown_unit.wav") + ".json").write_text(
             json.dumps({**side, "channels": cols}))
+
+        # clipped (amplifier / ADC saturation; usable in part, flagged on read)
+        tt = np.arange(N) / FS
+        sine = 1.3 * np.sin(2 * np.pi * 10.0 * tt)
+        _write(base_record(np.clip(sine, -0.8, 0.8).astype(np.float32)), add("clipped.h5"))
+        pcm = np.clip(np.round(sine / 1.0 * 32767), -32768, 32767).astype(np.int16)
+        sf.write(str(add("clipped_pcm.wav")), pcm, 1000, subtype="PCM_16", format="WAV")
+        Path(str(out / "clipped_pcm.wav") + ".json").write_text(json.dumps({
+            "crankbench_sidecar": 1, "attrs": {"start_time": "2026-01-01T00:00:00+00:00"},
+            "channels": [{"name": "acc", "units": "g", "scale": 2.0}]}))
 
         # format-specific faults
         add("no_time_column.csv").write_text("acc [g],vel [mm/s]\n1,2\n3,4\n")

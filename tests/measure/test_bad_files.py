@@ -113,7 +113,11 @@ MASKED = {
 }
 
 WARNED = {"no_sidecar.wav": r"no sidecar 'no_sidecar.wav.json'; channels read as fractions of "
-                            r"full scale \(units '1', quantity 'other'\)"}
+                            r"full scale \(units '1', quantity 'other'\)",
+          "clipped.h5": r"clipped.h5: channel 'acc' looks clipped \(amplifier/ADC saturation\): "
+                        r"\d+ sample\(s\) in 10 flat run\(s\) at its extremes 0.8 / -0.8 m/s\^2",
+          "clipped_pcm.wav": r"clipped_pcm.wav: channel 'acc' looks clipped .* at its extremes "
+                             r"19.6\d* / -19.6\d* m/s\^2"}
 
 
 def _files():
@@ -216,3 +220,15 @@ def test_truth_only_in_hdf5(tmp_path):
         io.write(rec, tmp_path / "out.csv", truth=truth)
     assert not (tmp_path / "out.csv").exists()
     assert not list(tmp_path.iterdir()), "a failed write must leave no file behind"
+
+
+@pytest.mark.parametrize("name, limit", [("clipped.h5", 0.8), ("clipped_pcm.wav", 1.0)])
+def test_clipped_file_flagged_with_spans(name, limit):
+    with pytest.warns(RecordWarning, match=WARNED[name]):
+        rec = io.read(CORPUS / name)
+    spans = rec["acc"].attrs["clipped_spans_s"].reshape(-1, 2)
+    # a 10 Hz sine of amplitude 1.3 clipped at `limit`: flat tops start asin(limit/1.3)/(2 pi 10)
+    # s after the first zero crossing, then one every half period (0.05 s)
+    start = np.arcsin(limit / 1.3) / (2 * np.pi * 10)
+    assert spans[0, 0] == pytest.approx(start, abs=1.5e-3)
+    np.testing.assert_allclose(np.diff(spans[:, 0]), 0.05, atol=1.5e-3)

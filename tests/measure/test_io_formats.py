@@ -196,3 +196,44 @@ def test_wav_without_sidecar_warns_once(tmp_path):
     with pytest.warns(RecordWarning, match="no sidecar 'plain.wav.json'"):
         rec = io.read(tmp_path / "plain.wav")
     assert rec["ch1"].attrs["units"] == "1"
+
+
+def test_uff_refuses_nan_instead_of_corrupting(tmp_path):
+    x = np.ones(100)
+    x[40:45] = np.nan
+    rec = make_record({"acc": dict(data=x, sample_rate=100.0, units="g")}, allow_nonfinite=True)
+    with pytest.raises(RecordError, match=r"drop.uff: channel 'acc' has NaN/inf samples \(1 "
+                                          r"span\(s\), first samples 40..44\); UFF 58 cannot "
+                                          r"store NaN/inf"):
+        io.write(rec, tmp_path / "drop.uff")
+    assert not list(tmp_path.iterdir())
+
+
+@pytest.mark.parametrize("ext", [".h5", ".csv", ".mf4", ".tdms", ".wav"])
+def test_nan_dropouts_survive_every_other_format(ext, tmp_path):
+    x = np.ones(100)
+    x[40:45] = np.nan
+    rec = make_record({"acc": dict(data=x, sample_rate=100.0, units="g")}, allow_nonfinite=True)
+    io.write(rec, tmp_path / f"drop{ext}")
+    with pytest.raises(RecordError, match=r"channel 'acc' has 5 NaN/inf sample"):
+        io.read(tmp_path / f"drop{ext}")
+    with pytest.warns(RecordWarning, match=r"0.4..0.44 s \(samples 40..44\)"):
+        back = io.read(tmp_path / f"drop{ext}", allow_nonfinite=True)
+    np.testing.assert_array_equal(np.isnan(back["acc"].values), np.isnan(x))
+
+
+def test_clipping_flagged_on_read(tmp_path):
+    t = np.arange(2000) / 1000.0
+    x = np.clip(1.3 * np.sin(2 * np.pi * 5 * t), -0.8, 0.8)
+    rec = make_record({"acc": dict(data=x, sample_rate=1000.0, units="m/s^2"),
+                       "speed": dict(data=np.full(20, 3000.0), sample_rate=10.0, units="rpm")})
+    io.write(rec, tmp_path / "clip.h5")
+    with pytest.warns(RecordWarning, match=r"clip.h5: channel 'acc' looks clipped .*in 20 flat "
+                                           r"run\(s\) at its extremes 0.8 / -0.8 m/s\^2") as rec_w:
+        back = io.read(tmp_path / "clip.h5")
+    assert len(rec_w) == 1, "the constant speed channel is not clipping"
+    spans = back["acc"].attrs["clipped_spans_s"].reshape(-1, 2)
+    # |1.3 sin(2 pi 5 t)| >= 0.8 from t = asin(0.8/1.3)/(2 pi 5) = 0.02109 s after each zero
+    first = np.arcsin(0.8 / 1.3) / (2 * np.pi * 5)
+    assert spans[0, 0] == pytest.approx(first, abs=1e-3)
+    np.testing.assert_array_equal(back["acc"].values, x)   # kept as recorded

@@ -13,7 +13,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from measure import io
-from measure.record import make_record
+from measure.record import RecordWarning, make_record
 from predict.errors import RecordError
 
 SETTINGS = dict(max_examples=50, deadline=None,
@@ -59,14 +59,18 @@ def test_round_trip_exact(ext, rec):
     with tempfile.TemporaryDirectory() as d:
         path = Path(d) / f"r{ext}"
         io.write(rec, path)
-        back = io.read(path)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", RecordWarning)
+            back = io.read(path)
     assert list(back.data_vars) == list(rec.data_vars)
     for name, var in rec.data_vars.items():
         got = back[name]
         assert got.dtype == var.dtype
         np.testing.assert_array_equal(got.values, var.values)
         assert not np.isnan(got.values).any()
-        assert got.attrs == var.attrs
+        # a flat run at the extremes is reported as clipping: the only attr reading may add
+        attrs = {k: v for k, v in got.attrs.items() if k != "clipped_spans_s"}
+        assert attrs == var.attrs
         dim = var.dims[0]
         if dim in rec.coords:
             np.testing.assert_array_equal(back[dim].values, rec[dim].values)

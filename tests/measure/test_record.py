@@ -4,7 +4,8 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from measure.record import channel_time, list_channels, make_record, nonfinite_spans, validate
+from measure.record import channel_time, clipped_spans, list_channels, make_record, \
+    nonfinite_spans, validate
 from predict.errors import RecordError
 
 
@@ -170,3 +171,21 @@ def test_nonfinite_spans_against_hand_count():
     x = np.array([np.nan, 1, 1, np.inf, -np.inf, 2, np.nan])
     assert nonfinite_spans(x) == [(0, 1), (3, 5), (6, 7)]
     assert nonfinite_spans(np.ones(3)) == []
+
+
+def test_clipped_spans_against_hand_count():
+    """Flat runs (>= 3 samples) at the signal's own max/min; shorter touches are not clipping."""
+    x = np.sin(np.linspace(0, 4 * np.pi, 400)) * 1.3
+    clipped = np.clip(x, -0.8, 0.8)
+    spans = clipped_spans(clipped)
+    # |1.3 sin| >= 0.8 on 4 arcs; every span lies inside one of them and covers it
+    expected = np.abs(x) >= 0.8
+    got = np.zeros(400, bool)
+    for a, b in spans:
+        got[a:b] = True
+    np.testing.assert_array_equal(got, expected)
+    assert len(spans) == 4
+    assert clipped_spans(x) == []                      # unclipped sine: single peak samples
+    assert clipped_spans(np.ones(10)) == []            # constant channel is not "clipped"
+    assert clipped_spans(np.array([0, 1, 1, 0, -1])) == []   # run of 2 < min_run
+    assert clipped_spans(np.array([np.nan, 2, 2, 2, 0])) == [(1, 4)]
