@@ -19,6 +19,7 @@ import numpy as np
 import pytest
 
 from measure.synth import Scene, synthesize
+from measure.synth.imperfections import Imperfections
 from measure.synth.profile import steady
 from measure.synth.scene import LoadSpec, SensorSpec
 from measure.tacho import speed_from_pulses
@@ -48,7 +49,9 @@ def steady_run():
                                         "output": "analogue", "sample_rate": 50_000.0}),
         SensorSpec("acc", "vibrograph", {"mount": "engine side", "direction": "z",
                                          "quantity": "acceleration", "sample_rate": 4000.0}),
-        SensorSpec("p1", "pressure", {"cylinder": 1, "sample_rate": 20000.0}),
+        # a transducer's noise keeps the model's flat gas-exchange pressure from looking clipped
+        SensorSpec("p1", "pressure", {"cylinder": 1, "sample_rate": 20000.0},
+                   Imperfections(noise_rms=2.0e3)),
         SensorSpec("speed", "speed", {"sample_rate": 100.0}),
     )
     scene = Scene(name="i4 steady", engine=engine,
