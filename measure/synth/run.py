@@ -33,7 +33,7 @@ import numpy as np
 from predict._validate import check_option
 from predict.errors import ConfigError
 
-from .imperfections import add_noise_and_drift
+from .imperfections import add_noise_and_drift as _add_noise_and_drift
 from .pulses import analogue_pickup, wheel_edges
 from .scene import Scene
 
@@ -235,9 +235,9 @@ def synthesize(scene, *, method="split", integration_rate=None):
                 ts = np.arange(int(np.floor(duration * fs)) + 1) / fs
                 data = _resample(tg, data_g, ts, rate, fs,
                                  v_tot[i] * ratio[i] if quantity == "angle" else None)
-                data = add_noise_and_drift(data, ts, s.imperfections, rng)
+                data = _read_out(data, ts, s.imperfections, rng, s, quantity)
                 channels[s.name] = dict(data=data, sample_rate=fs, units=units,
-                                        quantity=quantity,
+                                        quantity=quantity, attrs=_instrument_attrs(s),
                                         location=s.params.get("location", s.params["node"]),
                                         direction="torsional")
                 truth_rows.append((s.name, units, s.kind, amp, ph, st))
@@ -255,7 +255,7 @@ def synthesize(scene, *, method="split", integration_rate=None):
                 ts = np.arange(int(np.floor(duration * fs)) + 1) / fs
                 volts = analogue_pickup(clean, time=ts, pulses_per_rev=s.params["pulses_per_rev"],
                                         missing_teeth=s.params["missing_teeth"], profile=prof)
-                volts = add_noise_and_drift(volts, ts, s.imperfections, rng)
+                volts = _read_out(volts, ts, s.imperfections, rng)
                 channels[s.name] = dict(data=volts, sample_rate=fs, units="V",
                                         quantity="voltage",
                                         location=s.params.get("location", s.params["node"]),
@@ -284,7 +284,7 @@ def synthesize(scene, *, method="split", integration_rate=None):
         elif s.kind == "speed":
             fs = float(s.sample_rate)
             ts = np.arange(int(np.floor(duration * fs)) + 1) / fs
-            data = add_noise_and_drift(prof.speed(ts), ts, s.imperfections, rng)
+            data = _read_out(prof.speed(ts), ts, s.imperfections, rng)
             channels[s.name] = dict(data=data, sample_rate=fs, units="rad/s",
                                     quantity="rotational_speed",
                                     location=s.params.get("location", "bench speed channel"))
@@ -306,6 +306,30 @@ def synthesize(scene, *, method="split", integration_rate=None):
 
 
 # ------------------------------------------------------------------------------------------
+_INSTRUMENT_KIND = {"angle": "displacement", "displacement": "displacement",
+                    "angular_velocity": "velocity", "velocity": "velocity",
+                    "acceleration": "acceleration"}
+
+
+def _instrument(spec, quantity):
+    """The seismic instrument of a sensor (None if it has none)."""
+    if "instrument_frequency" not in spec.params:
+        return None
+    from measure.instruments import SeismicInstrument
+
+    return SeismicInstrument(spec.params["instrument_frequency"],
+                             spec.params["instrument_damping"], _INSTRUMENT_KIND[quantity])
+
+
+def _read_out(data, time, imperfections, rng, spec=None, quantity=None):
+    """The sensor's instrument response (if any), then its noise and drift."""
+    inst = None if spec is None else _instrument(spec, quantity)
+    if inst is not None:
+        time = np.asarray(time, float)
+        data = inst.simulate(data, fs=1.0 / (time[1] - time[0]))
+    return _add_noise_and_drift(data, time, imperfections, rng)
+
+
 def _excitation(scene, orders):
     from predict.torsion.excitation import engine_excitation
 
@@ -433,13 +457,20 @@ def _mount_channels(scene, sensors, excitation, orders, psi0, t_truth, rpm_truth
     for p, s in enumerate(sensors):
         fs = float(s.sample_rate)
         ts = np.arange(data[p].size) / fs
-        values = add_noise_and_drift(data[p], ts, s.imperfections, rng)
+        values = _read_out(data[p], ts, s.imperfections, rng, s, s.params["quantity"])
         units = truth_rows[-len(sensors) + p][1]
         channels[s.name] = dict(data=values, sample_rate=fs, units=units,
-                                quantity=s.params["quantity"],
+                                quantity=s.params["quantity"], attrs=_instrument_attrs(s),
                                 location=s.params.get("location", s.params.get(
                                     "mount", f"point {points[p]}")),
                                 direction=s.params["direction"])
+
+
+def _instrument_attrs(spec):
+    if "instrument_frequency" not in spec.params:
+        return {}
+    return {"instrument_natural_frequency": float(spec.params["instrument_frequency"]),
+            "instrument_damping_ratio": float(spec.params["instrument_damping"])}
 
 
 def _pressure_channel(scene, s, psi0, rng):
@@ -461,7 +492,7 @@ def _pressure_channel(scene, s, psi0, rng):
     base = float(np.min(trace.pressure))
     load = scene.load.scale(prof.speed(ts) / RPM)
     p = base + load * (p - base)
-    p = add_noise_and_drift(p, ts, s.imperfections, rng)
+    p = _read_out(p, ts, s.imperfections, rng)
     return dict(data=p, sample_rate=fs, units="Pa", quantity="pressure",
                 location=s.params.get("location", f"cylinder {c}"))
 

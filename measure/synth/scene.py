@@ -39,7 +39,12 @@ Sensor keys by kind: *torsiograph* ``node``, ``quantity``, ``sample_rate``; *enc
 ``output = "pulses" | "analogue"`` (``sample_rate`` for the analogue pick-up voltage);
 *vibrograph* ``point = [x, y, z]`` or ``mount = "name"``, ``direction`` (x/y/z),
 ``quantity`` (acceleration/velocity/displacement), ``sample_rate``; *pressure* ``cylinder``,
-``sample_rate``; *speed* ``sample_rate``. Any sensor may override the imperfection keys.
+``sample_rate``; *speed* ``sample_rate``. Torsiograph and vibrograph sensors may give a
+seismic instrument, ``instrument_frequency`` (Hz) and ``instrument_damping`` (fraction of
+critical, default 0.65): the channel is then the instrument's reading
+(:mod:`measure.instruments`: a seismic torsiograph/vibrograph for angles and displacements, a
+velocity pick-up, an accelerometer), while the truth stays the true motion. Any sensor may
+override the imperfection keys.
 Unknown keys are errors (with a did-you-mean) naming the file and key.
 """
 
@@ -60,11 +65,13 @@ __all__ = ["Scene", "SensorSpec", "LoadSpec", "SENSOR_KINDS"]
 
 #: sensor kinds and the keys each accepts (besides kind, name and the imperfection keys)
 SENSOR_KINDS = {
-    "torsiograph": ("node", "quantity", "sample_rate", "location"),
+    "torsiograph": ("node", "quantity", "sample_rate", "location", "instrument_frequency",
+                    "instrument_damping"),
     "encoder": ("node", "pulses_per_rev", "missing_teeth", "tdc_offset_deg", "location"),
     "tacho": ("node", "pulses_per_rev", "missing_teeth", "tdc_offset_deg", "output",
               "sample_rate", "location"),
-    "vibrograph": ("point", "mount", "direction", "quantity", "sample_rate", "location"),
+    "vibrograph": ("point", "mount", "direction", "quantity", "sample_rate", "location",
+                   "instrument_frequency", "instrument_damping"),
     "pressure": ("cylinder", "sample_rate", "location"),
     "speed": ("sample_rate", "location"),
 }
@@ -357,6 +364,9 @@ def _sensor(t: Table, defaults: Imperfections) -> SensorSpec:
         p["sample_rate"] = t.positive("sample_rate")
     if kind == "speed":
         p["sample_rate"] = t.positive("sample_rate")
+    if kind in ("torsiograph", "vibrograph") and "instrument_frequency" in t:
+        p["instrument_frequency"] = t.positive("instrument_frequency")
+        p["instrument_damping"] = t.number("instrument_damping", 0.65, low=0.0)
     location = t.string("location", None)
     if location is not None:
         p["location"] = location
