@@ -1,0 +1,69 @@
+"""The bench-suite registry contract, checked cheaply: every ``analysis/bench/suite_*.py``
+imports without doing work, has a docstring saying what it measures and a ``run(quick)``
+callable. Running all suites is ``crankbench bench --quick`` (minutes); only the fidelity
+suite (≈ 6 s quick) runs here, and its rows are checked against their own definition."""
+
+import importlib
+import inspect
+import math
+import time
+
+import numpy as np
+import pytest
+
+import analysis.bench as bench
+from analysis.bench import Row
+from analysis.bench.suite_fidelity import pareto_distance
+
+SUITES = bench.suites()
+
+
+def test_every_expected_suite_is_registered():
+    expected = {"io", "kinematics", "balance", "orders", "torsion", "lateral", "fidelity"}
+    missing = expected - set(SUITES)
+    assert not missing, f"suites missing from analysis/bench: {sorted(missing)}"
+
+
+@pytest.mark.parametrize("name", SUITES)
+def test_suite_module_contract(name):
+    t0 = time.perf_counter()
+    module = importlib.import_module(f"analysis.bench.suite_{name}")
+    assert time.perf_counter() - t0 < 20.0, "import should do no work (import heavy stuff in run)"
+    doc = inspect.getdoc(module)
+    assert doc and len(doc.split()) >= 8, f"suite_{name} needs a docstring saying what it measures"
+    assert callable(getattr(module, "run", None)), f"suite_{name} has no run(quick) callable"
+    params = list(inspect.signature(module.run).parameters)
+    assert params[:1] == ["quick"], f"suite_{name}.run must take quick as its first argument"
+
+
+def test_pareto_distance_definition():
+    sweep = [(2, 1.0, 1e-3), (4, 1.2, 1e-7), (6, 1.1, 1e-9), (8, 1.6, 1e-12)]
+    # on the front: the cheapest setting meeting the tolerance, or one that costs the same
+    assert pareto_distance(4, 1e-7, sweep, 1e-6) == 0.0
+    assert pareto_distance(6, 1e-9, sweep, 1e-6) == 0.0   # 4 costs 1.1 (envelope: 6 did)
+    assert pareto_distance(8, 1e-12, sweep, 1e-6) == pytest.approx(1.6 / 1.1 - 1)
+    # missing the tolerance is infinitely far; nothing manual meets it -> extends the front
+    assert math.isinf(pareto_distance(2, 1e-3, sweep, 1e-6))
+    assert pareto_distance(8, 1e-14, sweep, 1e-13) == 0.0
+
+
+def test_fidelity_suite_quick_rows():
+    t0 = time.perf_counter()
+    rows = importlib.import_module("analysis.bench.suite_fidelity").run(quick=True)
+    elapsed = time.perf_counter() - t0
+    assert elapsed < 20.0                      # the registry's quick budget
+    assert rows and all(isinstance(r, Row) and r.suite == "fidelity" for r in rows)
+    auto = [r for r in rows if " auto → " in r.setting]
+    dist = [r for r in rows if r.setting.startswith("pareto distance")]
+    assert {r.method for r in auto} == {r.method for r in dist}
+    assert len(dist) == len(auto) >= 6
+    for r in auto:                             # the automatic choice delivers its tolerance
+        assert r.error <= r.bound, (r.method, r.setting, r.error)
+        assert np.isfinite(r.time_s) and r.time_s > 0
+    for r in dist:
+        assert r.error_kind == "excess cost rel" and np.isfinite(r.error) and r.error >= 0
+        if r.method.startswith("acceleration_series"):
+            # the series order is the cheapest meeting the tolerance: exactly on the front
+            assert r.extra["auto"] == r.extra["cheapest"] and r.error == 0.0
+        else:
+            assert r.extra["auto"] >= r.extra["cheapest"]
