@@ -110,7 +110,7 @@ def detect_edges(signal, *, fs, hysteresis=0.2, level=None, slope="rising",
     >>> fs = 20_000.0
     >>> t = np.arange(2000) / fs
     >>> edges = detect_edges(np.sin(2 * np.pi * 250.0 * t - 0.3), fs=fs)
-    >>> print(np.round(edges[:3] * 1e3, 5))  # ms; upward zero crossings at (0.3 + 2 pi k)/(2 pi 250)
+    >>> print(np.round(edges[:3] * 1e3, 5))  # ms; up-crossings at (0.3 + 2 pi k)/(2 pi 250)
     [0.19099 4.19099 8.19099]
     """
     x = check_finite_array(signal, "signal", ndim=1, min_length=4)

@@ -24,8 +24,14 @@ def configure(parser) -> None:
 
 
 def run(args) -> int:
-    import json
     from pathlib import Path
+
+    from measure._atomic import check_overwrite
+
+    out = Path(args.output)
+    check_overwrite(out, args.overwrite, option="--overwrite")   # before any heavy work
+
+    import json
 
     import numpy as np
     import pandas as pd
@@ -33,10 +39,7 @@ def run(args) -> int:
     from analysis._output import print_json, print_table
     from measure.io import write
     from measure.synth import synthesize
-    from measure._atomic import check_overwrite
 
-    out = Path(args.output)
-    check_overwrite(out, args.overwrite, option="--overwrite")
     result = synthesize(args.scene, method=args.method)
     keeps_truth = out.suffix.lower() in (".h5", ".hdf5", ".nc")
     write(result.record, out, truth=result.truth if keeps_truth else None,

@@ -75,7 +75,7 @@ class SyntheticRun:
     elapsed_s: float = float("nan")
 
     def write(self, path, *, overwrite=False):
-        """Write record and truth (HDF5 group ``truth``) atomically with :func:`measure.io.write`."""
+        """Write record and truth (HDF5 group ``truth``) atomically (:func:`measure.io.write`)."""
         from measure.io import write
 
         write(self.record, path, truth=self.truth, overwrite=overwrite)
@@ -154,8 +154,6 @@ def synthesize(scene, *, method="split", integration_rate=None):
     >>> sorted(run.truth["amplitude"].dims)
     ['channel', 'order', 'time']
     """
-    import xarray as xr
-
     t_start = _time.perf_counter()
     if not isinstance(scene, Scene):
         scene = Scene.from_toml(scene)

@@ -280,8 +280,9 @@ class ModalModel:
         if name not in self.node_names:
             from predict._validate import suggest
 
-            raise ConfigError(f"shaft-line node {name!r} does not exist{suggest(name, self.node_names)}"
-                              f"; nodes: {', '.join(self.node_names)}")
+            raise ConfigError(f"shaft-line node {name!r} does not exist"
+                              f"{suggest(name, self.node_names)}; nodes: "
+                              f"{', '.join(self.node_names)}")
         return self.node_names.index(name)
 
     def respond(self, time, psi, order, gas, inertia, speed, *, load=None, nodes,
