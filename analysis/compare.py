@@ -221,10 +221,14 @@ def match_criticals(measured, predicted, *, gate=0.15, tolerance=0.03,
     order_tolerance : float
         Orders equal within this are the same order.
     significant_fraction : float
-        An unmatched predicted critical is *significant* (flagged) when its predicted
-        amplitude is at least this fraction of the largest predicted amplitude; without
-        amplitudes, when it is a major order (or always, without that column either). A
-        boolean ``significant`` column in ``predicted`` overrides this.
+        A predicted critical is *significant* when its predicted amplitude is at least this
+        fraction of the largest predicted amplitude (without amplitudes: when it is a major
+        order, or always without that column either); a boolean ``significant`` column in
+        ``predicted`` overrides this. Only significant criticals are judged: their deviations
+        and their absence are flagged, while weak ones (whose peaks sit on a large background
+        and cannot be identified reliably) are matched and listed only. Likewise a measured
+        resonance without a critical is flagged when its amplitude is at least this fraction
+        of the largest measured one.
 
     Returns
     -------
@@ -303,6 +307,15 @@ def match_criticals(measured, predicted, *, gate=0.15, tolerance=0.03,
         pairs = [(int(i), int(j)) for i, j in zip(rows, cols) if allowed[i, j]]
 
     amp_lo, amp_hi = 1.0 / (1.0 + amplitude_tolerance), 1.0 + amplitude_tolerance
+    amps = pred["amplitude"].to_numpy(float)
+    if "significant" in pred:
+        significant = pred["significant"].to_numpy(bool)
+    elif np.isfinite(amps).any() and np.nanmax(amps) > 0:
+        significant = np.nan_to_num(amps) >= significant_fraction * np.nanmax(amps)
+    elif "major" in pred:
+        significant = pred["major"].to_numpy(bool)
+    else:
+        significant = np.ones(n_p, bool)
     records = []
     for i, j in pairs:
         m, p = meas.iloc[i], pred.iloc[j]
@@ -319,11 +332,12 @@ def match_criticals(measured, predicted, *, gate=0.15, tolerance=0.03,
             amplitude_ratio=ratio, damping_ratio=float(m.damping_ratio),
             confidence=float(m.confidence),
             speed_ok=bool(abs(dev) <= tolerance * float(p.speed_rpm)),
-            amplitude_ok=bool(not np.isfinite(ratio) or amp_lo <= ratio <= amp_hi)))
+            amplitude_ok=bool(not np.isfinite(ratio) or amp_lo <= ratio <= amp_hi),
+            significant=bool(significant[j])))
     columns = ["mode", "order", "speed_rpm_predicted", "speed_rpm_measured", "deviation_rpm",
                "deviation_pct", "frequency_hz_predicted", "frequency_hz_measured",
                "amplitude_predicted", "amplitude_measured", "amplitude_ratio", "damping_ratio",
-               "confidence", "speed_ok", "amplitude_ok"]
+               "confidence", "speed_ok", "amplitude_ok", "significant"]
     matched = pd.DataFrame(records, columns=columns).sort_values(
         ["mode", "order"], ignore_index=True)
     used_m = {i for i, _ in pairs}
@@ -334,24 +348,14 @@ def match_criticals(measured, predicted, *, gate=0.15, tolerance=0.03,
         .rename(columns={"amplitude_used": "amplitude"}).reset_index(drop=True)
     unmatched_predicted = pred.loc[[j for j in range(n_p) if j not in used_p]] \
         .reset_index(drop=True)
-    if len(unmatched_predicted):
-        amps = pred["amplitude"].to_numpy(float)
-        if "significant" in unmatched_predicted:
-            sig = unmatched_predicted["significant"].to_numpy(bool)
-        elif np.isfinite(amps).any() and np.nanmax(amps) > 0:
-            sig = unmatched_predicted["amplitude"].to_numpy(float) >= \
-                significant_fraction * np.nanmax(amps)
-        elif "major" in unmatched_predicted:
-            sig = unmatched_predicted["major"].to_numpy(bool)
-        else:
-            sig = np.ones(len(unmatched_predicted), bool)
-        unmatched_predicted["significant"] = sig
-    else:
-        unmatched_predicted["significant"] = pd.Series(dtype=bool)
+    unmatched_predicted["significant"] = [bool(significant[j]) for j in range(n_p)
+                                          if j not in used_p]
 
     nat = _natural_frequencies(matched, pred)
     flags = []
     for _, r in matched.iterrows():
+        if not r.significant:
+            continue  # weak criticals are listed, not judged: their peaks sit on a background
         if not r.speed_ok:
             flags.append(f"mode {r['mode']} order {r.order:g}: measured critical speed "
                          f"{r.speed_rpm_measured:.1f} rpm deviates {r.deviation_pct:+.1f} % "
@@ -366,7 +370,14 @@ def match_criticals(measured, predicted, *, gate=0.15, tolerance=0.03,
             flags.append(f"mode {r['mode']} order {r.order:g}: predicted critical at "
                          f"{r.speed_rpm:.1f} rpm not found in the measurement (gate "
                          f"±{100 * gate:g} %)")
-    for _, r in unmatched_measured.iterrows():
+    meas_amp = unmatched_measured["amplitude"].to_numpy(float) if "amplitude" in \
+        unmatched_measured else np.full(len(unmatched_measured), np.nan)
+    top = np.nanmax(meas["amplitude_used"].to_numpy(float)) if n_m and \
+        np.isfinite(meas["amplitude_used"].to_numpy(float)).any() else np.nan
+    for k, (_, r) in enumerate(unmatched_measured.iterrows()):
+        if np.isfinite(top) and np.isfinite(meas_amp[k]) and \
+                meas_amp[k] < significant_fraction * top:
+            continue
         flags.append(f"order {r.order:g}: measured resonance at {r.speed_rpm:.1f} rpm matches "
                      f"no predicted critical (gate ±{100 * gate:g} %)")
     settings = dict(gate=gate, tolerance=tolerance, amplitude_tolerance=amplitude_tolerance,

@@ -754,7 +754,7 @@ def _track_arrays(track, order):
 
 def find_resonances(track, *, orders=None, response=None, min_snr=5.0, min_prominence=0.05,
                     min_amplitude_fraction=1e-3,
-                    max_damping=0.2, min_confidence=0.3, baseline_degree=3,
+                    max_damping=0.2, min_damping=0.004, min_confidence=0.5, baseline_degree=3,
                     max_points=3000, sweep_correction=True, sweep_hysteresis=0.02):
     """Find and identify resonances in an order track.
 
@@ -780,12 +780,15 @@ def find_resonances(track, *, orders=None, response=None, min_snr=5.0, min_promi
         order: bumps at the floor of weak orders (leakage of strong ones) are not sought.
     max_damping : float
         Peaks wider than this damping ratio are treated as growth with speed, not resonance.
+    min_damping : float
+        Peaks narrower than this damping ratio are treated as spikes (noise, pulse dropouts):
+        engine shaft-line modes have ζ of order 0.01–0.1.
     min_confidence : float
         Resonances below this confidence (0..1) are dropped.
     baseline_degree : int
         Degree of the polynomial baseline (in rpm) that models order amplitude growing with
-        speed; it is fitted as a lower envelope (peak stripping) and removed before peaks are
-        sought.
+        speed; it is fitted to the log amplitude as a lower envelope (peak stripping) and
+        removed before peaks are sought.
     max_points : int
         Each sweep is averaged into at most this many rpm bins (resolution knob).
     sweep_correction : bool
@@ -860,6 +863,8 @@ def find_resonances(track, *, orders=None, response=None, min_snr=5.0, min_promi
     min_prominence = check_range(min_prominence, "min_prominence", 0.0, 1.0, error=AnalysisError)
     max_damping = check_range(max_damping, "max_damping", 0.0, 0.5, inclusive=(False, True),
                               error=AnalysisError)
+    min_damping = check_range(min_damping, "min_damping", 0.0, max_damping,
+                              inclusive=(True, False), error=AnalysisError)
     min_confidence = check_range(min_confidence, "min_confidence", 0.0, 1.0, error=AnalysisError)
     baseline_degree = check_int(baseline_degree, "baseline_degree", minimum=0, error=AnalysisError)
     max_points = check_int(max_points, "max_points", minimum=16, error=AnalysisError)
@@ -904,7 +909,10 @@ def find_resonances(track, *, orders=None, response=None, min_snr=5.0, min_promi
             x, (a, c) = _bin(r_seg, [amp[seg], None if comp is None else comp[seg]], n_bins)
             if x.size < 16:
                 continue
-            base = _baseline(x, a, baseline_degree)
+            # lower envelope of log amplitude: always positive, and a large peak elsewhere
+            # in the sweep cannot drag it below zero
+            floor = max(np.max(a), 1e-300) * 1e-12
+            base = np.exp(_baseline(x, np.log(np.maximum(a, floor)), baseline_degree))
             curves.append(OrderCurve(order, k, direction, x, a, base))
             resid = a - base
             sigma = _robust_noise(resid)
@@ -922,13 +930,14 @@ def find_resonances(track, *, orders=None, response=None, min_snr=5.0, min_promi
                     continue
                 res = _identify(x, a, c, base, resid, i, p, response, order, sigma, prom,
                                 max_damping, accepted, rate_fn, direction, k,
-                                sweep_correction)
+                                sweep_correction, min_damping)
                 if res is None or res.confidence < min_confidence:
                     continue
                 found.append(res)
     found.sort(key=lambda r: (r.order, r.sweep, r.speed_rpm))
     settings = {"response": response, "min_snr": min_snr, "min_prominence": min_prominence,
-                "max_damping": max_damping, "min_confidence": min_confidence,
+                "max_damping": max_damping, "min_damping": min_damping,
+                "min_confidence": min_confidence,
                 "min_amplitude_fraction": min_amplitude_fraction,
                 "baseline_degree": baseline_degree, "max_points": max_points,
                 "sweep_correction": bool(sweep_correction),
@@ -955,7 +964,7 @@ def _local_rate(t, rpm):
 
 
 def _identify(x, a, c, base, resid, i, p, response, order, sigma, prom, max_damping, accepted,
-              rate_fn, direction, sweep, sweep_correction):
+              rate_fn, direction, sweep, sweep_correction, min_damping=0.0):
     """Identify the peak at bin ``i``; None if it is not a resonance. Appends to ``accepted``."""
     step = float(np.median(np.diff(x)))
     x_pk, a_pk = _parabolic(x, a, i)
@@ -992,7 +1001,7 @@ def _identify(x, a, c, base, resid, i, p, response, order, sigma, prom, max_damp
         zeta_hp, n_hp = half_power_damping(x1, x2, response=response)
     except AnalysisError:
         return None
-    if not np.isfinite(zeta_hp) or zeta_hp > max_damping:
+    if not np.isfinite(zeta_hp) or zeta_hp > max_damping or zeta_hp < min_damping:
         return None
 
     # modal (circle) fit in ±3 half-power widths

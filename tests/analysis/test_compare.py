@@ -93,12 +93,15 @@ def test_correct_model_agrees_and_wrong_stiffness_is_flagged():
     speed_range = (100.0, 1000.0)
     truth = _system().critical_speeds(orders, speed_range)
     measured = pd.DataFrame({"order": truth.order, "speed_rpm": truth.speed_rpm * 1.002})
-    good = match_criticals(measured, _system().critical_speeds(orders, speed_range),
-                           speed_range_rpm=speed_range)
+    def predicted(system):
+        crit = system.critical_speeds(orders, speed_range)
+        crit["significant"] = True  # judge every critical (no amplitudes in this test)
+        return crit
+
+    good = match_criticals(measured, predicted(_system()), speed_range_rpm=speed_range)
     assert good.agrees, good.flags
     assert len(good.matched) == len(truth)
-    wrong = match_criticals(measured, _system(1.2).critical_speeds(orders, speed_range),
-                            speed_range_rpm=speed_range)
+    wrong = match_criticals(measured, predicted(_system(1.2)), speed_range_rpm=speed_range)
     assert not wrong.agrees
     assert any("deviates" in f for f in wrong.flags)
 
@@ -143,3 +146,17 @@ def test_balance_errors():
         compare_balance(meas, pred, orders=[4])
     with pytest.raises(AnalysisError, match=r"predicted must be an xarray.DataArray over"):
         compare_balance(meas, pred.values)
+
+
+def test_weak_criticals_are_listed_not_judged():
+    """A critical below significant_fraction of the largest predicted amplitude is matched
+    and listed, but its deviation is not flagged."""
+    pred = pd.DataFrame({"mode": [1, 2], "order": [6.0, 3.0], "speed_rpm": [400.0, 600.0],
+                         "amplitude": [1e-3, 1e-5]})
+    meas = pd.DataFrame({"order": [6.0, 3.0], "speed_rpm": [401.0, 660.0],
+                         "amplitude": [1e-3, 1e-5]})
+    c = match_criticals(meas, pred, significant_fraction=0.05)
+    assert len(c.matched) == 2
+    weak = c.matched[c.matched["mode"] == 2].iloc[0]
+    assert not weak.significant and not weak.speed_ok
+    assert c.agrees

@@ -1,0 +1,83 @@
+"""``crankbench compare RECORD MODEL.toml [--channel NAME] [--json]``: measurement vs model.
+
+Runs the chain of :mod:`analysis.pipeline` — order tracking of the torsional channel,
+resonance identification, the model's critical speeds and resonance curves at the measured
+node, their assignment — and prints the matched critical speeds with deviations (rpm, %) and
+amplitude ratios, the natural frequencies per mode collected across orders, what stayed
+unmatched, and the limit checks. ``--strict`` exits with status 1 when anything disagrees.
+"""
+
+from __future__ import annotations
+
+HELP = "compare a record's resonances with a shaft-line model's critical speeds"
+
+
+def configure(parser) -> None:
+    from analysis.pipeline import add_common_arguments
+
+    parser.add_argument("record", metavar="RECORD", help="record file (any supported format)")
+    parser.add_argument("model", metavar="MODEL.toml", help="shaft-line model (TOML)")
+    add_common_arguments(parser)
+    parser.add_argument("--strict", action="store_true",
+                        help="exit with status 1 when measurement and model disagree or a "
+                             "limit check fails")
+    parser.add_argument("--json", action="store_true", help="print JSON instead of tables")
+
+
+def run(args) -> int:
+    import logging
+
+    from analysis._output import print_json, print_table
+    from analysis.pipeline import analyse, options_from_args, progress_bar
+
+    log = logging.getLogger("crankbench")
+    bar, progress = progress_bar(desc="compare", disable=args.json or
+                                 log.getEffectiveLevel() > logging.INFO)
+    try:
+        result = analyse(args.record, args.model, progress=progress,
+                         **options_from_args(args, args.record))
+    finally:
+        bar.close()
+    comp = result.comparison
+    limits = [c.as_dict() for c in result.limits]
+    if args.json:
+        print_json({"summary": result.summary(), "matched": comp.matched,
+                    "natural_frequencies": comp.natural_frequencies,
+                    "unmatched_measured": comp.unmatched_measured,
+                    "unmatched_predicted": comp.unmatched_predicted,
+                    "resonances": result.resonances.to_frame(), "limits": limits,
+                    "flags": list(comp.flags), "settings": result.settings})
+    else:
+        print(f"record   {result.source}  channel {result.channel} at {result.node}")
+        print(f"model    {result.model_path}")
+        print(f"speed    {result.speed_range_rpm[0]:.0f}–{result.speed_range_rpm[1]:.0f} rpm, "
+              f"sweep {result.sweep_rate_rpm_per_s:.3g} rpm/s")
+        print()
+        cols = ["mode", "order", "speed_rpm_predicted", "speed_rpm_measured", "deviation_rpm",
+                "deviation_pct", "amplitude_ratio", "confidence"]
+        print_table(comp.matched[cols], title="matched critical speeds")
+        print()
+        print_table(comp.natural_frequencies, title="natural frequencies by mode")
+        sig = comp.unmatched_predicted
+        if len(sig):
+            sig = sig[sig["significant"]]
+        if len(sig):
+            print()
+            print_table(sig[["mode", "order", "speed_rpm", "amplitude"]],
+                        title="predicted criticals not found")
+        if len(comp.unmatched_measured):
+            print()
+            print_table(comp.unmatched_measured, title="measured resonances without a critical")
+        print()
+        for c in result.limits:
+            print(f"{'PASS' if c.passed else 'FAIL'}  {c.name}: {c.detail}")
+        print()
+        if comp.flags:
+            print("disagreements:")
+            for f in comp.flags:
+                print(f"  - {f}")
+        else:
+            print("measurement and model agree within the tolerances")
+    if args.strict and not result.passed:
+        return 1
+    return 0

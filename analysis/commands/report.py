@@ -1,0 +1,85 @@
+"""``crankbench report RECORD MODEL.toml -o report.html [--pdf] [--overwrite]``: test report.
+
+Runs the chain of :mod:`analysis.pipeline` and writes the self-contained HTML report (figures
+embedded, no network) built by :func:`analysis.report.build.build_report`; ``--pdf`` also
+writes a PDF beside it (weasyprint when installed, else a matplotlib layout). Outputs are
+written atomically and never replace an existing file without ``--overwrite``.
+"""
+
+from __future__ import annotations
+
+HELP = "write the test report (HTML, optionally PDF) of a record against a shaft-line model"
+
+
+def configure(parser) -> None:
+    from analysis.pipeline import add_common_arguments
+
+    parser.add_argument("record", metavar="RECORD", help="record file (any supported format)")
+    parser.add_argument("model", metavar="MODEL.toml", help="shaft-line model (TOML)")
+    parser.add_argument("-o", "--output", required=True, metavar="REPORT.html",
+                        help="report file (.html; .pdf writes only the PDF)")
+    parser.add_argument("--pdf", action="store_true", help="also write REPORT.pdf")
+    parser.add_argument("--overwrite", action="store_true", help="replace existing outputs")
+    parser.add_argument("--title", default=None, help="report title")
+    add_common_arguments(parser)
+    parser.add_argument("--json", action="store_true",
+                        help="print the written paths and the summary as JSON")
+
+
+def write_outputs(result, output, *, pdf, overwrite, title=None, parameters=None,
+                  record_path=None, model_path=None):
+    """Build the report and write HTML (and PDF); return the written paths."""
+    from pathlib import Path
+
+    from measure._atomic import check_overwrite
+    from analysis.report.build import build_report
+
+    output = Path(output)
+    targets = [output]
+    if pdf and output.suffix.lower() != ".pdf":
+        targets.append(output.with_suffix(".pdf"))
+    for t in targets:  # refuse before any work is written
+        check_overwrite(t, overwrite, option="--overwrite")
+    rep = build_report(result, title=title, parameters=parameters, record_path=record_path,
+                       model_path=model_path)
+    return [rep.save(t, overwrite=overwrite, option="--overwrite") for t in targets]
+
+
+def run(args) -> int:
+    import logging
+    from pathlib import Path
+
+    from analysis._output import print_json
+    from analysis.pipeline import analyse, options_from_args, progress_bar
+    from measure._atomic import check_overwrite
+
+    log = logging.getLogger("crankbench")
+    out = Path(args.output)
+    if out.suffix.lower() not in (".html", ".htm", ".pdf"):
+        from predict.errors import ConfigError
+
+        raise ConfigError(f"-o {args.output!r} must end in .html or .pdf")
+    check_overwrite(out, args.overwrite, option="--overwrite")
+    if args.pdf and out.suffix.lower() != ".pdf":
+        check_overwrite(out.with_suffix(".pdf"), args.overwrite, option="--overwrite")
+    options = options_from_args(args, args.record)
+    bar, progress = progress_bar(desc="report",
+                                 disable=args.json or log.getEffectiveLevel() > logging.INFO)
+    try:
+        result = analyse(args.record, args.model, progress=progress, **options)
+    finally:
+        bar.close()
+    params = {"channel": result.channel, "method": args.method, "gate": args.gate,
+              "tolerance": args.tolerance, "machine class": args.machine_class}
+    paths = write_outputs(result, out, pdf=args.pdf, overwrite=args.overwrite,
+                          title=args.title, parameters=params, record_path=args.record,
+                          model_path=args.model)
+    if args.json:
+        print_json({"written": [str(p) for p in paths], "summary": result.summary()})
+    else:
+        for p in paths:
+            print(f"report written: {p}")
+        verdict = "all checks passed" if result.passed else "see the disagreements and " \
+                                                            "failed checks in the report"
+        print(f"verdict: {verdict}")
+    return 0
