@@ -297,7 +297,7 @@ def synthesize(scene, *, method="split", integration_rate=None):
         "seed": int(scene.seed)})
     truth = _truth_dataset(scene, orders, t_truth, rpm_truth, truth_rows, modal, fidelity)
     elapsed = _time.perf_counter() - t_start
-    log.info("synthesized %r: %d channels, %.1f s of record in %.2f s", scene.name,
+    log.debug("synthesized %r: %d channels, %.1f s of record in %.2f s", scene.name,
              len(channels), duration, elapsed)
     return SyntheticRun(record=record, truth=truth, scene=scene, fidelity=fidelity,
                         elapsed_s=elapsed)
