@@ -91,22 +91,28 @@ def nonfinite_spans(values: np.ndarray) -> list[tuple[int, int]]:
 
 
 #: Quantities whose flat runs at the extremes mean saturation (speed plateaus are legitimate).
-CLIP_QUANTITIES = ("acceleration", "velocity", "displacement", "pressure", "voltage", "force",
-                   "torque", "angular_velocity", "angle")
+#: Voltage is left out: raw tacho signals are square waves whose flat tops are not clipping.
+CLIP_QUANTITIES = ("acceleration", "velocity", "displacement", "pressure", "force", "torque",
+                   "angular_velocity", "angle")
 
 
 def clipped_spans(values: np.ndarray, *, min_run: int = 3) -> list[tuple[int, int]]:
     """Index spans ``[start, stop)`` where the signal sits flat at its own maximum or minimum.
 
-    A saturated amplifier or ADC holds its limit value for consecutive samples; a run of at
-    least ``min_run`` equal samples at the channel's global extreme is taken as clipping.
-    NaN/inf are ignored; a constant channel (max == min) returns no span.
+    A saturated amplifier or ADC holds its limit value for consecutive samples. A level is
+    taken as a clipping limit when (1) the channel sits on it, at its global maximum or
+    minimum, in runs of at least ``min_run`` samples, (2) at least two such runs occur (a limit
+    cuts every large peak, one flat peak is not evidence), and (3) the signal enters those runs
+    with a median jump larger than two quantisation steps (the smallest gap between distinct
+    values of the channel), so the flat crest of a slow, finely sampled, quantised peak is not mistaken for a
+    limit. NaN/inf are ignored; a constant channel (max == min) returns no span.
 
     Examples
     --------
-    >>> x = np.array([0, 0.5, 1, 1, 1, 0.5, 0, -0.5, -1, -1, -1, -1, 0, 1, 0])
+    >>> x = np.array([0, 0.5, 1, 1, 1, 0.5, 0, -0.5, -1, -1, -1, -1, 0, 0.6, 1, 1, 1, 0,
+    ...               -1, -1, -1])
     >>> clipped_spans(x)
-    [(2, 5), (8, 12)]
+    [(2, 5), (8, 12), (14, 17), (18, 21)]
     """
     x = np.asarray(values)
     if x.dtype.kind != "f":
@@ -118,14 +124,24 @@ def clipped_spans(values: np.ndarray, *, min_run: int = 3) -> list[tuple[int, in
     if hi == lo:
         return []
     spans = []
+    step = None
     for level in (hi, lo):
         at = x == level
-        if at.sum() < min_run:
+        if at.sum() < 2 * min_run:
             continue
         edges = np.diff(np.concatenate(([0], at.view(np.int8), [0])))
         starts, stops = np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)
         keep = stops - starts >= min_run
-        spans += [(int(a), int(b)) for a, b in zip(starts[keep], stops[keep])]
+        starts, stops = starts[keep], stops[keep]
+        if starts.size < 2:
+            continue
+        if step is None:  # quantisation step: smallest gap between distinct values
+            levels = np.unique(x[finite])
+            step = float(np.diff(levels).min()) if levels.size > 1 else 0.0
+        entries = [abs(float(x[a - 1]) - level) for a in starts if a > 0 and finite[a - 1]]
+        if entries and np.median(entries) <= 2 * step:
+            continue
+        spans += [(int(a), int(b)) for a, b in zip(starts, stops)]
     return sorted(spans)
 
 

@@ -207,7 +207,8 @@ def make_all(out: Path) -> list[Path]:
         tt = np.arange(N) / FS
         sine = 1.3 * np.sin(2 * np.pi * 10.0 * tt)
         _write(base_record(np.clip(sine, -0.8, 0.8).astype(np.float32)), add("clipped.h5"))
-        pcm = np.clip(np.round(sine / 1.0 * 32767), -32768, 32767).astype(np.int16)
+        dither = np.random.default_rng(11).normal(0.0, 3.0, N)   # ADC noise, codes rms
+        pcm = np.clip(np.round(sine * 32767 + dither), -32768, 32767).astype(np.int16)
         sf.write(str(add("clipped_pcm.wav")), pcm, 1000, subtype="PCM_16", format="WAV")
         Path(str(out / "clipped_pcm.wav") + ".json").write_text(json.dumps({
             "crankbench_sidecar": 1, "attrs": {"start_time": "2026-01-01T00:00:00+00:00"},

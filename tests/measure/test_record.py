@@ -188,4 +188,17 @@ def test_clipped_spans_against_hand_count():
     assert clipped_spans(x) == []                      # unclipped sine: single peak samples
     assert clipped_spans(np.ones(10)) == []            # constant channel is not "clipped"
     assert clipped_spans(np.array([0, 1, 1, 0, -1])) == []   # run of 2 < min_run
-    assert clipped_spans(np.array([np.nan, 2, 2, 2, 0])) == [(1, 4)]
+    assert clipped_spans(np.array([0, 2, 2, 2, 0])) == []    # one flat peak is no evidence
+    assert clipped_spans(np.array([np.nan, 2, 2, 2, 0.1, 0.2, 2, 2, 2])) == [(1, 4), (6, 9)]
+
+
+def test_quantised_slow_sine_is_not_clipping():
+    """A 5 Hz sine at 51.2 kHz stored as 16-bit codes has crests flat for dozens of samples
+    (entered one quantisation step below the crest value): not clipping. The same codes with
+    ADC noise clipped at 80 % of the crest are."""
+    t = np.arange(51200) / 51200.0
+    codes = np.round(30000 * np.sin(2 * np.pi * 5 * t))
+    assert clipped_spans(codes) == []
+    noisy = np.round(30000 * np.sin(2 * np.pi * 5 * t)
+                     + np.random.default_rng(1).normal(0, 2.0, t.size))
+    assert len(clipped_spans(np.clip(noisy, -24000, 24000))) == 10
