@@ -19,6 +19,12 @@ own suites):
   ω_ref from the dense symmetric eigen-solve of the same lumped model (``lumped_exact``);
   time = one call. The shaft: a steel shaft with its own mass (20 lumps) and three disks.
 
+* ``measure.synth.profile.exponential_coastdown(..., tolerance_rpm=...)`` — number of linear
+  pieces of the synthetic speed profile from a speed tolerance. Sweep: 1 … 512 equal pieces
+  (``from_table``) plus one piece fewer than each automatic choice; error =
+  max |n_pw(t) − n0 e^{−t/τ}| (rpm) on 2·10⁵ times against the closed form; time = the crank
+  angle at 2·10⁴ times (what the synthesis evaluates).
+
 Metric of the ``pareto distance`` rows (``error_kind = "excess cost rel"``): the manual
 settings are ordered by fidelity (series order, iteration count) and each gets a cost c = the
 lower envelope of the measured median times from that fidelity upwards (a higher fidelity does
@@ -35,6 +41,8 @@ metric):
 * kinematics 0.25 — the choice uses the rigorous tail bound Σ|aₙ|, attained at TDC within
   15 %, so it may pick one even order above the oracle at most when the tolerance falls inside
   that 15 % band: one more multiply-add per angle, ≤ 25 % of the cost;
+* coast-down 0.25 — the piece count comes from the chord-error bound at the start speed, the
+  largest one, so it is the cheapest equal spacing meeting the tolerance or one piece more;
 * stodola 1.0 — the stop criterion is a guaranteed bracket, whose width shrinks like the
   vector error (ratio ω₁²/ω₂² per step), while the Rayleigh-quotient error shrinks like its
   square; an oracle that knew the true error could stop after about half the iterations, so
@@ -227,6 +235,53 @@ def _stodola_rows(quick: bool) -> list[Row]:
     return rows
 
 
+def _coastdown_rows(quick: bool) -> list[Row]:
+    from measure.synth.profile import RPM, exponential_coastdown, from_table
+
+    rows: list[Row] = []
+    timer = _timer(quick)
+    n0, n1, tau = 1500.0, 300.0, 8.0
+    total = tau * np.log(n0 / n1)
+    t_err = np.linspace(0.0, total, 200_001)
+    exact = n0 * np.exp(-t_err / tau)
+    t_eval = np.linspace(0.0, total, 20_000 if quick else 100_000)
+    method = "exponential_coastdown (synthetic speed profile)"
+
+    def error(profile):
+        return float(np.abs(profile.speed(t_err) / RPM - exact).max())
+
+    manual = []
+    for pieces in (1, 2, 4, 8, 16, 32, 64, 128, 256, 512):
+        knots = np.linspace(0.0, total, pieces + 1)
+        prof = from_table(knots, n0 * np.exp(-knots / tau))
+        t = timer(lambda prof=prof: prof.angle(t_eval))
+        err = error(prof)
+        manual.append((pieces, t, err))
+        rows.append(Row(suite=SUITE, method=method, setting=f"{pieces} pieces (manual)",
+                        error=err, error_kind="max abs rpm", reference="n0 exp(-t/tau)",
+                        time_s=t, baseline="", throughput=t_eval.size / t,
+                        throughput_unit="angles/s", note="manual sweep (informational)"))
+    for tol in ((5.0, 0.5, 0.01) if quick else (5.0, 1.0, 0.5, 0.1, 0.01)):
+        prof = exponential_coastdown(n0, n1, time_constant=tau, tolerance_rpm=tol)
+        pieces = prof.time.size - 1
+        t = timer(lambda prof=prof: prof.angle(t_eval))
+        err = error(prof)
+        rows.append(Row(suite=SUITE, method=method,
+                        setting=f"tolerance_rpm={tol:g} auto → {pieces} pieces", error=err,
+                        error_kind="max abs rpm", reference="n0 exp(-t/tau)", time_s=t,
+                        throughput=t_eval.size / t, throughput_unit="angles/s", bound=tol,
+                        extra={"pieces": pieces}))
+        if pieces not in {m[0] for m in manual}:
+            manual.append((pieces, t, err))
+        if pieces > 1 and pieces - 1 not in {m[0] for m in manual}:
+            # one piece fewer, so the front is resolved right below the automatic choice
+            knots = np.linspace(0.0, total, pieces)
+            fewer = from_table(knots, n0 * np.exp(-knots / tau))
+            manual.append((pieces - 1, timer(lambda p=fewer: p.angle(t_eval)), error(fewer)))
+        rows.append(_distance_row(method, tol, pieces, err, t, manual, "pieces", 0.25))
+    return rows
+
+
 def run(quick: bool) -> list[Row]:
     """All rows of the fidelity suite (see the module docstring)."""
-    return _kinematics_rows(quick) + _stodola_rows(quick)
+    return _kinematics_rows(quick) + _stodola_rows(quick) + _coastdown_rows(quick)
