@@ -9,7 +9,8 @@ Entry points with an automatic choice (the others take a fixed fidelity and are 
 own suites):
 
 * ``predict.kinematics.acceleration_series(lam, tol=...)`` — series order from a tolerance
-  relative to r ω². Sweep ``max_order`` = 2, 4, …, 24 (20 quick; λ = 0.25 and 0.45); error = max
+  relative to r ω². Sweep ``max_order`` = 2, 4, …, 24 (20 quick; λ = 0.25 and 0.45);
+  error = max
   |a − a_exact| / (r ω²) over 3600 crank angles (TDC included, where the truncation error is
   largest), reference = the exact closed form (itself checked against mpmath in the kinematics
   suite); time = one evaluation on 2·10⁴ angles (10⁵ in the full run).

@@ -19,8 +19,8 @@ ANGLES = np.linspace(0.0, 2 * np.pi, 37)
 
 
 def _mp_acceleration(theta):
-    """d²x/dt² of x = r cos θ + √(l² − r² sin² θ) at constant ω, by mpmath (40 digits), with
-    the sign of the module: positive towards the cylinder head."""
+    """d²x/dt² of x = r cos θ + √(l² − r² sin² θ) at constant ω, by mpmath (40 digits),
+    with the sign of the module: positive towards the cylinder head."""
     with mp.workdps(40):
         x = lambda t: R * mp.cos(t) + mp.sqrt(L ** 2 - (R * mp.sin(t)) ** 2)  # noqa: E731
         return float(mp.diff(x, mp.mpf(float(theta)), 2)) * W * W
