@@ -83,6 +83,25 @@ class Correction:
     max_gain: float
     end_effect_s: float = 0.0
 
+    def to_frame(self):
+        """One-row table of the correction's band, gain and end effect."""
+        import pandas as pd
+
+        return pd.DataFrame([{"band_low_hz": self.band_hz[0], "band_high_hz": self.band_hz[1],
+                              "max_gain": self.max_gain, "end_effect_s": self.end_effect_s,
+                              "samples": self.data.size}])
+
+    def plot(self, ax=None, *, fs=None):
+        """The corrected signal (against time if ``fs`` is given); returns the figure."""
+        import matplotlib.pyplot as plt
+
+        fig, ax = plt.subplots() if ax is None else (ax.figure, ax)
+        x = np.arange(self.data.size) / fs if fs else np.arange(self.data.size)
+        ax.plot(x, self.data)
+        ax.set_xlabel("time (s)" if fs else "sample")
+        ax.set_title(f"corrected in {self.band_hz[0]:.3g}-{self.band_hz[1]:.3g} Hz")
+        return fig
+
 
 @dataclass(frozen=True)
 class SeismicInstrument:

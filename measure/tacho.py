@@ -233,6 +233,22 @@ class PitchCount:
         return pd.DataFrame({"time_s": self.edge_times, "pitch": self.pitch,
                              "tooth": self.tooth, "angle_deg": np.degrees(self.angle)})
 
+    def plot(self, ax=None):
+        """Interval per pitch (s) against time, gaps marked; returns the figure."""
+        import matplotlib.pyplot as plt
+
+        fig, ax = plt.subplots() if ax is None else (ax.figure, ax)
+        dt = np.diff(self.edge_times) / np.diff(self.pitch)
+        ax.plot(self.edge_times[1:], dt, ".", ms=2)
+        if self.gaps.size:
+            ax.plot(self.edge_times[self.gaps], dt[self.gaps - 1], "rx", label="gap end")
+            ax.legend()
+        ax.set_xlabel("time (s)")
+        ax.set_ylabel("time per pitch (s)")
+        ax.set_title(f"{self.pulses_per_rev}-{self.missing_teeth} wheel: {self.filled} bridged, "
+                     f"{self.removed} removed")
+        return fig
+
 
 def _local_pitch_time(dt, size=9):
     from scipy.ndimage import median_filter

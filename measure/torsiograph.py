@@ -748,6 +748,17 @@ class ErrorFloor:
                               "order_amplitude_mean_deg": self.order_amplitude_mean_deg,
                               "speed_rms_rpm": self.speed_rms_rpm}])
 
+    def plot(self, ax=None):
+        """Timing-error components (s rms) as bars; returns the figure."""
+        import matplotlib.pyplot as plt
+
+        fig, ax = plt.subplots() if ax is None else (ax.figure, ax)
+        names = list(self.components) + ["total"]
+        ax.bar(names, [*self.components.values(), self.timing_rms])
+        ax.set_ylabel("edge timing error (s rms)")
+        ax.set_title(f"order noise floor {self.order_amplitude_mean_deg:.2e} deg")
+        return fig
+
 
 def error_floor(*, speed_rpm, pulses_per_rev, timer_resolution=0.0, sample_rate=None,
                 interpolated=True, jitter=0.0, revs_per_block=2, missing_teeth=0):

@@ -325,3 +325,14 @@ def test_seismic_torsiograph_reading_and_correction():
     fixed = inst.correct(ch.values[late], fs=2000.0)
     c2 = 2 * np.mean(fixed.data * np.exp(-2j * psi[late]))
     assert abs(c2) == pytest.approx(amp, rel=0.01)
+
+
+def test_synthetic_run_tabulates_and_plots(steady_run):
+    import matplotlib
+
+    matplotlib.use("Agg")
+    frame = steady_run.to_frame()
+    assert list(frame["channel"]) == [s.name for s in steady_run.scene.sensors]
+    fig = steady_run.plot(channel="tv")
+    assert fig.axes[0].get_xlabel() == "speed (rpm)"
+    matplotlib.pyplot.close(fig)
