@@ -67,3 +67,11 @@ def test_fidelity_suite_quick_rows():
             assert r.extra["auto"] == r.extra["cheapest"] and r.error == 0.0
         else:
             assert r.extra["auto"] >= r.extra["cheapest"]
+
+
+def test_fidelity_suite_examples_run():
+    import doctest
+
+    module = importlib.import_module("analysis.bench.suite_fidelity")
+    result = doctest.testmod(module, optionflags=doctest.NORMALIZE_WHITESPACE)
+    assert result.attempted > 0 and result.failed == 0
