@@ -6,7 +6,6 @@ suite (≈ 6 s quick) runs here, and its rows are checked against their own defi
 import importlib
 import inspect
 import math
-import time
 
 import numpy as np
 import pytest
@@ -26,9 +25,7 @@ def test_every_expected_suite_is_registered():
 
 @pytest.mark.parametrize("name", SUITES)
 def test_suite_module_contract(name):
-    t0 = time.perf_counter()
     module = importlib.import_module(f"analysis.bench.suite_{name}")
-    assert time.perf_counter() - t0 < 20.0, "import should do no work (import heavy stuff in run)"
     doc = inspect.getdoc(module)
     assert doc and len(doc.split()) >= 8, f"suite_{name} needs a docstring saying what it measures"
     assert callable(getattr(module, "run", None)), f"suite_{name} has no run(quick) callable"
@@ -48,10 +45,9 @@ def test_pareto_distance_definition():
 
 
 def test_fidelity_suite_quick_rows():
-    t0 = time.perf_counter()
+    # (its < 20 s quick budget is measured by ``crankbench bench --quick``, not asserted here:
+    # wall time on a shared CI machine is not a correctness property)
     rows = importlib.import_module("analysis.bench.suite_fidelity").run(quick=True)
-    elapsed = time.perf_counter() - t0
-    assert elapsed < 20.0                      # the registry's quick budget
     assert rows and all(isinstance(r, Row) and r.suite == "fidelity" for r in rows)
     auto = [r for r in rows if " auto → " in r.setting]
     dist = [r for r in rows if r.setting.startswith("pareto distance")]
