@@ -587,7 +587,11 @@ class Resonance:
     baseline_amplitude : float
         Smooth baseline at the peak.
     peak_speed_rpm : float
-        Where the measured amplitude peaks.
+        Where the measured amplitude peaks (includes the sweep's delay).
+    resonance_speed_rpm : float
+        Where the identified SDOF's steady-state response peaks: ``speed_rpm·√(1 − 2ζ²)``
+        for displacement, ``speed_rpm`` for velocity, ``speed_rpm/√(1 − 2ζ²)`` for
+        acceleration — the convention of a "resonance peak" critical speed.
     speed_rpm_half_power, damping_ratio_half_power : float
         Half-power estimates (exact SDOF relations).
     speed_rpm_fit, damping_ratio_fit, fit_r2 : float
@@ -622,6 +626,7 @@ class Resonance:
     resonant_amplitude: float
     baseline_amplitude: float
     peak_speed_rpm: float
+    resonance_speed_rpm: float
     speed_rpm_half_power: float
     damping_ratio_half_power: float
     speed_rpm_fit: float
@@ -1095,7 +1100,9 @@ def _identify(x, a, c, base, resid, i, p, response, order, sigma, prom, max_damp
         order=float(order), speed_rpm=float(speed), frequency_hz=float(speed * order / 60.0),
         damping_ratio=float(zeta), amplitude=float(a_pk), amplitude_corrected=float(amp_corr),
         resonant_amplitude=float(r_pk), baseline_amplitude=float(a_pk - r_pk),
-        peak_speed_rpm=float(x_pk), speed_rpm_half_power=float(n_hp),
+        peak_speed_rpm=float(x_pk),
+        resonance_speed_rpm=float(speed * np.sqrt(max(1.0 - 2.0 * zeta**2, 1e-12)) ** (1 - p)),
+        speed_rpm_half_power=float(n_hp),
         damping_ratio_half_power=float(zeta_hp), speed_rpm_fit=float(n_fit),
         damping_ratio_fit=float(z_fit), fit_r2=float(r2), half_power_complete=complete,
         snr=float(snr), confidence=float(confidence), sweep=int(sweep), direction=direction,

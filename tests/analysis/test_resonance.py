@@ -90,6 +90,7 @@ def test_clean_sdof_is_exact_and_amplitude_is_closed_form():
     assert r.amplitude == pytest.approx(1 / (2 * zeta * np.sqrt(1 - zeta**2)), rel=1e-4)
     # peak of the receptance sits at ν = √(1 − 2ζ²)
     assert r.peak_speed_rpm == pytest.approx(200.0 * np.sqrt(1 - 2 * zeta**2), rel=1e-4)
+    assert r.resonance_speed_rpm == pytest.approx(200.0 * np.sqrt(1 - 2 * zeta**2), rel=1e-7)
 
 
 @pytest.mark.parametrize("response,units", [("velocity", "m/s"), ("acceleration", "m/s^2")])
