@@ -74,3 +74,14 @@ def test_atomic_path_refuses_overwrite_and_leaves_no_partial(tmp_path):
             raise RuntimeError("crash mid-write")
     assert target.read_text() == "old"
     assert [p.name for p in tmp_path.iterdir()] == ["out.txt"]
+
+
+def test_atomic_output_gets_ordinary_permissions(tmp_path):
+    import os
+    umask = os.umask(0o022)
+    try:
+        with atomic_path(tmp_path / "r.txt") as tmp:
+            tmp.write_text("x")
+    finally:
+        os.umask(umask)
+    assert oct((tmp_path / "r.txt").stat().st_mode & 0o777) == oct(0o644)
