@@ -19,7 +19,7 @@ __all__ = ["chain", "TorsionalSystem", "Modes", "from_toml", "forced_response",
 _LAZY = {
     "chain": "system",
     "TorsionalSystem": "system",
-    "Modes": "system",
+    "Modes": "modes",
     "forced_response": "forced",
     "ForcedResponse": "forced",
     "ShaftLine": "elements",
