@@ -10,8 +10,10 @@ harmonic torque), C the viscous and K_η = η∘K the hysteretic damping. The dy
 the resonant over the static modal amplitude, ``M = ω² / (ω aᵀCa + aᵀK_η a)`` (= 1/2ζ).
 
 Nodes left out of the undamped eigen-analysis (rings of viscous and friction dampers,
-centrifugal pendulums) have zero modal amplitude, so their damping does not enter the energy
-balance; the exact solve includes them, and the difference shows in ``method_error``.
+centrifugal pendulums) have zero modal amplitude: a damper ring is thus taken as standing still
+(the classical seismic-ring assumption, an upper bound of its damping, so the energy balance
+under-estimates the amplitude) and a pendulum's tuning is ignored. The exact solve includes
+them; the difference shows in ``method_error``.
 
 The exact value is the peak of the full damped harmonic solve of that order near the critical
 speed (:func:`predict.torsion.forced.harmonic_solve`; two grid passes of 61 speeds, relative
