@@ -113,11 +113,12 @@ def detect_edges(signal, *, fs, hysteresis=0.2, level=None, slope="rising",
     >>> print(np.round(edges[:3] * 1e3, 5))  # ms; up-crossings at (0.3 + 2 pi k)/(2 pi 250)
     [0.19099 4.19099 8.19099]
     """
-    x = check_finite_array(signal, "signal", ndim=1, min_length=4)
-    fs = check_positive(fs, "fs")
-    hysteresis = check_range(hysteresis, "hysteresis", 0.0, 1.0, inclusive=(True, False))
-    check_option(slope, "slope", ("rising", "falling"))
-    check_option(interpolation, "interpolation", ("cubic", "linear"))
+    x = check_finite_array(signal, "signal", ndim=1, min_length=4, error=AnalysisError)
+    fs = check_positive(fs, "fs", error=AnalysisError)
+    hysteresis = check_range(hysteresis, "hysteresis", 0.0, 1.0, inclusive=(True, False),
+                             error=AnalysisError)
+    check_option(slope, "slope", ("rising", "falling"), error=AnalysisError)
+    check_option(interpolation, "interpolation", ("cubic", "linear"), error=AnalysisError)
     if slope == "falling":
         x = -x
     lo, hi = np.percentile(x, [2.0, 98.0])
@@ -260,7 +261,7 @@ def _local_pitch_time(dt, size=9):
 
 
 def count_pitches(edge_times, *, pulses_per_rev, missing_teeth=0, repair=True,
-                  spurious_ratio=0.5):
+                  spurious_ratio=0.5, max_bridge_pitches=None):
     """Count pitches between edges, repair dropouts and spurious pulses, find the gap.
 
     Each interval is divided by the running median of its neighbours (nine intervals, robust to
@@ -285,6 +286,9 @@ def count_pitches(edge_times, *, pulses_per_rev, missing_teeth=0, repair=True,
         Remove spurious pulses (with ``False`` every interval must be at least half a pitch).
     spurious_ratio : float
         Interval/pitch ratio below which an interval is taken to contain a spurious pulse.
+    max_bridge_pitches : int, optional
+        Most consecutive missing pulses bridged (default ``max(pulses_per_rev, 8)``, besides
+        the wheel's own gap); a longer silence is a stop or a lost signal, not a dropout.
 
     Returns
     -------
@@ -293,7 +297,9 @@ def count_pitches(edge_times, *, pulses_per_rev, missing_teeth=0, repair=True,
     Raises
     ------
     AnalysisError
-        Too few edges, non-increasing times, or no gap found on a missing-tooth wheel.
+        Too few edges, non-increasing times, no gap found on a missing-tooth wheel, a silence
+        longer than ``max_bridge_pitches``, or more than 10 % of the intervals further than a
+        quarter pitch from a whole number of pitches (too many faults to count reliably).
 
     Examples
     --------
@@ -305,20 +311,22 @@ def count_pitches(edge_times, *, pulses_per_rev, missing_teeth=0, repair=True,
     >>> int(pc.filled), float(pc.edge_times[pc.reference_index]), int(pc.pitch[0])
     (1, 0.059, -54)
     """
-    t = check_finite_array(edge_times, "edge_times", ndim=1)
-    n_rev = check_int(pulses_per_rev, "pulses_per_rev", minimum=1)
-    missing = check_int(missing_teeth, "missing_teeth", minimum=0)
+    t = check_finite_array(edge_times, "edge_times", ndim=1, error=AnalysisError)
+    n_rev = check_int(pulses_per_rev, "pulses_per_rev", minimum=1, error=AnalysisError)
+    missing = check_int(missing_teeth, "missing_teeth", minimum=0, error=AnalysisError)
     if missing >= n_rev - 1 and n_rev > 1:
         raise AnalysisError(f"missing_teeth={missing} must be less than pulses_per_rev - 1 "
                             f"= {n_rev - 1}")
-    spurious_ratio = check_range(spurious_ratio, "spurious_ratio", 0.05, 0.95)
+    spurious_ratio = check_range(spurious_ratio, "spurious_ratio", 0.05, 0.95,
+                                 error=AnalysisError)
     if t.size < 3:
         raise AnalysisError(f"edge_times has {t.size} edges; at least 3 are needed")
     dt = np.diff(t)
     if np.any(dt <= 0):
         i = int(np.flatnonzero(dt <= 0)[0])
         raise AnalysisError(f"edge_times must increase strictly; edge {i + 1} "
-                            f"({t[i + 1]!r} s) does not follow edge {i} ({t[i]!r} s)")
+                            f"({float(t[i + 1]):.9g} s) does not follow edge {i} "
+                            f"({float(t[i]):.9g} s)")
     removed = 0
     if repair:
         t, removed = _remove_spurious(t, spurious_ratio)
@@ -329,6 +337,23 @@ def count_pitches(edge_times, *, pulses_per_rev, missing_teeth=0, repair=True,
         ref = _local_pitch_time(np.where(dt > 1.5 * ref, np.nan_to_num(ref), dt))
     ratio = dt / ref
     counts = np.maximum(np.rint(ratio).astype(np.int64), 1)
+    limit = max(n_rev, 8) if max_bridge_pitches is None else check_int(
+        max_bridge_pitches, "max_bridge_pitches", minimum=1, error=AnalysisError)
+    long = np.flatnonzero(counts - 1 > limit + (missing if missing else 0))
+    if long.size:
+        i = int(long[0])
+        raise AnalysisError(
+            f"edge_times: no pulse for {float(dt[i]):.4g} s between {float(t[i]):.6g} s and "
+            f"{float(t[i + 1]):.6g} s ({int(counts[i]) - 1} pitches missing at the local pulse "
+            f"rate, more than max_bridge_pitches={limit}): the shaft stopped or the signal was "
+            "lost; analyse the parts on either side separately")
+    off = np.abs(ratio - np.rint(ratio)) > 0.25
+    if ratio.size >= 10 and off.mean() > 0.1:
+        raise AnalysisError(
+            f"edge_times: {100 * off.mean():.0f} % of the pulse intervals are not whole numbers "
+            "of pitches (more than a quarter pitch off the local pitch time): too many missing "
+            "or spurious pulses to count reliably, an irregular wheel, or a wrong "
+            f"pulses_per_rev={n_rev}/missing_teeth={missing}")
     if not repair and np.any(ratio < spurious_ratio):
         i = int(np.flatnonzero(ratio < spurious_ratio)[0])
         raise AnalysisError(f"interval {i} is {ratio[i]:.2f} of a pitch (spurious pulse?); "
@@ -417,7 +442,8 @@ class SpeedTrace:
         Pitches averaged per value (``pulses_per_rev`` = one revolution; 1 = per tooth).
     timing_error_s : float
         Upper estimate of the edge-timing error (jitter, quantisation, tooth errors), s rms,
-        from the second differences of the edge times.
+        from the second differences of the edge times (NaN, with a logged warning, for fewer
+        than 5 edges).
     error_rpm : float
         Upper estimate of the rms speed error, rpm, at the median speed:
         ``sqrt(2) sigma_t / T_w * n`` (the gain of ``smoothing_revs`` is not counted, since
@@ -515,7 +541,7 @@ def speed_from_pulses(edge_times, *, pulses_per_rev, missing_teeth=0, window_rev
     >>> float(np.max(np.abs(w - (omega0 + alpha * tt))))  < 1e-9
     True
     """
-    window_revs = check_positive(window_revs, "window_revs")
+    window_revs = check_positive(window_revs, "window_revs", error=AnalysisError)
     pc = count_pitches(edge_times, pulses_per_rev=pulses_per_rev, missing_teeth=missing_teeth,
                        repair=repair)
     t, pitch = pc.edge_times, pc.pitch
@@ -536,7 +562,8 @@ def speed_from_pulses(edge_times, *, pulses_per_rev, missing_teeth=0, window_rev
     sigma_t = _timing_error(t, pitch)
     t_w = float(np.median(span))
     err = float(np.sqrt(2.0) * sigma_t / t_w * np.median(omega) * 60.0 / TWO_PI)
-    smoothing_revs = check_range(smoothing_revs, "smoothing_revs", 0.0, None)
+    smoothing_revs = check_range(smoothing_revs, "smoothing_revs", 0.0, None,
+                                 error=AnalysisError)
     edges_per_rev = max(1, n_rev - pc.missing_teeth)
     length = int(round(smoothing_revs * edges_per_rev))
     if length > 1:
@@ -557,8 +584,13 @@ def _moving_mean(x, length):
 
 
 def _timing_error(t, pitch):
-    """Robust upper estimate of the per-edge timing error from second differences, s rms."""
+    """Robust upper estimate of the per-edge timing error from second differences, s rms.
+
+    NaN (with a warning) for fewer than 5 edges: no second differences to estimate from.
+    """
     if t.size < 5:
+        log.warning("speed_from_pulses: %d edges are too few to estimate the timing error; "
+                    "timing_error_s and error_rpm are NaN", t.size)
         return float("nan")
     dt = np.diff(t) / np.diff(pitch)  # per-pitch time
     d2 = np.diff(dt)
@@ -675,13 +707,15 @@ def angle_from_pulses(edge_times, *, pulses_per_rev, missing_teeth=0, reference_
     >>> round(float(np.degrees(trace.at(0.0))), 6)    # -(47 teeth * 6 deg) - 90 deg
     -372.0
     """
-    tdc_offset = np.radians(check_range(tdc_offset_deg, "tdc_offset_deg", -720.0, 720.0))
+    tdc_offset = np.radians(check_range(tdc_offset_deg, "tdc_offset_deg", -720.0, 720.0,
+                                        error=AnalysisError))
     pc = count_pitches(edge_times, pulses_per_rev=pulses_per_rev, missing_teeth=missing_teeth,
                        repair=repair)
     angle = pc.angle.astype(float)
     reference = "gap" if pc.missing_teeth else "first edge"
     if reference_times is not None:
-        ref = check_finite_array(reference_times, "reference_times", ndim=1, min_length=1)
+        ref = check_finite_array(reference_times, "reference_times", ndim=1, min_length=1,
+                                 error=AnalysisError)
         if pc.edge_times.size < 4:
             raise AnalysisError("angle_from_pulses needs at least 4 edges to interpolate the "
                                 "reference mark")

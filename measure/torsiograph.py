@@ -71,12 +71,13 @@ TWO_PI = 2.0 * np.pi
 # --------------------------------------------------------------------------------------------
 def _sync(edge_times, pulses_per_rev, missing_teeth, reference_times, butt_joint, repair):
     """Return (times, pitch, sync) with pitch 0 at the wheel's reference where there is one."""
-    n = check_int(pulses_per_rev, "pulses_per_rev", minimum=2)
+    n = check_int(pulses_per_rev, "pulses_per_rev", minimum=2, error=AnalysisError)
     if butt_joint:
         if missing_teeth:
             raise AnalysisError("butt_joint=True describes a zebra tape; it cannot also have "
                                 f"missing_teeth={missing_teeth}")
-        t = check_finite_array(edge_times, "edge_times", ndim=1, min_length=2 * n + 1)
+        t = check_finite_array(edge_times, "edge_times", ndim=1, min_length=2 * n + 1,
+                               error=AnalysisError)
         if np.any(np.diff(t) <= 0):
             raise AnalysisError("edge_times must increase strictly")
         k0 = _find_joint(t, n)
@@ -85,7 +86,8 @@ def _sync(edge_times, pulses_per_rev, missing_teeth, reference_times, butt_joint
     t, pitch = pc.edge_times, pc.pitch
     sync = "gap" if missing_teeth else "first edge"
     if reference_times is not None:
-        ref = check_finite_array(reference_times, "reference_times", ndim=1, min_length=1)
+        ref = check_finite_array(reference_times, "reference_times", ndim=1, min_length=1,
+                                 error=AnalysisError)
         inside = ref[(ref >= t[0]) & (ref <= t[-1])]
         if inside.size == 0:
             raise AnalysisError("reference_times: no mark falls within the edge times")
