@@ -12,7 +12,8 @@ Rows
 * forced response of a 20-mass engine model over 1000 speeds × 24 orders: batched tree
   elimination (per-order) and with cycle superposition, against a batched dense complex solve.
 
-``--quick`` drops the 2000-mass chain, the peer beyond 100 masses and the 1e12 case.
+``--quick`` drops the 2000-mass chain, the peer beyond 10 masses and the 1e12 case, and runs
+the forced response over 300 speeds.
 """
 
 from __future__ import annotations
@@ -133,7 +134,7 @@ def _frequency_rows(quick: bool) -> list[Row]:
                         "masses/s"))
         if n >= 1000:
             rows.append(_sterf_row(n, j, k, ref, t_ours))
-        if ot is not None and (n <= 100 or not quick):
+        if ot is not None and (n <= 10 or not quick):
             reps = 3 if n <= 100 else 1
             t_ot = median_time(lambda: _ot_omega(ot, inertias, stiffnesses), repeats=reps,
                                warmup=1 if n <= 100 else 0)
@@ -211,7 +212,7 @@ def _forced_rows(quick: bool) -> list[Row]:
         cylinder_nodes=list(range(2, 8)), firing_angles_deg=[0, 480, 240, 600, 120, 360],
         edge_damping=np.full(n - 1, 30.0), node_damping=np.r_[np.full(n - 1, 3.0), 300.0],
         edge_loss_factor=np.full(n - 1, 0.02))
-    n_speeds = 1000
+    n_speeds = 300 if quick else 1000
     rpm = np.linspace(100, 1500, n_speeds)
     orders = np.arange(0.5, 12.01, 0.5)
     torque = 1e3 / orders
@@ -236,8 +237,8 @@ def _forced_rows(quick: bool) -> list[Row]:
     x_ref = dense().reshape(n_speeds, orders.size, n)
     x = harmonic_solve(s, speed, orders, cylinder_forcing(s, torque, orders, n_speeds))
     err = float(np.max(np.abs(x - x_ref)) / np.max(np.abs(x_ref)))
-    t_dense = median_time(dense, repeats=3)
-    t_po = median_time(per_order, repeats=5)
+    t_dense = median_time(dense, repeats=1 if quick else 3)
+    t_po = median_time(per_order, repeats=3 if quick else 5)
     t_full = median_time(full, repeats=3)
     setting = f"{n} masses, {n_speeds} speeds x {orders.size} orders"
     pairs = n_speeds * orders.size
