@@ -11,6 +11,15 @@ from predict.engine import ArticulatedRod, Engine
 from predict.errors import ModelError
 from predict.kinematics import series_coefficients
 
+
+@pytest.fixture(autouse=True)
+def _close_figures():
+    """Close the figures the result objects' plot() made (matplotlib warns past 20)."""
+    yield
+    import matplotlib.pyplot as plt
+
+    plt.close("all")
+
 R, L, M, W = 0.045, 0.15, 0.7, 2 * np.pi * 4000 / 60
 SCALE = M * R * W**2
 

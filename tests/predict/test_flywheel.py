@@ -14,6 +14,15 @@ from predict.errors import ModelError
 from predict.forces import engine_torque
 from predict.pressure import synthetic_pressure
 
+
+@pytest.fixture(autouse=True)
+def _close_figures():
+    """Close the figures the result objects' plot() made (matplotlib warns past 20)."""
+    yield
+    import matplotlib.pyplot as plt
+
+    plt.close("all")
+
 ENGINES_DIR = Path(__file__).resolve().parents[2] / "sample_data" / "engines"
 
 

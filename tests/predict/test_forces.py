@@ -10,6 +10,15 @@ from predict.engine import Engine
 from predict.errors import ModelError
 from predict.pressure import PressureTrace, synthetic_pressure
 
+
+@pytest.fixture(autouse=True)
+def _close_figures():
+    """Close the figures the result objects' plot() made (matplotlib warns past 20)."""
+    yield
+    import matplotlib.pyplot as plt
+
+    plt.close("all")
+
 W = 2 * np.pi * 3000 / 60
 
 

@@ -10,6 +10,15 @@ import pytest
 from predict import kinematics as kin
 from predict.errors import ModelError
 
+
+@pytest.fixture(autouse=True)
+def _close_figures():
+    """Close the figures the result objects' plot() made (matplotlib warns past 20)."""
+    yield
+    import matplotlib.pyplot as plt
+
+    plt.close("all")
+
 R, L = 0.05, 0.2
 
 

@@ -8,6 +8,15 @@ from predict import kinematics as kin
 from predict.errors import ModelError
 from predict.masses import Rod, rod_inertia_from_pendulum, throw_rotating_mass
 
+
+@pytest.fixture(autouse=True)
+def _close_figures():
+    """Close the figures the result objects' plot() made (matplotlib warns past 20)."""
+    yield
+    import matplotlib.pyplot as plt
+
+    plt.close("all")
+
 ROD = Rod(mass=1.3, length=0.16, cg_from_big_end=0.045, inertia_cg=0.0042)
 
 

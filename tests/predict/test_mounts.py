@@ -9,6 +9,15 @@ from predict.engine import Engine
 from predict.errors import ModelError
 from predict.mounts import Mount, MountedEngine, excitation_from_unbalance
 
+
+@pytest.fixture(autouse=True)
+def _close_figures():
+    """Close the figures the result objects' plot() made (matplotlib warns past 20)."""
+    yield
+    import matplotlib.pyplot as plt
+
+    plt.close("all")
+
 MASS, J = 500.0, np.array([30.0, 60.0, 70.0])
 KX, KY, KZ = 1.0e6, 1.5e6, 3.0e6
 A, B = 0.6, 0.3          # mounts at x = ±A, y = ±B in the CG plane
