@@ -20,6 +20,7 @@ def _close_figures():
 
     plt.close("all")
 
+
 R, L, M, W = 0.045, 0.15, 0.7, 2 * np.pi * 4000 / 60
 SCALE = M * R * W**2
 

@@ -23,6 +23,7 @@ def _close_figures():
 
     plt.close("all")
 
+
 ENGINES_DIR = Path(__file__).resolve().parents[2] / "sample_data" / "engines"
 
 

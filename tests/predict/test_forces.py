@@ -19,6 +19,7 @@ def _close_figures():
 
     plt.close("all")
 
+
 W = 2 * np.pi * 3000 / 60
 
 

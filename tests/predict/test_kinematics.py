@@ -19,6 +19,7 @@ def _close_figures():
 
     plt.close("all")
 
+
 R, L = 0.05, 0.2
 
 

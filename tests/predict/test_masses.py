@@ -17,6 +17,7 @@ def _close_figures():
 
     plt.close("all")
 
+
 ROD = Rod(mass=1.3, length=0.16, cg_from_big_end=0.045, inertia_cg=0.0042)
 
 

@@ -18,6 +18,7 @@ def _close_figures():
 
     plt.close("all")
 
+
 MASS, J = 500.0, np.array([30.0, 60.0, 70.0])
 KX, KY, KZ = 1.0e6, 1.5e6, 3.0e6
 A, B = 0.6, 0.3          # mounts at x = ±A, y = ±B in the CG plane
