@@ -20,6 +20,7 @@ file), optional ``engine_id`` and ``test_id``. Mixed sample rates are never resa
 from __future__ import annotations
 
 import datetime as _dt
+import math
 from collections.abc import Mapping
 
 import numpy as np
@@ -54,7 +55,13 @@ class RecordWarning(UserWarning):
 
 
 def is_pulse_dim(dim: str) -> bool:
-    """True for ``pulse`` and ``pulse_<name>`` dims (edge-time channels)."""
+    """True for ``pulse`` and ``pulse_<name>`` dims (edge-time channels).
+
+    Examples
+    --------
+    >>> is_pulse_dim("pulse_cam"), is_pulse_dim("time_rpm")
+    (True, False)
+    """
     return dim == "pulse" or dim.startswith("pulse_")
 
 
@@ -167,11 +174,12 @@ def _check_time_axis(name: str, t: np.ndarray, fs: float | None, dim: str) -> No
             raise RecordError(f"channel {name!r}: time coordinate {dim!r} has NaN/inf at index "
                               "0; expected finite times in s")
         return
-    dt = np.diff(t)
+    with np.errstate(invalid="ignore"):  # inf - inf in a corrupt time axis is reported below
+        dt = np.diff(t)
     # min/max reductions first (no temporaries); locate the fault only when there is one.
     # NaN propagates through min/max and an inf makes the sum inf - inf = NaN.
     dt_min, dt_max = float(dt.min()), float(dt.max())
-    if not np.isfinite(dt_min + dt_max + t[0]):
+    if not math.isfinite(dt_min + dt_max + float(t[0])):
         i = int(np.flatnonzero(~np.isfinite(t))[0])
         raise RecordError(f"channel {name!r}: time coordinate {dim!r} has NaN/inf at index {i}; "
                           "expected finite times in s")

@@ -288,7 +288,18 @@ def to_si(values, unit: str, *, channel: str | None = None):
 
 
 def to_si_owned(values, unit: str, *, channel: str | None = None):
-    """:func:`to_si` for arrays the caller owns: scales in place, no copy when factor is 1."""
+    """:func:`to_si` for arrays the caller owns: scales in place, no copy when factor is 1.
+
+    Falls back to :func:`to_si` (a copy) for sensitivities, non-float, read-only or non-numpy
+    input.
+
+    Examples
+    --------
+    >>> x = np.array([1.0, 2.0])
+    >>> y, unit, _ = to_si_owned(x, "mm")
+    >>> y is x, unit, x.tolist()
+    (True, 'm', [0.001, 0.002])
+    """
     found = _lookup(unit) if isinstance(unit, str) else None
     if (found is None or not isinstance(values, np.ndarray) or values.dtype.kind != "f"
             or not values.flags.writeable):

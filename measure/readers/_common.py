@@ -14,7 +14,7 @@ from ..record import is_pulse_dim, time_coordinate
 from ..units import QUANTITIES, SI_UNITS, sensitivity_to_si, to_si_owned
 
 __all__ = ["clean_attr", "clean_attrs", "regular_start", "channel_meta", "dims_of",
-           "si_channel", "build_dataset", "META_KEYS"]
+           "si_channel", "build_dataset", "select", "meta_json", "META_KEYS", "REGULAR_KEY"]
 
 #: Channel attrs carried through every format's metadata slot.
 META_KEYS = ("units", "quantity", "sample_rate", "location", "direction", "sensitivity",

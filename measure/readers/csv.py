@@ -219,6 +219,10 @@ def _read_foreign(frame, channels, file) -> xr.Dataset:
     if n < 2:
         raise RecordError(f"{file}: time column has {n} value(s); expected at least 2 to infer "
                           "the sample rate")
+    if not np.all(np.isfinite(t)):
+        i = int(np.flatnonzero(~np.isfinite(t))[0])
+        raise RecordError(f"{file}: time column {headers[time_idx]!r} is empty or NaN/inf at "
+                          f"data row {i + 1}; expected a time in every row")
     span = t[-1] - t[0]
     fs = (n - 1) / span if np.isfinite(span) and span > 0 else float("nan")
     names = [p[0] for i, p in enumerate(parsed) if i != time_idx]
