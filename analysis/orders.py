@@ -148,7 +148,7 @@ def _check_order_range(top_order: float, samples_per_rev: int, x, fs, rpm, *,
             f"{samples_per_rev / divisor:g} ({what}); use samples_per_rev >= "
             f"{int(np.ceil(divisor * top_order))}")
     values, fs_, _, label = _as_signal(x, fs)
-    speed = _as_rpm(rpm, values.shape[0])
+    speed = _as_rpm(rpm, values.shape[0], fs_)
     f_top = top_order * float(speed.max()) / 60.0
     if f_top >= 0.5 * fs_:
         raise AnalysisError(f"order {top_order:g} reaches {f_top:.6g} Hz at {speed.max():.6g} "
@@ -598,7 +598,7 @@ def campbell_map(x, *, fs=None, rpm, nperseg: int = 4096, overlap: float = 0.5, 
     0.25
     """
     values, fs, units, label = _as_signal(x, fs)
-    speed = _as_rpm(rpm, values.shape[0])
+    speed = _as_rpm(rpm, values.shape[0], fs)
     factor = amplitude_factor(amplitude)
     nperseg = check_int(nperseg, "nperseg", minimum=8, error=AnalysisError)
     overlap = check_range(overlap, "overlap", 0.0, 1.0, inclusive=(True, False),

@@ -84,8 +84,11 @@ def _as_signal(x, fs, name: str = "x"):
     return values, fs, units, label
 
 
-def _as_rpm(rpm, n: int) -> np.ndarray:
-    """Speed in rpm as an array of length ``n`` (a scalar means a steady speed)."""
+def _as_rpm(rpm, n: int, fs: float | None = None) -> np.ndarray:
+    """Speed in rpm as an array of length ``n`` (a scalar means a steady speed).
+
+    ``fs`` (Hz), when known, lets an error say at what time the speed was bad.
+    """
     if hasattr(rpm, "values") and hasattr(rpm, "dims"):
         rpm = rpm.values
     arr = np.asarray(rpm, dtype=float) if not np.isscalar(rpm) else None
@@ -97,9 +100,13 @@ def _as_rpm(rpm, n: int) -> np.ndarray:
         raise AnalysisError(f"rpm has {arr.shape[0]} samples but the signal has {n}; "
                             "give one speed per signal sample (see analysis.speedref)")
     if arr.min() <= 0:
-        i = int(np.argmin(arr))
-        raise AnalysisError(f"rpm must be > 0 throughout (shaft turning one way); "
-                            f"found {arr[i]!r} at sample {i}")
+        bad = np.flatnonzero(arr <= 0)
+        i, j = int(bad[0]), int(bad[-1])
+        when = (lambda k: f" (t = {k / fs:.6g} s)") if fs else (lambda k: "")
+        raise AnalysisError(f"rpm must be > 0 throughout (shaft turning one way); found "
+                            f"{len(bad)} sample(s) <= 0 (min {float(arr.min()):.6g} rpm), first "
+                            f"at sample {i}{when(i)}, last at sample {j}{when(j)}; trim the "
+                            "record to the running span")
     return arr
 
 
@@ -253,7 +260,7 @@ def angle_resample(x, *, fs=None, rpm, samples_per_rev: int = 64, interpolation:
     """
     values, fs, units, label = _as_signal(x, fs)
     n = values.shape[0]
-    speed = _as_rpm(rpm, n)
+    speed = _as_rpm(rpm, n, fs)
     samples_per_rev = check_int(samples_per_rev, "samples_per_rev", minimum=4, error=AnalysisError)
     interpolation = check_option(interpolation, "interpolation", INTERPOLATIONS,
                                  error=AnalysisError)

@@ -304,9 +304,9 @@ def vold_kalman(x, *, fs=None, rpm, orders, bandwidth_hz=None, bandwidth_orders=
         if rpm_arr.shape != (k, n):
             raise AnalysisError(f"a 2-D rpm must have shape (len(orders), len(x)) = ({k}, {n}), "
                                 f"got {rpm_arr.shape}")
-        speeds = np.stack([_as_rpm(r, n) for r in rpm_arr])
+        speeds = np.stack([_as_rpm(r, n, fs) for r in rpm_arr])
     else:
-        speeds = np.tile(_as_rpm(rpm, n), (k, 1))
+        speeds = np.tile(_as_rpm(rpm, n, fs), (k, 1))
     if bandwidth_hz is not None and bandwidth_orders is not None:
         raise AnalysisError("give bandwidth_hz or bandwidth_orders, not both")
     if bandwidth_hz is None and bandwidth_orders is None:

@@ -149,9 +149,6 @@ def test_vkf_refuses_a_zero_speed_segment_by_name():
         order_track(x, fs=fs, rpm=rpm, orders=[2], method="vkf")
 
 
-@pytest.mark.xfail(strict=True, reason="analysis.resample._as_rpm formats the offending speed "
-                   "with repr(): the message reads 'found np.float64(0.0) at sample 12000' "
-                   "instead of a plain number with its time")
 def test_zero_speed_message_is_plain_numbers():
     fs = 4000.0
     rpm = np.full(32000, 1500.0)
