@@ -1095,6 +1095,8 @@ def _identify(x, a, c, base, resid, i, p, response, order, sigma, prom, max_damp
         else:
             loss, shift = 0.0, 0.0
     confidence = quality * (1.0 - np.exp(-snr / 10.0)) * (1.0 if complete else 0.5)
+    if not min_damping <= zeta <= max_damping:
+        return None  # the identified damping says spike or trend after all
     accepted.append((x_pk, half_width, prom))
     return Resonance(
         order=float(order), speed_rpm=float(speed), frequency_hz=float(speed * order / 60.0),
