@@ -110,58 +110,47 @@ def test_few_dropouts_are_bridged_and_counted():
     np.testing.assert_allclose(trace.speed_rpm, sig.SPEED_RPM, rtol=1e-9)
 
 
-@pytest.mark.xfail(strict=True, reason="measure.tacho.count_pitches: with 50 % of the pulses "
-                   "lost at random the running-median pitch locks onto 2 pitches; speed comes "
-                   "out 12-33 % low (675-883 rpm for 1000 rpm) with no error or warning")
-def test_half_missing_pulses_give_right_speed_or_error():
+@pytest.mark.parametrize("func", list(PULSE_FUNCS))
+def test_half_missing_pulses_are_named_error(func):
+    """50 % of pulses lost at random: too damaged to count pitches; the error says so.
+    (Found: the speed came out 12-33 % low without a word; fixed in 62522aa.)"""
     tacho = sig.tacho_half_missing()
-    try:
-        trace = speed_from_pulses(tacho.edge_times, pulses_per_rev=PPR)
-    except AnalysisError as exc:
-        assert "missing" in str(exc)
-        return
-    np.testing.assert_allclose(trace.speed_rpm, sig.SPEED_RPM, rtol=0.02)
+    with pytest.raises(AnalysisError, match=r"edge_times: \d+ % of the pulse intervals are not "
+                                            r"whole numbers of pitches.*too many missing or "
+                                            r"spurious pulses.*pulses_per_rev=60"):
+        PULSE_FUNCS[func](tacho.edge_times)
 
 
-@pytest.mark.xfail(strict=True, reason="measure.tacho.count_pitches bridges a 5 s standstill as "
-                   "5000 'missing pulses' and reports a constant 1000 rpm through it, silently")
-def test_standstill_is_not_bridged_as_dropouts():
+@pytest.mark.parametrize("func", list(PULSE_FUNCS))
+def test_standstill_is_named_error_not_bridged(func):
+    """A 5 s standstill is not 'missing pulses': the error names the silent stretch.
+    (Found: bridged as 5000 dropouts at a constant 1000 rpm; fixed in 62522aa.)"""
     tacho = sig.tacho_stops()
-    try:
-        trace = speed_from_pulses(tacho.edge_times, pulses_per_rev=PPR)
-    except AnalysisError as exc:
-        assert "0.71" in str(exc) or "5" in str(exc)   # names the stretch
-        return
-    inside = (trace.time > tacho.span[0] + 0.1) & (trace.time < tacho.span[1] - 0.1)
-    assert not np.any(trace.speed_rpm[inside] > 100.0)
+    with pytest.raises(AnalysisError, match=r"edge_times: no pulse for 5\.001 s between "
+                                            r"0\.359 s and 5\.36 s.*shaft stopped or the "
+                                            r"signal was lost"):
+        PULSE_FUNCS[func](tacho.edge_times)
 
 
-def test_standstill_bridge_is_visible_in_pitch_count():
-    """What the user can see today: the bridged pitches are counted in ``filled``."""
-    tacho = sig.tacho_stops()
-    pc = count_pitches(tacho.edge_times, pulses_per_rev=PPR)
-    assert pc.filled == 5000          # 5.001 s interval = 5001 pitches at 1000 pulses/s
-
-
-@pytest.mark.xfail(strict=True, reason="measure.tacho: check_finite_array is called without "
-                   "error=AnalysisError, so NaN edge times / samples raise a bare ValueError "
-                   "outside the project's error family")
-@pytest.mark.parametrize("case", ["tacho_nan_edge", "tacho_nan_analog"])
-def test_nan_in_tacho_is_our_error(case):
+@pytest.mark.parametrize("case, pattern", [
+    ("tacho_nan_edge", r"edge_times contains 1 NaN/inf value\(s\), first at index 50"),
+    ("tacho_nan_analog", r"signal contains 50 NaN/inf value\(s\), first at index 1000"),
+])
+def test_nan_in_tacho_is_our_error(case, pattern):
+    """(Found: a bare ValueError outside the family; fixed in 62522aa.)"""
     tacho = sig.TACHO_CASES[case]()
-    with pytest.raises(CrankbenchError, match=r"(edge_times|signal) contains \d+ NaN/inf"):
+    with pytest.raises(AnalysisError, match=pattern):
         if tacho.edge_times is not None:
             speed_from_pulses(tacho.edge_times, pulses_per_rev=PPR)
         else:
             detect_edges(tacho.signal, fs=tacho.fs)
 
 
-@pytest.mark.xfail(strict=True, reason="measure.tacho.count_pitches formats edge times with "
-                   "repr() of numpy scalars: 'edge 1 (np.float64(0.7182) s)'")
 def test_reversed_tacho_message_is_plain_numbers():
-    with pytest.raises(AnalysisError) as info:
+    """(Found: 'edge 1 (np.float64(0.718) s)'; fixed in 62522aa.)"""
+    with pytest.raises(AnalysisError, match=r"edge_times must increase strictly; edge 1 "
+                                            r"\(0\.718 s\) does not follow edge 0 \(0\.719 s\)"):
         speed_from_pulses(sig.tacho_reversed().edge_times, pulses_per_rev=PPR)
-    assert "np.float64" not in str(info.value)
 
 
 # ------------------------------------------------------------------------------ channels
@@ -169,8 +158,13 @@ def test_reversed_tacho_message_is_plain_numbers():
 @pytest.mark.parametrize("case, pattern", [
     ("channel_dropout_nan", r"acc contains 100 NaN/inf value\(s\), first at index 4000"),
     ("channel_dropout_inf", r"acc contains 5 NaN/inf value\(s\), first at index 2000"),
-    ("channel_zero_speed_segment", r"rpm must be > 0 throughout.*found .*0\.0.* at sample 3000"),
-    ("channel_negative_speed", r"rpm must be > 0 throughout.*found .*-1500\.0.* at sample 0"),
+    # (the message is being reworded to name the whole span; both forms name sample and speed)
+    ("channel_zero_speed_segment", r"rpm must be > 0 throughout.*(found 500 sample\(s\) <= 0, "
+                                   r"min 0 rpm, at samples 3000.3499 \(t = 1\.5 s to 1\.7495 s\)"
+                                   r"|found (np\.float64\()?0\.0\)? at sample 3000)"),
+    ("channel_negative_speed", r"rpm must be > 0 throughout.*(found 8000 sample\(s\) <= 0, "
+                               r"min -1500 rpm, at samples 0.7999"
+                               r"|found (np\.float64\()?-1500\.0\)? at sample 0)"),
     ("channel_nan_speed", r"rpm contains 1 NaN/inf value\(s\), first at index 7999"),
     ("channel_speed_wrong_length", r"rpm has 7900 samples but the signal has 8000"),
 ])
@@ -225,10 +219,10 @@ def test_dropouts_read_with_allow_nonfinite_are_masked_with_warning(tmp_path, ex
     np.testing.assert_allclose(values[good], c.data[good], atol=tol)
 
 
-@pytest.mark.xfail(strict=True, reason="measure UFF 58 writer stores NaN as 0.0 and inf as "
-                   "1.797e308; reading back gives finite data, no mask, no warning (silent "
-                   "corruption of dropouts)")
 def test_uff_keeps_or_refuses_dropouts(tmp_path):
+    """UFF 58 cannot hold NaN: the writer must refuse (naming the channel) rather than store
+    zeros, or the reader must flag them. (Found writing NaN as 0.0 and inf as 1.8e308; fixed
+    in 5311e14.)"""
     c = sig.channel_dropout_nan()
     path = tmp_path / "drop.uff"
     rec = make_record({"acc": dict(data=c.data, sample_rate=FS, units="m/s^2",
@@ -256,10 +250,8 @@ def test_masked_dropout_gives_masked_order_track_with_warning():
     np.testing.assert_allclose(amp.values[far], 1.0, rtol=1e-2)
 
 
-@pytest.mark.xfail(strict=True, reason="no clipping detection anywhere (measure.io.read, "
-                   "measure.record.validate, analysis.orders): a channel saturated at ±0.8 is "
-                   "read and order-analysed without a warning")
 def test_clipped_channel_is_flagged(tmp_path):
+    """Usable in part: read gives the data with the flat-topped spans listed and a warning."""
     c = sig.channel_clipped()
     path = tmp_path / "clip.h5"
     mio.write(make_record({"acc": dict(data=c.data, sample_rate=FS, units="m/s^2",

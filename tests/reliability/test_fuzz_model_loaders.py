@@ -25,7 +25,7 @@ from hypothesis import strategies as st
 from predict.errors import CrankbenchError, ModelError
 
 CORPUS = Path(__file__).resolve().parents[1] / "corpus"
-FUZZ = settings(max_examples=60, deadline=None, derandomize=True,
+FUZZ = settings(max_examples=30, deadline=None, derandomize=True,
                 suppress_health_check=[HealthCheck.function_scoped_fixture,
                                        HealthCheck.too_slow])
 

@@ -9,6 +9,8 @@ run-down, a few random dropouts, timing jitter) the speed comes back close to th
 from __future__ import annotations
 
 import contextlib
+import logging
+import re
 import signal
 
 import numpy as np
@@ -21,7 +23,7 @@ from measure.tacho import angle_from_pulses, count_pitches, speed_from_pulses
 from measure.torsiograph import angular_vibration
 from predict.errors import CrankbenchError
 
-FUZZ = settings(max_examples=60, deadline=None, derandomize=True,
+FUZZ = settings(max_examples=40, deadline=None, derandomize=True,
                 suppress_health_check=[HealthCheck.too_slow, HealthCheck.filter_too_much])
 
 
@@ -70,7 +72,7 @@ def _run_all(edges, ppr, missing):
         elif name == "speed":
             _finite(res.time, res.omega)
             counted = outcomes.get("count")
-            if counted is not None and counted.edge_times.size >= 5:  # fewer: see xfail below
+            if counted is not None and counted.edge_times.size >= 5:  # fewer: NaN + warning
                 _finite(res.error_rpm, res.timing_error_s)
         elif name == "angle":
             _finite(res.time, res.angle)
@@ -169,10 +171,19 @@ def test_constant_edge_spacing_of_any_length(ppr):
         _run_all(np.arange(n) * 1e-3, ppr, 0)
 
 
-@pytest.mark.xfail(strict=True, reason="measure.tacho.speed_from_pulses returns error_rpm = nan "
-                   "and timing_error_s = nan for fewer than 5 edges (_timing_error), undocumented "
-                   "and without a warning")
-def test_speed_error_estimate_is_finite_or_warned_for_few_edges(caplog):
-    trace = speed_from_pulses(np.array([0.0, 1.0, 2.0, 3.0]), pulses_per_rev=1)
+def test_speed_error_estimate_for_few_edges_is_warned():
+    """Fewer than 5 edges: ``error_rpm`` cannot be estimated; it is NaN *and* a warning says so
+    on the ``crankbench`` logger. (Found silent; fixed in 62522aa.)"""
+    records = []
+    handler = logging.Handler(level=logging.WARNING)
+    handler.emit = records.append
+    logger = logging.getLogger("crankbench")
+    logger.addHandler(handler)
+    try:
+        trace = speed_from_pulses(np.array([0.0, 1.0, 2.0, 3.0]), pulses_per_rev=1)
+    finally:
+        logger.removeHandler(handler)
     np.testing.assert_allclose(trace.omega, 2 * np.pi)
-    assert np.isfinite(trace.error_rpm) or "error" in caplog.text.lower()
+    assert np.isnan(trace.error_rpm)
+    assert any(re.search(r"4 edges are too few to estimate the timing error", r.getMessage())
+               for r in records)
