@@ -14,8 +14,15 @@ _LAZY = {
     "write": "io",
     "open": "io",
     "validate": "record",
+    "read_truth": "io",
+    "make_record": "record",
     "synthesize": "synth",
     "Scene": "synth",
+    "SyntheticRun": "synth",
+    "speed_from_pulses": "tacho",
+    "angle_from_pulses": "tacho",
+    "detect_edges": "tacho",
+    "angular_vibration": "torsiograph",
 }
 
 __all__ = sorted([*_LAZY, "RecordError"])
