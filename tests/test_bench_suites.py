@@ -12,7 +12,7 @@ import pytest
 
 import analysis.bench as bench
 from analysis.bench import Row
-from analysis.bench.suite_fidelity import pareto_distance
+from analysis.bench.suite_fidelity import paired_ratio, pareto_distance
 
 SUITES = bench.suites()
 
@@ -34,14 +34,30 @@ def test_suite_module_contract(name):
 
 
 def test_pareto_distance_definition():
-    sweep = [(2, 1.0, 1e-3), (4, 1.2, 1e-7), (6, 1.1, 1e-9), (8, 1.6, 1e-12)]
-    # on the front: the cheapest setting meeting the tolerance, or one that costs the same
-    assert pareto_distance(4, 1e-7, sweep, 1e-6) == 0.0
-    assert pareto_distance(6, 1e-9, sweep, 1e-6) == 0.0   # 4 costs 1.1 (envelope: 6 did)
-    assert pareto_distance(8, 1e-12, sweep, 1e-6) == pytest.approx(1.6 / 1.1 - 1)
+    sweep = [(2, 1e-3), (4, 1e-7), (6, 1e-9), (8, 1e-12)]
+    asked = []
+
+    def ratio(f):
+        asked.append(f)
+        return {4: 1.45}[f]
+
+    # on the front: the cheapest fidelity meeting the tolerance costs nothing extra, unmeasured
+    assert pareto_distance(4, 1e-7, sweep, 1e-6, cost_ratio=ratio) == 0.0 and asked == []
+    # above it: the side-by-side cost ratio to the cheapest one (4), never below 0
+    assert pareto_distance(8, 1e-12, sweep, 1e-6, cost_ratio=ratio) == pytest.approx(0.45)
+    assert asked == [4]
+    assert pareto_distance(6, 1e-9, sweep, 1e-6, cost_ratio=lambda f: 0.8) == 0.0
     # missing the tolerance is infinitely far; nothing manual meets it -> extends the front
-    assert math.isinf(pareto_distance(2, 1e-3, sweep, 1e-6))
-    assert pareto_distance(8, 1e-14, sweep, 1e-13) == 0.0
+    assert math.isinf(pareto_distance(2, 1e-3, sweep, 1e-6, cost_ratio=ratio))
+    assert pareto_distance(8, 1e-14, sweep, 1e-13, cost_ratio=ratio) == 0.0
+
+
+def test_paired_ratio_sees_a_twofold_cost():
+    import time as _time
+
+    r = paired_ratio(lambda: _time.sleep(0.004), lambda: _time.sleep(0.002), pairs=3,
+                     min_time=0.0)
+    assert 1.3 < r < 3.0
 
 
 def test_fidelity_suite_quick_rows():
@@ -61,6 +77,9 @@ def test_fidelity_suite_quick_rows():
         if r.method.startswith("acceleration_series"):
             # the series order is the cheapest meeting the tolerance: exactly on the front
             assert r.extra["auto"] == r.extra["cheapest"] and r.error == 0.0
+        elif r.method.startswith("exponential_coastdown"):
+            # piece count from the chord bound: the cheapest, or one more piece
+            assert r.extra["auto"] - r.extra["cheapest"] in (0, 1)
         else:
             assert r.extra["auto"] >= r.extra["cheapest"]
 

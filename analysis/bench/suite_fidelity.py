@@ -26,18 +26,17 @@ own suites):
   max |n_pw(t) − n0 e^{−t/τ}| (rpm) on 2·10⁵ times against the closed form; time = the crank
   angle at 2·10⁴ times (what the synthesis evaluates).
 
-Metric of the ``pareto distance`` rows (``error_kind = "excess cost rel"``): the manual
-settings are ordered by fidelity (series order, iteration count) and each gets a cost c = the
-lower envelope of the measured median times from that fidelity upwards (a higher fidelity does
-the same work and more, so a cheaper time above it is timer noise on a loaded machine). With
-f_auto the fidelity the automatic choice picked and f* the lowest-fidelity manual setting whose
-error is within the same tolerance, distance = max(0, c(f_auto) / c(f*) − 1); 0 means the
-automatic choice is on the front (nothing cheaper meets the tolerance); ``inf`` if the
-automatic choice misses the tolerance. The cost compared is that of running the chosen
-setting: for the kinematic series the one-off choice (``order_for_tolerance``, which sums the
-dropped tail for every candidate order) is reported in its own ``choice cost`` row, since the
-series object is built once and evaluated many times. ``bound`` (documented tolerance of the
-metric):
+Metric of the ``pareto distance`` rows (``error_kind = "excess cost rel"``): with f_auto the
+fidelity the automatic choice picked (series order, iteration count, piece count) and f* the
+lowest manual fidelity whose error is within the same tolerance, distance = max(0,
+t(f_auto) / t(f*) − 1), where the two times are taken side by side — alternating calls,
+median of the per-pair ratios — so a loaded machine slows both alike. It is 0 when the
+automatic choice is f* itself (nothing cheaper meets the tolerance) or extends the front (no
+manual setting meets the tolerance); ``inf`` if the automatic choice misses the tolerance. The
+cost compared is that of running the chosen setting: for the kinematic series the one-off
+choice (``order_for_tolerance``, which sums the dropped tail for every candidate order) is
+reported in its own ``choice cost`` row, since the series object is built once and evaluated
+many times. ``bound`` (documented tolerance of the metric):
 
 * kinematics 0.25 — the choice uses the rigorous tail bound Σ|aₙ|, attained at TDC within
   15 %, so it may pick one even order above the oracle at most when the tolerance falls inside
@@ -55,66 +54,84 @@ tolerance asked for: the bench fails if the automatic choice does not deliver it
 
 from __future__ import annotations
 
+import time
+
 import numpy as np
 
 from . import Row, median_time
 
-__all__ = ["run", "pareto_distance"]
+__all__ = ["run", "pareto_distance", "paired_ratio"]
 
 SUITE = "fidelity"
 
 
-def pareto_distance(auto_fidelity, auto_error: float, manual, tol: float) -> float:
+def pareto_distance(auto_fidelity, auto_error: float, manual, tol: float, *,
+                    cost_ratio) -> float:
     """Relative excess cost of the automatic choice over the cheapest manual setting meeting
     ``tol``.
 
     Parameters
     ----------
     auto_fidelity : float
-        The fidelity the automatic choice used (order, iterations); must be one of the manual
-        fidelities.
+        The fidelity the automatic choice used (order, iterations, pieces).
     auto_error : float
         Its error against the reference (same units as ``tol``).
-    manual : sequence of (fidelity, time_s, error)
-        The manual sweep.
+    manual : sequence of (fidelity, error)
+        The manual sweep (cost grows with fidelity).
     tol : float
         The tolerance the automatic choice was asked to meet.
+    cost_ratio : callable
+        ``cost_ratio(f)`` → time of the automatic choice / time of manual fidelity ``f``,
+        measured side by side; called only when ``f`` differs from ``auto_fidelity``.
 
     Returns
     -------
     float
-        ``max(0, c(f_auto) / c(f*) − 1)`` with c the lower envelope of the times from each
-        fidelity upwards and f* the lowest fidelity with error ≤ ``tol``; ``inf`` if the
-        automatic choice misses ``tol``; 0 if no manual setting meets ``tol`` (the automatic
-        choice extends the front).
+        ``max(0, cost_ratio(f*) − 1)`` with f* the lowest fidelity with error ≤ ``tol``;
+        0 if f* is the automatic fidelity or none meets ``tol`` (the automatic choice extends
+        the front); ``inf`` if the automatic choice misses ``tol``.
 
     Examples
     --------
-    >>> sweep = [(2, 1.0, 1e-3), (4, 1.2, 1e-7), (6, 1.1, 1e-9), (8, 1.6, 1e-12)]
-    >>> round(pareto_distance(6, 1e-9, sweep, 1e-6), 6), pareto_distance(4, 1e-7, sweep, 1e-6)
-    (0.0, 0.0)
-    >>> round(pareto_distance(8, 1e-12, sweep, 1e-6), 6)
-    0.454545
+    >>> sweep = [(2, 1e-3), (4, 1e-7), (6, 1e-9), (8, 1e-12)]
+    >>> pareto_distance(4, 1e-7, sweep, 1e-6, cost_ratio=lambda f: 9.9)
+    0.0
+    >>> round(pareto_distance(8, 1e-12, sweep, 1e-6, cost_ratio=lambda f: 1.45), 6)
+    0.45
+    >>> pareto_distance(2, 1e-3, sweep, 1e-6, cost_ratio=lambda f: 1.0)
+    inf
     """
     if not (np.isfinite(auto_error) and auto_error <= tol):
         return float("inf")
-    cost = _envelope(manual)
-    meeting = [f for f, _, e in manual if np.isfinite(e) and e <= tol]
-    if not meeting:
+    meeting = [f for f, e in manual if np.isfinite(e) and e <= tol]
+    if not meeting or min(meeting) >= auto_fidelity:
         return 0.0
-    return max(0.0, cost[auto_fidelity] / cost[min(meeting)] - 1.0)
+    return max(0.0, float(cost_ratio(min(meeting))) - 1.0)
 
 
-def _envelope(manual) -> dict:
-    """Cost per fidelity: the least time measured at that fidelity or any higher one."""
-    best: dict = {}
-    for f, t, _ in manual:
-        best[f] = min(t, best.get(f, np.inf))
-    cost, running = {}, np.inf
-    for f in sorted(best, reverse=True):
-        running = min(running, best[f])
-        cost[f] = running
-    return cost
+def paired_ratio(func_a, func_b, *, pairs: int = 7, min_time: float = 0.005) -> float:
+    """Median over ``pairs`` alternating measurements of time(func_a) / time(func_b).
+
+    Each measurement loops the call for about ``min_time`` seconds; alternating A and B makes
+    a slow-down of the machine hit both alike.
+    """
+    func_a()
+    func_b()
+    loops = []
+    for f in (func_a, func_b):
+        t0 = time.perf_counter()
+        f()
+        loops.append(max(1, int(min_time / max(time.perf_counter() - t0, 1e-9))))
+    ratios = []
+    for _ in range(pairs):
+        per = []
+        for f, n in zip((func_a, func_b), loops):
+            t0 = time.perf_counter()
+            for _ in range(n):
+                f()
+            per.append((time.perf_counter() - t0) / n)
+        ratios.append(per[0] / per[1])
+    return float(np.median(ratios))
 
 
 def _timer(quick: bool):
@@ -123,19 +140,31 @@ def _timer(quick: bool):
     return lambda f: median_time(f, repeats=11, min_time=0.02)
 
 
-def _distance_row(method, tol, auto_fidelity, auto_error, auto_time, manual, label, bound):
-    """The ``pareto distance`` row of one entry point and tolerance."""
-    cost = _envelope(manual)
-    meeting = [f for f, _, e in manual if e <= tol]
+def _distance_row(method, tol, auto, manual, label, bound, quick):
+    """The ``pareto distance`` row of one entry point and tolerance.
+
+    ``auto`` = (fidelity, error, time, call); ``manual`` = [(fidelity, time, error, call)].
+    """
+    f_auto, e_auto, t_auto, call_auto = auto
+    calls = {f: c for f, _, _, c in manual}
+    meeting = [f for f, _, e, _ in manual if e <= tol] + ([f_auto] if e_auto <= tol else [])
     cheapest = min(meeting) if meeting else None
-    dist = pareto_distance(auto_fidelity, auto_error, manual, tol)
+    measured = {}
+
+    def ratio(f):
+        measured[f] = paired_ratio(call_auto, calls[f], pairs=9 if quick else 15,
+                                   min_time=0.01 if quick else 0.02)
+        return measured[f]
+
+    dist = pareto_distance(f_auto, e_auto, [(f, e) for f, _, e, _ in manual], tol,
+                           cost_ratio=ratio)
     return Row(suite=SUITE, method=method, setting=f"pareto distance tol={tol:g}", error=dist,
                error_kind="excess cost rel",
                reference=f"cheapest manual setting meeting tol ({label}={cheapest})",
-               time_s=auto_time, baseline=f"{label}={cheapest}",
-               ratio=auto_time / cost[cheapest] if cheapest is not None else float("nan"),
-               bound=bound, note=f"auto {label}={auto_fidelity} vs cheapest {cheapest}",
-               extra={"auto": auto_fidelity, "cheapest": cheapest})
+               time_s=t_auto, baseline=f"{label}={cheapest} (side by side)",
+               ratio=measured.get(cheapest, 1.0 if cheapest == f_auto else float("nan")),
+               bound=bound, note=f"auto {label}={f_auto} vs cheapest {cheapest}",
+               extra={"auto": f_auto, "cheapest": cheapest})
 
 
 def _kinematics_rows(quick: bool) -> list[Row]:
@@ -159,7 +188,8 @@ def _kinematics_rows(quick: bool) -> list[Row]:
             t = timer(lambda s=s: s.acceleration(theta_eval, crank_radius=1.0, omega=1.0))
             err = float(np.abs(s.acceleration(theta_err, crank_radius=1.0, omega=1.0)
                                - ref).max())
-            manual.append((n, t, err))
+            manual.append((n, t, err, lambda s=s: s.acceleration(theta_eval, crank_radius=1.0,
+                                                                 omega=1.0)))
             rows.append(Row(suite=SUITE, method=method, setting=f"max_order={n} (manual)",
                             error=err, error_kind="max abs / (r ω²)",
                             reference="exact closed form", time_s=t,
@@ -181,8 +211,9 @@ def _kinematics_rows(quick: bool) -> list[Row]:
                             throughput=n_eval / t, throughput_unit="angles/s", bound=tol,
                             note=f"stated error bound {s.error_bound:.3g}",
                             extra={"max_order": s.max_order, "error_bound": s.error_bound}))
-            rows.append(_distance_row(method, tol, s.max_order, err, t, manual, "max_order",
-                                      0.25))
+            auto = (s.max_order, err, t,
+                    lambda s=s: s.acceleration(theta_eval, crank_radius=1.0, omega=1.0))
+            rows.append(_distance_row(method, tol, auto, manual, "max_order", 0.25, quick))
             rows.append(Row(suite=SUITE, method=method, setting=f"choice cost tol={tol:g}",
                             error=0.0, error_kind="(informational)",
                             reference="order_for_tolerance + coefficients, caches cleared",
@@ -212,7 +243,8 @@ def _stodola_rows(quick: bool) -> list[Row]:
         seen.add(res.iterations)
         t = timer(lambda rtol=rtol: stodola(shaft, rtol=rtol, max_iter=2000))
         err = abs(res.omega - ref.omega) / ref.omega
-        manual.append((res.iterations, t, err))
+        manual.append((res.iterations, t, err,
+                       lambda rtol=rtol: stodola(shaft, rtol=rtol, max_iter=2000)))
         rows.append(Row(suite=SUITE, method=method,
                         setting=f"{res.iterations} iterations (manual)", error=err,
                         error_kind="rel", reference="dense eigh of the lumped model",
@@ -228,11 +260,8 @@ def _stodola_rows(quick: bool) -> list[Row]:
                         error_kind="rel", reference="dense eigh of the lumped model", time_s=t,
                         baseline="lumped_exact (dense eigh)", ratio=t / t_ref, bound=tol,
                         extra={"iterations": res.iterations}))
-        if res.iterations not in seen:        # the auto stop is a manual setting too
-            seen.add(res.iterations)
-            manual.append((res.iterations, t, err))
-        rows.append(_distance_row(method, tol, res.iterations, err, t, manual, "iterations",
-                                  1.0))
+        auto = (res.iterations, err, t, lambda tol=tol: stodola(shaft, rtol=tol, max_iter=2000))
+        rows.append(_distance_row(method, tol, auto, manual, "iterations", 1.0, quick))
     return rows
 
 
@@ -257,7 +286,7 @@ def _coastdown_rows(quick: bool) -> list[Row]:
         prof = from_table(knots, n0 * np.exp(-knots / tau))
         t = timer(lambda prof=prof: prof.angle(t_eval))
         err = error(prof)
-        manual.append((pieces, t, err))
+        manual.append((pieces, t, err, lambda prof=prof: prof.angle(t_eval)))
         rows.append(Row(suite=SUITE, method=method, setting=f"{pieces} pieces (manual)",
                         error=err, error_kind="max abs rpm", reference="n0 exp(-t/tau)",
                         time_s=t, baseline="", throughput=t_eval.size / t,
@@ -272,14 +301,14 @@ def _coastdown_rows(quick: bool) -> list[Row]:
                         error_kind="max abs rpm", reference="n0 exp(-t/tau)", time_s=t,
                         throughput=t_eval.size / t, throughput_unit="angles/s", bound=tol,
                         extra={"pieces": pieces}))
-        if pieces not in {m[0] for m in manual}:
-            manual.append((pieces, t, err))
         if pieces > 1 and pieces - 1 not in {m[0] for m in manual}:
             # one piece fewer, so the front is resolved right below the automatic choice
             knots = np.linspace(0.0, total, pieces)
             fewer = from_table(knots, n0 * np.exp(-knots / tau))
-            manual.append((pieces - 1, timer(lambda p=fewer: p.angle(t_eval)), error(fewer)))
-        rows.append(_distance_row(method, tol, pieces, err, t, manual, "pieces", 0.25))
+            manual.append((pieces - 1, float("nan"), error(fewer),
+                           lambda p=fewer: p.angle(t_eval)))
+        auto = (pieces, err, t, lambda prof=prof: prof.angle(t_eval))
+        rows.append(_distance_row(method, tol, auto, manual, "pieces", 0.25, quick))
     return rows
 
 
