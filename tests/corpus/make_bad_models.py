@@ -1,6 +1,6 @@
-"""Generate the bad-model corpus: engine, shaft-line and rotor TOML files, each wrong in one way.
+"""Generate the bad-model corpus: engine, shaft-line, rotor and scene TOML files, each wrong once.
 
-Every case starts from a small valid model (``ENGINE``, ``SHAFTLINE``, ``ROTOR`` below) and
+Every case starts from a small valid model (``ENGINE``, ``SHAFTLINE``, ``ROTOR``, ``SCENE``) and
 changes one thing: a negative mass or inertia, a rod shorter than the crank, a firing order
 that is not a permutation, a misspelt key, a wrong type, a missing required key, a per-cylinder
 list of the wrong length, a disconnected shaft graph, a gear ratio of 0, a reference to a
@@ -22,7 +22,7 @@ import sys
 from dataclasses import dataclass
 from pathlib import Path
 
-__all__ = ["Case", "CASES", "ENGINE", "SHAFTLINE", "ROTOR", "OUT", "render", "write_corpus"]
+__all__ = ["Case", "CASES", "ENGINE", "SHAFTLINE", "ROTOR", "SCENE", "OUT", "render", "write_corpus"]
 
 OUT = Path(__file__).resolve().parent / "bad" / "models"
 
@@ -154,6 +154,34 @@ kxx = 1.0e6
 kyy = 0.8e6
 """
 
+# A valid scene (measure.synth) on the sample I4 engine and driveline: steady 1500 rpm, 1 s,
+# a 60-2 tacho on the flywheel and a speed channel. Model paths are relative to the corpus
+# folder (tests/corpus/bad/models -> sample_data).
+SCENE = """\
+[scene]
+name = "corpus scene"
+engine = "../../../../sample_data/engines/i4.toml"
+shaftline = "../../../../sample_data/shaftlines/i4.toml"
+seed = 1
+
+[profile]
+kind = "steady"
+speed_rpm = 1500.0
+duration = 1.0
+
+[[sensor]]
+kind = "tacho"
+name = "tacho"
+node = "flywheel"
+pulses_per_rev = 60
+missing_teeth = 2
+
+[[sensor]]
+kind = "speed"
+name = "speed"
+sample_rate = 100.0
+"""
+
 
 @dataclass(frozen=True)
 class Case:
@@ -165,7 +193,8 @@ class Case:
         File stem (``<kind>_<what>``); the file is ``OUT / f"{name}.toml"``.
     kind : str
         Loader: ``"engine"`` (``Engine.from_toml``), ``"shaftline"``
-        (``predict.torsion.from_toml``) or ``"rotor"`` (``predict.lateral.load_rotor``).
+        (``predict.torsion.from_toml``), ``"rotor"`` (``predict.lateral.load_rotor``) or
+        ``"scene"`` (``measure.synth.Scene.from_toml``).
     text : str or bytes
         File content.
     match : tuple of str
@@ -407,8 +436,64 @@ def _rotor_cases() -> list[Case]:
     ]
 
 
+def _scene_cases() -> list[Case]:
+    c = SCENE
+    return [
+        Case("scene_unknown_key_typo", "scene",
+             _add_after(_set(c, "seed", None), 'name = "corpus scene"', "sead = 1"),
+             (r"scene\.sead", r"not a known key", r"did you mean 'seed'"), error="ConfigError"),
+        Case("scene_missing_profile", "scene", c.split("[profile]")[0] + "[[sensor]]" +
+             c.split("[[sensor]]", 1)[1],
+             (r"no \[profile\] table",), error="ConfigError"),
+        Case("scene_profile_kind_typo", "scene", _set(c, "kind", '"stedy"'),
+             (r"profile\.kind", r"'stedy'", r"did you mean 'steady'"), error="ConfigError"),
+        Case("scene_negative_speed", "scene", _set(c, "speed_rpm", "-1500.0"),
+             (r"profile\.speed_rpm", r"-1500\.0", r"must be > 0"), error="ConfigError"),
+        Case("scene_zero_duration", "scene", _set(c, "duration", "0.0"),
+             (r"profile\.duration", r"must be > 0"), error="ConfigError"),
+        Case("scene_runup_end_below_start", "scene",
+             c.replace('kind = "steady"\nspeed_rpm = 1500.0',
+                       'kind = "runup"\nstart_rpm = 3000.0\nend_rpm = 1000.0'),
+             (r"profile\.end_rpm", r"must be above start_rpm"), error="ConfigError"),
+        Case("scene_missing_engine_file", "scene",
+             _set(c, "engine", '"no_such_engine.toml"'),
+             (r"scene\.engine", r"no_such_engine\.toml", r"does not exist"),
+             error="FileNotFoundError"),
+        Case("scene_bad_engine_file", "scene",
+             _set(c, "engine", '"engine_rod_shorter_than_crank.toml"'),
+             (r"rod_length=0\.03", r"must exceed crank_radius"), error="ModelError",
+             file="engine_rod_shorter_than_crank.toml"),
+        Case("scene_sensor_kind_typo", "scene", _set(c, "kind", '"tahco"', nth=1),
+             (r"sensor\[0\]\.kind", r"is not one of", r"did you mean 'tacho'"),
+             error="ConfigError"),
+        Case("scene_sensor_name_with_space", "scene", _set(c, "name", '"tacho 1"', nth=1),
+             (r"sensor\[0\]\.name", r"'tacho 1'", r"letters, digits and underscores"),
+             error="ConfigError"),
+        Case("scene_sensor_names_repeated", "scene", _set(c, "name", '"tacho"', nth=2),
+             (r"sensor names must be unique", r"tacho"), error="ConfigError",
+             fault="Scene.__init__ checks (sensors, names, nodes) raise without the file name; "
+                   "Scene.from_toml does not prefix them (measure/synth/scene.py)"),
+        Case("scene_too_many_missing_teeth", "scene", _set(c, "missing_teeth", "59"),
+             (r"sensor\[0\]\.missing_teeth", r"= 59 must be less than pulses_per_rev - 1"),
+             error="ConfigError"),
+        Case("scene_sensor_node_unknown", "scene", _set(c, "node", '"flywheeel"'),
+             (r"sensor 'tacho' node='flywheeel' is not a shaft-line node",
+              r"did you mean 'flywheel'"), error="ConfigError",
+             fault="Scene.__init__ checks (sensors, names, nodes) raise without the file name; "
+                   "Scene.from_toml does not prefix them (measure/synth/scene.py)"),
+        Case("scene_no_sensors", "scene", c.split("[[sensor]]")[0],
+             (r"no sensors", r"\[\[sensor\]\]"), error="ConfigError",
+             fault="Scene.__init__ checks (sensors, names, nodes) raise without the file name; "
+                   "Scene.from_toml does not prefix them (measure/synth/scene.py)"),
+        Case("scene_negative_sample_rate", "scene", _set(c, "sample_rate", "-100.0"),
+             (r"sensor\[1\]\.sample_rate", r"must be > 0"), error="ConfigError"),
+        Case("scene_negative_seed", "scene", _set(c, "seed", "-1"),
+             (r"scene\.seed", r"= -1 must be >= 0"), error="ConfigError"),
+    ]
+
+
 def _all_cases() -> list[Case]:
-    cases = _engine_cases() + _shaftline_cases() + _rotor_cases()
+    cases = _engine_cases() + _shaftline_cases() + _rotor_cases() + _scene_cases()
     names = [c.name for c in cases]
     dup = {n for n in names if names.count(n) > 1}
     if dup:

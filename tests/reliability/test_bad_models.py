@@ -43,6 +43,10 @@ def _loader(kind):
         from predict.torsion import from_toml
 
         return from_toml
+    if kind == "scene":
+        from measure.synth.scene import Scene
+
+        return Scene.from_toml
     from predict.lateral import load_rotor
 
     return load_rotor
@@ -79,7 +83,8 @@ def test_corpus_covers_every_kind_of_wrong_field():
 def test_bad_model_raises_named_error(case):
     """Load the file: our error class, the file named, every expected phrase in the message."""
     path = gen.OUT / f"{case.name}.toml"
-    with pytest.raises(CrankbenchError) as info:
+    expected = FileNotFoundError if case.error == "FileNotFoundError" else CrankbenchError
+    with pytest.raises(expected) as info:
         _loader(case.kind)(path)
     exc = info.value
     message = str(exc)
