@@ -143,3 +143,9 @@ def test_errors_name_the_argument():
         endurance_limit(600e6, surface_factor=1.5)
     with pytest.raises(ModelError, match="history contains 1 NaN/inf"):
         rainflow([1.0, np.nan])
+
+
+def test_result_plots_return_figures():
+    c = rainflow([0.0, 2.0, -1.0, 3.0, -2.0, 1.0])
+    assert c.plot().axes and c.to_frame().shape[1] == 3
+    assert StressPoint(1e6, 2e6).plot().axes

@@ -236,3 +236,17 @@ def test_model_errors_name_the_item():
         _jeffcott().unbalance_response([10.0], [(0.3, 1e-4, 0.0)], probes=[0.123])
     with pytest.raises(ModelError, match="rigid bearing direction cannot carry cross-coupling"):
         Bearing(0.0, RIGID, kxy=1.0)
+
+
+def test_result_frames_and_plots():
+    rotor = Rotor(shaft=[ShaftSection(1.0, 0.05, material=STEEL)],
+                  disks=[Disk(0.5, 20.0, 0.1, 0.2)], bearings=[Bearing(0.0, 1e7), Bearing(1.0, 1e7)])
+    modes = rotor.natural_frequencies(400.0, n_modes=4)
+    frame = modes.to_frame()
+    assert list(frame.columns[:5]) == ["mode", "frequency_hz", "frequency_rpm", "damping_ratio",
+                                       "whirl"]
+    assert modes.plot().axes
+    crit = rotor.critical_speeds(n_modes=2)
+    assert list(crit.to_frame().columns) == ["mode", "order", "whirl", "speed_rpm", "omega",
+                                             "frequency_hz"]
+    assert crit.plot().axes
