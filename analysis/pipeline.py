@@ -128,6 +128,10 @@ class PipelineResult:
         Every parameter used.
     timings : dict
         Seconds per step.
+    balance : tuple of (channel, BalanceComparison or None, pandas.DataFrame)
+        Orders 1 and 2 at each vibrograph mounted at a named mount: the comparison with the
+        predicted balance residuals through the mount model (None when the prediction is zero
+        by design), and a table of predicted and measured maxima per order.
     """
 
     source: str
@@ -150,6 +154,7 @@ class PipelineResult:
     record: object = field(repr=False)
     settings: dict = field(default_factory=dict)
     timings: dict = field(default_factory=dict)
+    balance: tuple = ()
 
     @property
     def passed(self) -> bool:
@@ -494,6 +499,10 @@ def analyse(record, model, *, channel=None, speed_channel=None, orders=None, max
                                  speed_range_rpm=(lo, hi))
     done("comparison")
 
+    step("balance")
+    balance = _balance(rec, system, lo, hi)
+    done("balance")
+
     step("limits")
     limits = _limit_checks(rec, system, track, grid, pred_stress, response_da, all_orders,
                            channel, machine_class, operating_range_rpm)
@@ -532,7 +541,79 @@ def analyse(record, model, *, channel=None, speed_channel=None, orders=None, max
         speed_range_rpm=(lo, hi), sweep_rate_rpm_per_s=sweep_rate, track=track,
         resonances=resonances, predicted=predicted, response=response_da,
         comparison=comparison, limits=tuple(limits), system=system, record=rec,
-        settings=settings, timings=timings)
+        settings=settings, timings=timings, balance=tuple(balance))
+
+
+def _balance(rec, system, lo, hi, orders=(1.0, 2.0)):
+    """Orders 1 and 2 at the mounts against the balance residuals through the mount model.
+
+    The predicted response is that of the free inertia forces and moments only
+    (:func:`predict.balance.unbalance`, through :class:`predict.mounts.MountedEngine`, via
+    :class:`measure.synth.vibrograph.MountChannels` without torque reaction): the orders a
+    balance check is about. Orders balanced by design (prediction below 1e-9 of the
+    measurement) are listed with their measured residual level only.
+    """
+    import pandas as pd
+    import xarray as xr
+
+    from .compare import compare_balance
+    from .orders import order_track
+    from .speedref import speed_reference
+
+    engine = getattr(system, "engine", None)
+    source = getattr(engine, "source", None)
+    if engine is None or not source:
+        return []
+    try:
+        from predict.mounts import MountedEngine
+
+        mounted = MountedEngine.from_toml(source)
+    except (ValueError, OSError, KeyError):
+        return []  # no [mounts] in the engine model
+    names = {m.name: m.position for m in mounted.mounts}
+    out = []
+    for name in rec.data_vars:
+        v = rec[name]
+        q = v.attrs.get("quantity")
+        direction = str(v.attrs.get("direction", "")).lower()
+        if q not in ("acceleration", "velocity", "displacement") or v.ndim != 1 or \
+                v.attrs.get("location") not in names or direction not in ("x", "y", "z"):
+            continue
+        from measure.synth.vibrograph import MountChannels
+
+        grid = np.linspace(lo, hi, 60) * np.pi / 30.0
+        mc = MountChannels(mounted, engine, None, list(orders), [names[v.attrs["location"]]],
+                           grid)
+        pred = np.vstack([np.abs(mc.table(i, 0, direction, q)) for i in range(len(orders))])
+        predicted = xr.DataArray(pred, dims=("order", "rpm"),
+                                 coords={"order": list(orders), "rpm": grid * 30 / np.pi},
+                                 attrs={"units": v.attrs.get("units", "")})
+        fs = float(v.attrs["sample_rate"])
+        rpm = speed_reference(rec, str(name))
+        x = np.nan_to_num(np.asarray(v.values, float))
+        track = order_track(x, fs=fs, rpm=np.nan_to_num(rpm, nan=float(np.nanmedian(rpm))),
+                            orders=list(orders), revolutions=8, overlap=0.5)
+        rows = []
+        live = []
+        for i, o in enumerate(orders):
+            m_max = float(track["amplitude"].sel(order=o).max())
+            p_max = float(pred[i].max())
+            balanced = p_max <= 1e-9 * max(m_max, 1e-300)
+            rows.append(dict(order=o, predicted_max=p_max, measured_max=m_max,
+                             balanced_by_design=balanced))
+            if not balanced:
+                live.append(o)
+        comp = None
+        if live:
+            try:
+                comp = compare_balance(track, predicted, orders=live,
+                                       channel=f"{name} ({v.attrs['location']} {direction})")
+            except AnalysisError as exc:
+                log.info("balance comparison at %s skipped: %s", name, exc)
+        table = pd.DataFrame(rows)
+        table.attrs["units"] = v.attrs.get("units", "")
+        out.append((str(name), comp, table))
+    return out
 
 
 def _limit_checks(rec, system, track, grid, pred_stress, response, orders, channel, machine_class,
