@@ -135,3 +135,15 @@ def test_input_errors_are_named():
         two_plane([1.0, 1.0, 1.0], np.ones((2, 3)), [1.0, 1.0])
     with pytest.raises(ModelError, match="amplitude must be >= 0"):
         phasor(-1.0, 0.0)
+
+
+def test_nearly_dependent_trial_weight_sets_warn():
+    """Both runs carry almost the same trial-weight set: the trial-mass matrix is
+    ill-conditioned and the influence matrix cannot be separated reliably."""
+    A = np.array([[2.0 + 1j, 0.5], [0.3j, 1.5 - 0.5j]])
+    u0 = np.array([0.01, 0.006j])
+    masses = np.array([[0.01, 0.01], [0.01, 0.0102]])
+    runs = np.array([A @ (u0 + m) for m in masses])
+    with pytest.warns(BalanceWarning, match=r"trial-mass matrix condition .* nearly dependent"):
+        r = influence_balance(A @ u0, runs, masses)
+    assert r.trial_condition > 30
