@@ -122,3 +122,31 @@ def test_batch_reports_failures_and_resumes(demo_dir, tmp_path, capsys):
     assert time.perf_counter() - t0 < 20
     rows = {Path(r["record"]).name: r for r in csv.DictReader(summary.open())}
     assert rows["a.h5"]["status"] == "cached" and rows["broken.h5"]["status"] == "error"
+
+
+@pytest.mark.slow
+def test_batch_on_a_distributed_scheduler(demo_dir, tmp_path):
+    distributed = pytest.importorskip(
+        "distributed", reason="dask.distributed not installed (pip install 'crankbench[distributed]')")
+    out, _ = demo_dir
+    summary = tmp_path / "dist.csv"
+    with distributed.LocalCluster(n_workers=1, threads_per_worker=2, processes=False,
+                                  dashboard_address=None) as cluster:
+        status = main(["-q", "batch", str(out / "marine_6l_runup.h5"), "--model", str(MODEL),
+                       "-o", str(summary), "--no-cache", "--method", "cot",
+                       "--scheduler", cluster.scheduler_address])
+    assert status == 0
+    rows = list(csv.DictReader(summary.open()))
+    assert len(rows) == 1 and rows[0]["status"] == "ok"
+
+
+def test_batch_without_distributed_names_the_extra(tmp_path, capsys, monkeypatch):
+    import sys
+
+    monkeypatch.setitem(sys.modules, "distributed", None)  # import now raises ImportError
+    record = tmp_path / "r.h5"
+    record.write_bytes(b"x")
+    status = main(["batch", str(record), "--model", str(MODEL), "-o", str(tmp_path / "s.csv"),
+                   "--scheduler", "tcp://127.0.0.1:1", "--no-cache"])
+    assert status == 2
+    assert "pip install 'crankbench[distributed]'" in capsys.readouterr().err
