@@ -82,7 +82,11 @@ class Table:
         if key in self.data:
             return self.data[key]
         if default is ... or required:
-            self.fail(key, "is missing (required)")
+            unread = [k for k in self.data if k not in self._used]
+            hint = suggest(key, unread)
+            if hint:  # a present key that looks like a misspelling of this one
+                hint = f"; found {hint[len(' (did you mean '):-2]} — a misspelling of {key!r}?"
+            self.fail(key, f"is missing (required){hint}")
         return default
 
     def table(self, key: str, default: Any = ...) -> "Table":
@@ -170,7 +174,8 @@ class Table:
             bad = arr <= low if strict_low else arr < low
             if bad.any():
                 i = int(np.flatnonzero(bad)[0])
-                self.fail(f"{key}[{i}]", f"= {arr[i]!r} must be {'>' if strict_low else '>='} {low:g}")
+                self.fail(f"{key}[{i}]",
+                          f"= {float(arr[i]):g} must be {'>' if strict_low else '>='} {low:g}")
         return arr
 
     def check_unknown(self, extra_allowed: Iterable[str] = ()) -> None:

@@ -95,7 +95,13 @@ def write_outputs(frame, directory, *, overwrite: bool = False) -> None:
     from analysis._output import to_jsonable
     from measure._atomic import atomic_path
 
+    from measure._atomic import check_overwrite
+
     out = Path(directory)
+    targets = [out / "bench.csv", out / "bench.json",
+               *(out / f"{suite}.png" for suite in frame["suite"].unique())]
+    for target in targets:  # refuse before writing anything: no mixed old/new output set
+        check_overwrite(target, overwrite, option="--overwrite")
     out.mkdir(parents=True, exist_ok=True)
     with atomic_path(out / "bench.csv", overwrite=overwrite, option="--overwrite") as tmp:
         frame.to_csv(tmp, index=False)

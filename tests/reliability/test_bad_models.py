@@ -105,8 +105,6 @@ def test_bad_model_message_has_no_numpy_repr(name):
     assert "np.float64" not in str(info.value)
 
 
-@pytest.mark.xfail(strict=True, reason="Table.numbers formats a bad element with repr() of a "
-                   "numpy scalar: 'rotating_mass[2] = np.float64(-0.1)' (predict/_toml.py)")
 def test_bad_list_element_message_has_no_numpy_repr():
     path = gen.OUT / "engine_negative_mass_in_list.toml"
     with pytest.raises(ModelError) as info:
