@@ -167,7 +167,8 @@ def _interp(x: np.ndarray, u: np.ndarray, method: str) -> np.ndarray:
     return np.einsum("ij,ij->i", w, x[idx])
 
 
-def _antialias_taps(samples_per_rev: int, rpm_min: float, rpm_max: float, fs: float):
+def _antialias_taps(samples_per_rev: int, rpm_min: float, rpm_max: float, fs: float,
+                    n: int | None = None):
     """Linear-phase FIR low-pass protecting orders <= samples_per_rev/4 from aliasing.
 
     Pass band up to ``samples_per_rev/4`` orders at the chunk's top speed, stop band from
@@ -186,6 +187,11 @@ def _antialias_taps(samples_per_rev: int, rpm_min: float, rpm_max: float, fs: fl
             f"speed varies too much within one chunk ({rpm_min:.6g}..{rpm_max:.6g} rpm) for "
             f"samples_per_rev={samples_per_rev}; raise samples_per_rev or lower chunk")
     numtaps, beta = signal.kaiserord(100.0, (f_stop - f_pass) / (0.5 * fs))
+    if n is not None and numtaps > n:  # check before designing: the filter could be huge
+        raise AnalysisError(
+            f"the anti-alias filter for {rpm_min:.6g}..{rpm_max:.6g} rpm at fs = {fs:.6g} Hz needs "
+            f"{numtaps} taps, more than the {n} samples of the record: the speed is far too low "
+            "for this sample rate (is rpm in rpm, not rad/s or Hz?) or the record too short")
     numtaps |= 1  # odd: integer group delay, so the filtered signal stays on the sample grid
     return signal.firwin(numtaps, 0.5 * (f_pass + f_stop), window=("kaiser", beta), fs=fs)
 
@@ -270,7 +276,13 @@ def angle_resample(x, *, fs=None, rpm, samples_per_rev: int = 64, interpolation:
     t = np.arange(n) / fs
     dphi = 2.0 * np.pi / samples_per_rev
     bounds = _chunk_bounds(speed, chunk)
-    taps = [_antialias_taps(samples_per_rev, speed[a:b].min(), speed[a:b].max(), fs)
+    per_rev = 60.0 * fs / float(speed.max())
+    if per_rev < 2.0:
+        raise AnalysisError(
+            f"rpm up to {float(speed.max()):.6g} at fs = {fs:.6g} Hz leaves {per_rev:.3g} time "
+            "samples per revolution (at least 2 needed): check the speed units (rpm expected) "
+            "and the sample rate")
+    taps = [_antialias_taps(samples_per_rev, speed[a:b].min(), speed[a:b].max(), fs, n)
             if antialias else None for a, b in zip(bounds[:-1], bounds[1:])]
     half = [0 if h is None else h.shape[0] // 2 for h in taps]
     margin = _SINC_HALF + 2
