@@ -334,6 +334,13 @@ def open(path, *, chunk_seconds: float = 10.0, channels=None) -> xr.Dataset:  # 
         Lazily loaded Record (attrs ``source`` and ``sha256`` set; NaN scan left to the
         consumer). Use :func:`iter_blocks` or dask reductions to process it.
 
+    Notes
+    -----
+    For ``.h5`` the regular time coordinates are lazy :class:`xarray.indexes.RangeIndex`
+    objects (no time array in memory). xarray's RangeIndex selects by position (``isel``) or
+    with ``sel(..., method="nearest")``; label slices and alignment with records read by
+    :func:`read` (pandas index) are not supported — ``isel`` by ``round(t * sample_rate)``.
+
     Examples
     --------
     >>> import tempfile, pathlib

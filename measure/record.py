@@ -88,7 +88,12 @@ def nonfinite_spans(values: np.ndarray) -> list[tuple[int, int]]:
     >>> nonfinite_spans(np.array([1.0, np.nan, np.nan, 2.0, np.inf]))
     [(1, 3), (4, 5)]
     """
-    bad = ~np.isfinite(np.asarray(values))
+    values = np.asarray(values)
+    if values.size and values.dtype.kind == "f":
+        with np.errstate(invalid="ignore"):  # -inf + inf
+            if np.isfinite(values.min() + values.max()):
+                return []  # min/max propagate NaN and inf: two reductions clear the usual case
+    bad = ~np.isfinite(values)
     if not bad.any():
         return []
     edges = np.diff(np.concatenate(([0], bad.view(np.int8), [0])))
@@ -124,10 +129,17 @@ def clipped_spans(values: np.ndarray, *, min_run: int = 3) -> list[tuple[int, in
     x = np.asarray(values)
     if x.dtype.kind != "f":
         x = x.astype(np.float64)
-    finite = np.isfinite(x)
-    if not finite.any():
+    if x.size == 0:
         return []
-    hi, lo = np.max(x, where=finite, initial=-np.inf), np.min(x, where=finite, initial=np.inf)
+    with np.errstate(invalid="ignore"):
+        hi, lo = x.max(), x.min()
+    if np.isfinite(hi) and np.isfinite(lo):
+        finite = None  # all finite (NaN/inf would propagate into min/max)
+    else:
+        finite = np.isfinite(x)
+        if not finite.any():
+            return []
+        hi, lo = np.max(x, where=finite, initial=-np.inf), np.min(x, where=finite, initial=np.inf)
     if hi == lo:
         return []
     spans = []
@@ -143,9 +155,10 @@ def clipped_spans(values: np.ndarray, *, min_run: int = 3) -> list[tuple[int, in
         if starts.size < 2:
             continue
         if step is None:  # quantisation step: smallest gap between distinct values
-            levels = np.unique(x[finite])
+            levels = np.unique(x if finite is None else x[finite])
             step = float(np.diff(levels).min()) if levels.size > 1 else 0.0
-        entries = [abs(float(x[a - 1]) - level) for a in starts if a > 0 and finite[a - 1]]
+        entries = [abs(float(x[a - 1]) - level) for a in starts
+                   if a > 0 and math.isfinite(float(x[a - 1]))]
         if entries and np.median(entries) <= 2 * step:
             continue
         spans += [(int(a), int(b)) for a, b in zip(starts, stops)]
