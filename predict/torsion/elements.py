@@ -336,6 +336,32 @@ class ShaftLine:
                      speed2=speed2, name=name)
 
     # ---------------------------------------------------------------- build -------------
+    def _check_connected(self, nodes, edges) -> None:
+        """Refuse a shaft line in several pieces (ground not counted as a joint): each piece
+        would be a separate machine with its own rigid-body mode, almost always a missing
+        shaft or coupling in the model."""
+        parent = list(range(len(nodes)))
+
+        def root(i):
+            while parent[i] != i:
+                parent[i] = parent[parent[i]]
+                i = parent[i]
+            return i
+
+        for a, b in edges:
+            if a >= 0:
+                parent[root(a)] = root(b)
+        pieces: dict[int, list[str]] = {}
+        for i, node in enumerate(nodes):
+            pieces.setdefault(root(i), []).append(node["name"])
+        if len(pieces) > 1:
+            shown = " and ".join(
+                "{" + (repr(p[0]) if len(p) == 1 else f"{p[0]!r} … {p[-1]!r}") + "}"
+                for p in pieces.values())
+            raise ModelError(f"{self.name}: the shaft line is not connected: it falls into "
+                             f"{len(pieces)} pieces, {shown}; join them with a shaft, coupling "
+                             "or gear")
+
     def build(self, *, limits=None) -> TorsionalSystem:
         """Assemble the :class:`TorsionalSystem` (merged gear nodes removed)."""
         keep = [i for i, n in enumerate(self._nodes) if "merged_into" not in n]
@@ -347,6 +373,7 @@ class ShaftLine:
         edges = self._edges
         e = np.array([[(-1 if d["a"] < 0 else new[d["a"]]), new[d["b"]]] for d in edges],
                      int).reshape(-1, 2)
+        self._check_connected(nodes, e)
         cylinders = [new[self._cylinders[c]] for c in sorted(self._cylinders)]
         firing = None
         cycle = 4
