@@ -1,0 +1,258 @@
+"""The sweep-rate effect: an SDOF mode passed through at a finite rate.
+
+The swept response envelope (exponential integrator on the resonant pole), the peak loss,
+shift and apparent damping it causes, the inversion of the apparent damping, and the
+swept-SDOF fit of an order track.
+"""
+
+from __future__ import annotations
+
+import logging
+
+import numpy as np
+
+from predict._validate import check_option, check_positive, check_range
+from predict.errors import AnalysisError
+
+from .sdof import RESPONSES, _modal_fit, _peak_and_half_power, half_power_damping
+
+__all__ = ["sweep_peak_loss"]
+
+def _swept_envelope(zeta, s, p, *, lead=None, lag=None):
+    """Response envelope of an SDOF through a linear sweep, in normalised time τ = ω_n t.
+
+    ``z'' + 2ζz' + z = exp(iφ)`` with ``φ' = ν(τ) = ν₀ + sτ``. By partial fractions
+    ``z = (q₁ − q₂)/(λ₁ − λ₂)`` with ``q_j' = λ_j q_j + exp(iφ)`` and poles
+    ``λ₁,₂ = −ζ ± i√(1 − ζ²)``. Writing ``q_j = u_j exp(iφ)``: ``u_j' = (λ_j − iν)u_j + 1``.
+    The resonant pole's ``u₁`` is stepped exactly for ν frozen at each step's midpoint
+    (exponential integrator, linear recurrence evaluated by chunked cumulative products); the
+    non-resonant ``u₂`` follows quasi-statically (relative error O(sζ)).
+    Returns (ν, complex response envelope).
+    """
+    direction = 1.0 if s > 0 else -1.0
+    a = abs(s)
+    lead = max(8.0 * zeta, 0.02) if lead is None else lead
+    # the swept peak trails resonance by ~ a/ζ (slow sweeps) or ~ √a (fast sweeps)
+    lag = max(8.0 * zeta, 0.02) + 10.0 * np.sqrt(a) if lag is None else lag
+    nu0 = max(1.0 - direction * lead, 0.05)
+    nu1 = max(1.0 + direction * lag, 0.05)
+    tau_end = abs(nu1 - nu0) / a
+    wd = np.sqrt(1.0 - zeta**2)
+    lam1, lam2 = complex(-zeta, wd), complex(-zeta, -wd)
+    # frozen-ν exponential steps: exact rotation and decay, error O(s h²) per step; the ν
+    # resolution s·h ≤ ζ/50 resolves the peak (checked against h → h/100: < 2e-6 relative)
+    h = min(np.sqrt(2e-3 / a), 0.02 * max(zeta, np.sqrt(a)) / a)
+    n = int(np.clip(np.ceil(tau_end / h), 200, 400_000))
+    h = tau_end / n
+    tau = np.arange(n + 1) * h
+    nu = nu0 + s * tau
+    mu = lam1 - 1j * (nu0 + s * (tau[:-1] + 0.5 * h))
+    step_a = np.exp(mu * h)
+    step_b = np.expm1(mu * h) / mu
+    mu0 = lam1 - 1j * nu0
+    u1 = np.empty(n + 1, dtype=complex)
+    u1[0] = -1.0 / mu0 - 1j * s / mu0**3  # quasi-static start with its first sweep correction
+    chunk = 256
+    for k0 in range(0, n, chunk):  # u_{k+1} = A_k u_k + B_k, |cumprod(A)| stays O(1) per chunk
+        A = step_a[k0:k0 + chunk]
+        B = step_b[k0:k0 + chunk]
+        P = np.cumprod(A)
+        u1[k0 + 1:k0 + 1 + A.size] = P * (u1[k0] + np.cumsum(B / P))
+    u2 = 1.0 / (1j * nu - lam2)
+    w = (u1 - u2) / (lam1 - lam2)
+    v = (lam1 * u1 - lam2 * u2) / (lam1 - lam2)
+    if p == 0:
+        env = w
+    elif p == 1:
+        env = v
+    else:  # z'' = e^{iφ} − 2ζz' − z
+        env = 1.0 - 2.0 * zeta * v - w
+    return nu, env
+
+
+def sweep_peak_loss(*, natural_frequency, damping_ratio, sweep_rate, response="displacement"):
+    """Peak loss, peak shift and apparent damping of an SDOF mode swept at a constant rate.
+
+    The SDOF response to ``exp(iφ(t))`` is integrated through the resonance from a
+    quasi-static start with an exponential integrator on the resonant pole (exact for a
+    frozen frequency within each step); the envelope is read
+    against the instantaneous excitation frequency, as an order track reads amplitude
+    against rpm. Cost: a few thousand vectorised steps, about 1 ms.
+
+    Parameters
+    ----------
+    natural_frequency : float
+        f_n, Hz.
+    damping_ratio : float
+        ζ of the mode (true, not apparent).
+    sweep_rate : float
+        Rate of change of the excitation frequency α, Hz/s; negative for a run-down. For order
+        ``k`` of a run-up at ``R`` rpm/s, ``α = k R / 60``.
+    response : {'displacement', 'velocity', 'acceleration'}
+
+    Returns
+    -------
+    dict
+        ``loss`` (fraction of the steady-state peak lost, ≥ 0 for slow sweeps), ``shift``
+        (f_peak,swept − f_peak,steady in Hz, same sign as the sweep), ``apparent_damping``
+        (half-power damping ratio read off the swept envelope), ``eta`` (α/(ζ f_n)²).
+
+    Notes
+    -----
+    The loss depends only on ζ and η; below η = 0.02 it is under 1e-4 and the integration is
+    skipped (returns zeros). Integration error < 1e-5 relative (checked against halved steps
+    and an adaptive Runge–Kutta solution in the tests).
+
+    References
+    ----------
+    Lewis, F. M., "Vibration during acceleration through a critical speed", Trans. ASME 54
+    (1932) 253–261; Reed & Kabe, "Peak response of single-degree-of-freedom systems to
+    swept-frequency excitation", The Mathematica Journal 21 (2019).
+
+    Examples
+    --------
+    >>> r = sweep_peak_loss(natural_frequency=10.0, damping_ratio=0.02, sweep_rate=0.2)
+    >>> print(f"eta={r['eta']:.2f} loss={r['loss']:.3f}")
+    eta=5.00 loss=0.082
+    """
+    check_option(response, "response", RESPONSES)
+    fn = check_positive(natural_frequency, "natural_frequency", error=AnalysisError)
+    zeta = check_range(damping_ratio, "damping_ratio", 0.0, 0.5, inclusive=(False, True),
+                       error=AnalysisError)
+    alpha = check_range(sweep_rate, "sweep_rate", error=AnalysisError)
+    eta = abs(alpha) / (zeta * fn) ** 2
+    if eta < 0.02:
+        return {"loss": 0.0, "shift": 0.0, "apparent_damping": zeta, "fit_damping": zeta,
+                "fit_shift": 0.0, "eta": eta}
+    return _sweep_effect(zeta, alpha / (2.0 * np.pi * fn**2), RESPONSES[response], fn,
+                         complex_data=True) | {"eta": float(eta)}
+
+
+def _sweep_effect(zeta, s, p, fn, *, complex_data):
+    """Loss, peak shift, half-power and modal-fit damping/shift read off a swept envelope."""
+    nu, env = _swept_envelope(zeta, s, p)
+    order = np.argsort(nu)
+    nu, env = nu[order], env[order]
+    mag = np.abs(env)
+    nu_pk, env_pk, nu1, nu2 = _peak_and_half_power(nu, mag)
+    # steady-state peak of the same response, on a fine grid around ν = 1
+    grid = np.linspace(max(1.0 - 6 * zeta, 0.01), 1.0 + 6 * zeta, 4001)
+    steady = np.abs((1j * grid) ** p / (1.0 - grid**2 + 2j * zeta * grid))
+    g_pk, s_pk, _, _ = _peak_and_half_power(grid, steady)
+    apparent = fit_zeta = fit_shift = np.nan
+    if np.isfinite(nu1) and np.isfinite(nu2) and nu2 > nu1 > 0:
+        apparent, nu_hp = half_power_damping(nu1, nu2, response=list(RESPONSES)[p])
+        half = 0.5 * (nu2 - nu1)
+        win = (nu >= nu_pk - 3 * half) & (nu <= nu_pk + 3 * half)
+        sel = np.flatnonzero(win)
+        if sel.size > 400:  # the fit needs shape, not every integration step
+            sel = sel[np.linspace(0, sel.size - 1, 400).astype(int)]
+        if sel.size >= 7:
+            data = env[sel] if complex_data else mag[sel]
+            fit = _modal_fit(nu[sel], data, nu_hp, apparent, p, complex_data)
+            if fit is not None:
+                fit_zeta, fit_shift = fit[1], (fit[0] - 1.0) * fn
+    return {"loss": float(1.0 - env_pk / s_pk), "shift": float((nu_pk - g_pk) * fn),
+            "apparent_damping": float(apparent), "fit_damping": float(fit_zeta),
+            "fit_shift": float(fit_shift)}
+
+
+def _ascending(x, y):
+    order = np.argsort(x)
+    return x[order], y[order]
+
+
+def _deinflate(zeta_app, fn, alpha, p, key, complex_data):
+    """True ζ whose swept estimate ``key`` ('fit_damping' or 'apparent_damping') equals the
+    apparent ``zeta_app``; returns (ζ, sweep effect dict) or None when no ζ explains it."""
+    from scipy.optimize import brentq
+
+    s = alpha / (2.0 * np.pi * fn**2)
+    cache = {}
+
+    def effect(z):
+        if z not in cache:
+            cache[z] = _sweep_effect(z, s, p, fn, complex_data=complex_data)
+        return cache[z]
+
+    def gap(z):
+        value = effect(z)[key]
+        return (value if np.isfinite(value) else np.inf) - zeta_app
+
+    # the half-power damping is inflated by a sweep; the modal-fit damping barely moves and
+    # may fall slightly below the true value: bracket on both sides
+    lo, hi = max(0.2 * zeta_app, 1e-3), min(3.0 * zeta_app, 0.5)
+    if hi <= lo:
+        return None
+    g_lo, g_hi = gap(lo), gap(hi)
+    if not (np.isfinite(g_lo) and g_lo < 0 < g_hi):
+        return None
+    z = float(brentq(gap, lo, hi, xtol=1e-5 * zeta_app, rtol=1e-6))
+    return z, effect(z)
+
+
+
+def _swept_fit(x, c, order, rate, fn0, zeta0, p, complex_data):
+    """SDOF fit that models the sweep: c ≈ R E(x; fn, ζ, sweep) + B0 + B1 (x − x̄)/x̄.
+
+    ``E`` is the swept envelope of :func:`_swept_envelope` read at the data's instantaneous
+    speeds; ``x`` and ``fn`` in rpm of this order, ``rate`` in rpm/s. Variable projection as in
+    :func:`_modal_fit`. Returns (fn, ζ, r2, steady-state peak amplitude) or None.
+    """
+    from scipy.optimize import least_squares
+
+    xm = float(np.mean(x))
+    lin = (x - xm) / xm
+    up = rate > 0
+
+    def envelope(theta):
+        fn = np.exp(theta[0])
+        zeta = np.exp(theta[1])
+        fn_hz = fn * order / 60.0
+        s = (order * rate / 60.0) / (2.0 * np.pi * fn_hz**2)
+        below = max(1.0 - x.min() / fn, 0.0) + 2.0 * zeta
+        above = max(x.max() / fn - 1.0, 0.0) + 2.0 * zeta
+        lead, lag = (below, above) if up else (above, below)
+        lead = max(lead, 8.0 * zeta, 0.02)
+        lag = max(lag, 8.0 * zeta, 0.02)
+        nu, env = _swept_envelope(zeta, s, p, lead=lead, lag=lag)
+        k = np.argsort(nu)
+        nu, env = nu[k], env[k]
+        xi = x / fn
+        e = np.interp(xi, nu, env.real) + 1j * np.interp(xi, nu, env.imag)
+        return e if complex_data else np.abs(e)
+
+    def solve(theta):
+        a = np.column_stack([envelope(theta), np.ones_like(x), lin])
+        coef, *_ = np.linalg.lstsq(a, c, rcond=None)
+        return coef, c - a @ coef
+
+    def fun(theta):
+        _, res = solve(theta)
+        return np.concatenate([res.real, res.imag]) if complex_data else res
+
+    theta0 = np.array([np.log(fn0), np.log(min(max(zeta0, 2e-3), 0.4))])
+    lower = [np.log(x.min()), np.log(1e-3)]
+    upper = [np.log(x.max()), np.log(0.45)]
+    theta0 = np.clip(theta0, np.add(lower, 1e-9), np.subtract(upper, 1e-9))
+    try:
+        # the simulation's step count changes with ζ: difference over a resolvable step
+        sol = least_squares(fun, theta0, method="trf", bounds=(lower, upper), diff_step=1e-4,
+                            xtol=1e-9, ftol=1e-10, max_nfev=60)
+    except (ValueError, np.linalg.LinAlgError, FloatingPointError):
+        return None
+    if not np.all(np.isfinite(sol.x)):
+        return None
+    coef, res = solve(sol.x)
+    total = np.sum(np.abs(c - np.mean(c)) ** 2)
+    r2 = 1.0 - np.sum(np.abs(res) ** 2) / total if total > 0 else 0.0
+    fn, zeta = float(np.exp(sol.x[0])), float(np.exp(sol.x[1]))
+    # the steady-state order amplitude the fitted model predicts: same R and background, the
+    # steady SDOF response in place of the swept envelope
+    xg = np.linspace(x.min(), x.max(), 4001)
+    nu = xg / fn
+    h = (1j * nu) ** p / (1.0 - nu**2 + 2j * zeta * nu)
+    steady = coef[0] * (h if complex_data else np.abs(h)) + coef[1] + coef[2] * (xg - xm) / xm
+    return fn, zeta, float(r2), float(np.max(np.abs(steady)))
+
+
