@@ -10,6 +10,7 @@ from other tools are accepted when each variable carries a ``units`` attr (any s
 from __future__ import annotations
 
 import numpy as np
+import pandas as pd
 import xarray as xr
 
 from predict.errors import RecordError
@@ -65,7 +66,7 @@ def _convert(ds: xr.Dataset, file: str, *, lazy: bool) -> xr.Dataset:
     coords = {}
     for c in ds.coords:
         if c in ds.dims:
-            coords[c] = (c, np.asarray(ds[c].values, dtype=np.float64),
+            coords[c] = (c, pd.Index(np.asarray(ds[c].values, dtype=np.float64), copy=False),
                          {"units": "s", **clean_attrs(ds[c].attrs)})
     return xr.Dataset(data_vars, coords=coords, attrs=clean_attrs(ds.attrs))
 
