@@ -264,10 +264,13 @@ class Scene:
         sensors = tuple(_sensor(t, defaults) for t in doc.tables("sensor", []))
         doc.check_unknown(["description"])
         settings = dict(doc.data)
-        return cls(name=name, engine=engine, shaftline=shaftline, mounts=mounts,
-                   profile=profile, load=load, sensors=sensors, seed=seed, max_order=max_order,
-                   start_angle_deg=start_angle, truth_rate=truth_rate, source=str(path),
-                   settings=settings)
+        try:
+            return cls(name=name, engine=engine, shaftline=shaftline, mounts=mounts,
+                       profile=profile, load=load, sensors=sensors, seed=seed,
+                       max_order=max_order, start_angle_deg=start_angle, truth_rate=truth_rate,
+                       source=str(path), settings=settings)
+        except ConfigError as exc:  # whole-scene checks: say which file to fix
+            raise ConfigError(f"{path}: {exc}") from None
 
 
 def _model_path(scene_path, table, key, *, required):
