@@ -150,6 +150,7 @@ def test_vkf_refuses_a_zero_speed_segment_by_name():
 
 
 def test_zero_speed_message_is_plain_numbers():
+    """The refusal names the offending span in samples and seconds, as plain numbers."""
     fs = 4000.0
     rpm = np.full(32000, 1500.0)
     rpm[12000:14000] = 0.0
