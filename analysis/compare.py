@@ -119,9 +119,10 @@ class CriticalComparison:
         Criticals inside the measured speed range with no measured resonance; column
         ``significant`` marks those that should have been visible.
     natural_frequencies : pandas.DataFrame
-        Per mode: ``frequency_hz_predicted``, ``frequency_hz_measured`` (confidence-weighted
-        over orders), ``spread_hz`` (standard deviation over orders), ``n_orders``,
-        ``orders``, ``deviation_pct``.
+        Per mode: ``frequency_hz_measured`` (confidence-weighted over the matched orders),
+        ``frequency_hz_predicted`` (the same weighting over the same orders; the mode's first
+        critical when nothing matched), ``spread_hz`` (weighted standard deviation over
+        orders), ``n_orders``, ``orders``, ``deviation_pct``.
     gate, tolerance, amplitude_tolerance : float
         Settings: assignment gate (relative speed), speed tolerance for agreement, amplitude
         ratio tolerance (ratio within [1/(1+t), 1+t]).
@@ -399,6 +400,8 @@ def _natural_frequencies(matched, pred):
             w = np.clip(m["confidence"].to_numpy(float), 1e-6, None)
             f = m["frequency_hz_measured"].to_numpy(float)
             f_meas = float(np.sum(w * f) / np.sum(w))
+            # like with like: the prediction over the same orders, same weights
+            f_pred = float(np.sum(w * m["frequency_hz_predicted"].to_numpy(float)) / np.sum(w))
             spread = float(np.sqrt(np.sum(w * (f - f_meas) ** 2) / np.sum(w))) if len(m) > 1 \
                 else float("nan")
         else:

@@ -54,7 +54,7 @@ def run(args) -> int:
               f"sweep {result.sweep_rate_rpm_per_s:.3g} rpm/s")
         print()
         cols = ["mode", "order", "speed_rpm_predicted", "speed_rpm_measured", "deviation_rpm",
-                "deviation_pct", "amplitude_ratio", "confidence"]
+                "deviation_pct", "amplitude_ratio", "confidence", "significant"]
         print_table(comp.matched[cols], title="matched critical speeds")
         print()
         print_table(comp.natural_frequencies, title="natural frequencies by mode")

@@ -85,11 +85,14 @@ def run(args) -> int:
                     "elapsed_s": elapsed, "summary": summary})
         return 0
     m = result.comparison.matched
+    sig = m[m["significant"]] if len(m) else m
     print(f"synthesized  {record_path}  ({scene.profile.duration:g} s run-up "
           f"{result.speed_range_rpm[0]:.0f}–{result.speed_range_rpm[1]:.0f} rpm)")
     print(f"analysed     {result.channel} at {result.node}: {len(result.resonances)} resonances, "
           f"{len(m)} matched to the model's criticals"
-          + (f", largest deviation {m.deviation_pct.abs().max():.2f} %" if len(m) else ""))
+          + (f"; the {len(sig)} significant ones within {sig.deviation_pct.abs().max():.2f} %"
+             if len(sig) else ""))
+    print(f"comparison   {'model and measurement agree' if result.comparison.agrees else 'DISAGREEMENTS: ' + '; '.join(result.comparison.flags[:3])}")
     for c in result.limits:
         print(f"limit check  {'PASS' if c.passed else 'FAIL'}  {c.name}")
     for p in paths:
