@@ -25,6 +25,8 @@ from __future__ import annotations
 import contextlib
 import io
 import logging
+import os
+import sys
 import time
 import warnings
 
@@ -152,12 +154,32 @@ def _fe_rows(quick: bool) -> list[Row]:
     return rows
 
 
+@contextlib.contextmanager
+def _silenced_fds():
+    """Redirect the process's stdout/stderr file descriptors to /dev/null (C-level prints)."""
+    sys.stdout.flush()
+    sys.stderr.flush()
+    saved = [os.dup(1), os.dup(2)]
+    null = os.open(os.devnull, os.O_WRONLY)
+    try:
+        os.dup2(null, 1)
+        os.dup2(null, 2)
+        with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()):
+            yield
+    finally:
+        sys.stdout.flush()
+        os.dup2(saved[0], 1)
+        os.dup2(saved[1], 2)
+        for fd in (*saved, null):
+            os.close(fd)
+
+
 def _ross_rows(quick: bool) -> list[Row]:
     try:
         logging.getLogger("ross").setLevel(logging.ERROR)
-        # ROSS's dependencies print set-up chatter on import; keep it out of --json output
-        with warnings.catch_warnings(), contextlib.redirect_stdout(io.StringIO()), \
-                contextlib.redirect_stderr(io.StringIO()):
+        # ROSS's dependencies (CoolProp) print set-up chatter from C on import; keep it out
+        # of --json output by silencing the file descriptors themselves
+        with warnings.catch_warnings(), _silenced_fds():
             warnings.simplefilter("ignore")
             import ross as rs
     except Exception as exc:  # noqa: BLE001 - optional, any import failure means skip

@@ -80,23 +80,30 @@ def _small_blas(n_dof: int):
     return contextlib.nullcontext() if ctl is None else ctl.limit(limits=1, user_api="blas")
 
 
-def _hermitian_eigh(h_re, h_im, s):
+def _hermitian_eigh(h_re, h_im, s, top=None):
     """Eigenpairs of the Hermitian pencil (h_re + i h_im) x = λ s x, s real positive definite
     (None: identity),
     through the real symmetric form [[h_re, −h_im], [h_im, h_re]] of twice the size (every
     eigenvalue appears twice; [x_r; x_i] and [−x_i; x_r] are x and i x). Real LAPACK is used
     because small complex solves are much slower under threaded BLAS.
 
+    ``top``: compute only the ``top`` largest complex eigenvalues (a subset solve; a few
+    extra are computed so that repeated pairs are not cut).
+
     Returns ascending eigenvalues and complex eigenvectors (columns), one per complex pair.
     Raises numpy.linalg.LinAlgError if ``s`` is not positive definite.
     """
     n = h_re.shape[0]
     big = np.block([[h_re, -h_im], [h_im, h_re]])
+    subset = None
+    if top is not None and 2 * (top + 2) < 2 * n:
+        subset = [2 * n - 2 * (top + 2), 2 * n - 1]
     if s is None:  # standard problem
-        lam, vec = scipy.linalg.eigh(big)
+        lam, vec = scipy.linalg.eigh(big, subset_by_index=subset)
     else:
         zero = np.zeros_like(s)
-        lam, vec = scipy.linalg.eigh(big, np.block([[s, zero], [zero, s]]))
+        lam, vec = scipy.linalg.eigh(big, np.block([[s, zero], [zero, s]]),
+                                     subset_by_index=subset)
     cvec = vec[:n] + 1j * vec[n:]
     tol = 1e-9 * max(np.abs(lam).max(), 1e-300)
     values, vectors = [], []
@@ -349,7 +356,9 @@ class Rotor:
         omega = None
         if symmetric and not np.any(Ds):
             if lk is not None:
-                mu, vec = scipy.linalg.eigh(Ms, Ks)  # M φ = μ K φ, μ = 1/ω²
+                k = min(n, n_modes + 3)  # subset solve of the largest μ
+                mu, vec = scipy.linalg.eigh(Ms, Ks, subset_by_index=[n - k, n - 1])
+                # M φ = μ K φ, μ = 1/ω²
                 omega, vec = 1.0 / np.sqrt(mu[::-1]), vec[:, ::-1]
             else:
                 lam, vec = scipy.linalg.eigh(Ks, Ms)
@@ -366,7 +375,7 @@ class Rotor:
                 lk, scipy.linalg.solve_triangular(lk, Ds.T, lower=True).T, lower=True)
             q = (q - q.T) / 2
             big = np.block([[np.zeros((n, n)), p.T], [-p, -q]])
-            nu, y = _hermitian_eigh(np.zeros_like(big), big, None)
+            nu, y = _hermitian_eigh(np.zeros_like(big), big, None, top=n_modes + 1)
             keep = nu > 0
             omega = 1.0 / nu[keep]
             vec = scipy.linalg.solve_triangular(lk.T, y[n:, keep], lower=False)
@@ -515,7 +524,9 @@ class Rotor:
         """Critical speeds of one order: rows (order, whirl, Ω)."""
         if symmetric:
             try:
-                mu, vec = _hermitian_eigh(k**2 * Ms, -k * Gs, Ks)
+                mu, vec = _hermitian_eigh(k**2 * Ms, -k * Gs, Ks,
+                                          top=None if speed_range_rpm is not None
+                                          else n_modes + 1)
             except np.linalg.LinAlgError:
                 raise ModelError("the rotor is not supported (singular stiffness): add "
                                  "bearings before asking for critical speeds") from None
