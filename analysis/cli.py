@@ -77,10 +77,18 @@ def main(argv: list[str] | None = None) -> int:
     """Run the command line; return the process exit status."""
     parser = build_parser()
     args = parser.parse_args(argv)
+    saved = (log.handlers[:], log.level, log.propagate)
     _setup_logging(args.verbose, args.quiet)
-    if not getattr(args, "_run", None):
-        parser.print_help()
-        return 1
+    try:
+        if not getattr(args, "_run", None):
+            parser.print_help()
+            return 1
+        return _run(args)
+    finally:  # main() may be called in-process (tests, notebooks): leave logging as found
+        log.handlers[:], log.level, log.propagate = saved
+
+
+def _run(args) -> int:
     try:
         return int(args._run(args) or 0)
     except (CrankbenchError, FileNotFoundError, FileExistsError, IsADirectoryError,
