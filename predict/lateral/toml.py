@@ -142,32 +142,35 @@ def load_rotor(path: str | Path) -> RotorModel:
     sections = []
     for s in r.tables("shaft"):
         mat = _material(s.table("material", None), material)
-        try:
-            sections.append(ShaftSection(
-                length=s.positive("length"), outer_diameter=s.positive("outer_diameter"),
-                inner_diameter=s.number("inner_diameter", 0.0, low=0.0), material=mat,
-                n_elements=s.integer("n_elements", None, minimum=1)))
-        except ModelError as exc:
-            s.fail(None, str(exc))
+        values = dict(length=s.positive("length"), outer_diameter=s.positive("outer_diameter"),
+                      inner_diameter=s.number("inner_diameter", 0.0, low=0.0), material=mat,
+                      n_elements=s.integer("n_elements", None, minimum=1))
         s.check_unknown()
+        try:
+            sections.append(ShaftSection(**values))
+        except ModelError as exc:  # cross-field checks (bore >= diameter)
+            s.fail(None, str(exc))
     if not sections:
         r.fail("shaft", "needs at least one [[rotor.shaft]] section")
     disks = []
     for d in r.tables("disks", []):
-        try:
-            if "mass" in d:
-                disks.append(Disk(position=d.number("position", low=0.0), mass=d.positive("mass"),
-                                  diametral_inertia=d.number("diametral_inertia", 0.0, low=0.0),
-                                  polar_inertia=d.number("polar_inertia", 0.0, low=0.0)))
-            else:
-                disks.append(Disk.from_geometry(
-                    position=d.number("position", low=0.0),
-                    outer_diameter=d.positive("outer_diameter"), width=d.positive("width"),
-                    inner_diameter=d.number("inner_diameter", 0.0, low=0.0),
-                    density=d.positive("density", material.density)))
-        except ModelError as exc:
-            d.fail(None, str(exc))
+        position = d.number("position", low=0.0)
+        if "mass" in d:
+            values = dict(position=position, mass=d.positive("mass"),
+                          diametral_inertia=d.number("diametral_inertia", 0.0, low=0.0),
+                          polar_inertia=d.number("polar_inertia", 0.0, low=0.0))
+            build = Disk
+        else:
+            values = dict(position=position, outer_diameter=d.positive("outer_diameter"),
+                          width=d.positive("width"),
+                          inner_diameter=d.number("inner_diameter", 0.0, low=0.0),
+                          density=d.positive("density", material.density))
+            build = Disk.from_geometry
         d.check_unknown()
+        try:
+            disks.append(build(**values))
+        except ModelError as exc:  # cross-field checks (bore >= diameter)
+            d.fail(None, str(exc))
     bearings = []
     for b in r.tables("bearings", []):
         rigid = _bool(b, "rigid", False)
@@ -178,20 +181,21 @@ def load_rotor(path: str | Path) -> RotorModel:
                   cxx=b.number("cxx", 0.0, low=0.0), cyy=b.number("cyy", None, low=0.0),
                   cxy=b.number("cxy", 0.0), cyx=b.number("cyx", 0.0),
                   clamp=_bool(b, "clamp", False))
-        try:
-            bearings.append(Bearing(b.number("position", low=0.0), kxx, **kw))
-        except ModelError as exc:
-            b.fail(None, str(exc))
+        position = b.number("position", low=0.0)
         b.check_unknown()
-    try:
-        rotor = Rotor(shaft=sections, disks=disks, bearings=bearings,
-                      theory=r.string("theory", "timoshenko", options=THEORIES),
-                      max_element_length=r.positive("max_element_length", None),
-                      rotary_inertia=_bool(r, "rotary_inertia", True),
-                      name=r.string("name", Path(path).stem))
-    except ModelError as exc:
-        r.fail(None, str(exc))
+        try:
+            bearings.append(Bearing(position, kxx, **kw))
+        except ModelError as exc:  # cross-field checks (rigid with cross-coupling)
+            b.fail(None, str(exc))
+    values = dict(theory=r.string("theory", "timoshenko", options=THEORIES),
+                  max_element_length=r.positive("max_element_length", None),
+                  rotary_inertia=_bool(r, "rotary_inertia", True),
+                  name=r.string("name", Path(path).stem))
     r.check_unknown()
+    try:
+        rotor = Rotor(shaft=sections, disks=disks, bearings=bearings, **values)
+    except ModelError as exc:  # cross-item checks (a disk beyond the shaft end)
+        r.fail(None, str(exc))
 
     a = doc.table("analysis", {})
     rng = a.numbers("speed_range_rpm", [0.0, 10000.0], length=2, low=0.0)
