@@ -158,13 +158,11 @@ def test_reversed_tacho_message_is_plain_numbers():
 @pytest.mark.parametrize("case, pattern", [
     ("channel_dropout_nan", r"acc contains 100 NaN/inf value\(s\), first at index 4000"),
     ("channel_dropout_inf", r"acc contains 5 NaN/inf value\(s\), first at index 2000"),
-    # (the message is being reworded to name the whole span; both forms name sample and speed)
-    ("channel_zero_speed_segment", r"rpm must be > 0 throughout.*(found 500 sample\(s\) <= 0, "
-                                   r"min 0 rpm, at samples 3000.3499 \(t = 1\.5 s to 1\.7495 s\)"
-                                   r"|found (np\.float64\()?0\.0\)? at sample 3000)"),
-    ("channel_negative_speed", r"rpm must be > 0 throughout.*(found 8000 sample\(s\) <= 0, "
-                               r"min -1500 rpm, at samples 0.7999"
-                               r"|found (np\.float64\()?-1500\.0\)? at sample 0)"),
+    # (message wording under revision; every form names the speed found and the first sample)
+    ("channel_zero_speed_segment", r"rpm must be > 0 throughout.*(min 0 rpm|found "
+                                   r"(np\.float64\()?0\.0).*at samples? 3000\b"),
+    ("channel_negative_speed", r"rpm must be > 0 throughout.*(min -1500 rpm|found "
+                               r"(np\.float64\()?-1500\.0).*at samples? 0\b"),
     ("channel_nan_speed", r"rpm contains 1 NaN/inf value\(s\), first at index 7999"),
     ("channel_speed_wrong_length", r"rpm has 7900 samples but the signal has 8000"),
 ])
@@ -270,3 +268,23 @@ def test_clipped_channel_order_amplitude_is_wrong_without_flag():
         res = order_track(_channel(c.data), rpm=c.rpm, orders=[2.0], revolutions=8)
     amp = float(res.amplitude.sel(order=2.0).mean())
     assert abs(amp - c.truth[2.0]) > 0.1
+
+
+@pytest.mark.xfail(strict=True, reason="analysis.compare._measured_frame: a record with no "
+                   "resonance (steady speed, no critical crossed) gives an empty ResonanceTable "
+                   "whose frame has object columns; np.isfinite then raises TypeError, so "
+                   "`crankbench report` prints a traceback and `batch` marks the record failed")
+def test_record_without_resonances_is_compared_not_crashed():
+    import pandas as pd
+
+    from analysis.compare import match_criticals
+    from analysis.resonance import Resonance
+
+    measured = pd.DataFrame([], columns=list(Resonance.__dataclass_fields__))  # = empty table
+    predicted = pd.DataFrame({"mode": [1], "order": [2.0], "speed_rpm": [3000.0]})
+    try:
+        result = match_criticals(measured, predicted)
+    except CrankbenchError as exc:
+        assert "resonance" in str(exc)
+        return
+    assert result is not None

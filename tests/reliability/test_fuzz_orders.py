@@ -14,7 +14,7 @@ import signal
 
 import numpy as np
 import pytest
-from hypothesis import HealthCheck, given, settings
+from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 
 from analysis.orders import campbell_map, order_map, order_spectrum, order_track
@@ -23,7 +23,8 @@ from analysis.vkf import vold_kalman
 from predict.errors import CrankbenchError
 
 FUZZ = settings(max_examples=15, deadline=None, derandomize=True,
-                suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
+                suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large,
+                                       HealthCheck.filter_too_much])
 
 
 @contextlib.contextmanager
@@ -52,9 +53,11 @@ def _all_finite(result):
 
 @st.composite
 def signals(draw):
-    """(x, fs, rpm) with 2 rpm <= rpm <= fs * 60 / 2.5 (each revolution >= 2.5 samples).
+    """(x, fs, rpm) with speeds from 1e-6 rpm to 1e8 rpm.
 
-    Outside that band angle resampling allocates without bound (see the two xfails below)."""
+    Speeds with fewer than 2 samples per revolution, or so slow that the anti-alias filter
+    is longer than the record, must be refused before anything large is allocated (found
+    unbounded: MemoryError / OOM; fixed in 14ddf9b)."""
     fs = draw(st.sampled_from([200.0, 1000.0, 8000.0]))
     n = draw(st.integers(8, 3000))
     rng = np.random.default_rng(draw(st.integers(0, 2**32 - 1)))
@@ -72,7 +75,7 @@ def signals(draw):
     else:
         x = np.zeros(n)
         x[rng.integers(0, n, 3)] = 1.0
-    rpm_max = fs * 60.0 / 2.5
+    rpm_max = draw(st.sampled_from([fs * 60.0 / 2.5, 1e8]))
     rkind = draw(st.sampled_from(["scalar", "steady", "ramp", "noisy", "zero-run", "negative",
                                   "tiny"]))
     r0 = draw(st.floats(2.0, rpm_max))
@@ -91,7 +94,7 @@ def signals(draw):
     elif rkind == "negative":
         rpm = -np.full(n, r0)
     else:
-        rpm = np.full(n, draw(st.floats(2.0, 5.0)))
+        rpm = np.full(n, draw(st.floats(1e-6, 5.0)))
     return x * scale, fs, rpm
 
 
@@ -113,6 +116,8 @@ CALLS = {
 @given(data=signals())
 def test_random_signal_and_speed_give_our_error_or_finite_result(name, data):
     x, fs, rpm = data
+    if name == "order_track_vkf":   # very slow speeds: see the vkf xfail below (OOM risk)
+        assume(np.min(rpm) >= 2.0)
     try:
         with time_limit(20):
             result = CALLS[name](x, fs, rpm)
@@ -175,3 +180,25 @@ def test_speed_far_below_sample_rate_is_our_error(monkeypatch):
     x = np.random.default_rng(0).standard_normal(64)
     with pytest.raises(CrankbenchError, match=r"taps|rpm"):
         angle_resample(x, fs=200.0, rpm=np.full(64, 1e-5), samples_per_rev=16)
+
+
+@pytest.mark.xfail(strict=True, reason="analysis.vkf._decimate designs its Kaiser FIR before "
+                   "comparing the tap count with the record length (the check is two lines "
+                   "later): rpm = 1e-6 at fs = 200 Hz on 8 samples asks for 1.5e10 taps "
+                   "(115 GiB), MemoryError/OOM instead of the no-decimation path")
+def test_vkf_at_extremely_low_speed_does_not_design_a_huge_filter(monkeypatch):
+    from scipy import signal as sps
+
+    firwin = sps.firwin
+
+    def guarded(numtaps, *args, **kwargs):
+        if numtaps > 1_000_000:
+            raise AssertionError(f"firwin asked for {numtaps} taps for an 8-sample record")
+        return firwin(numtaps, *args, **kwargs)
+
+    monkeypatch.setattr(sps, "firwin", guarded)
+    try:
+        vold_kalman(np.full(8, 1e-13), fs=200.0, rpm=np.full(8, 1e-6), orders=[1.0, 2.0],
+                    bandwidth_orders=0.5)
+    except CrankbenchError:
+        pass

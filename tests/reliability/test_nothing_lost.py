@@ -325,7 +325,7 @@ def test_cli_refuses_existing_output_before_any_work(command, existing, inputs, 
     name = command[0]
     if not (ROOT / "analysis" / "commands" / f"{name}.py").exists():
         pytest.skip(f"crankbench {name} not present")
-    if name == "bench":            # bench refuses only after running (see the xfail above)
+    if name == "bench":            # keep the test fast should bench ever run before checking
         import analysis.bench as bench_pkg
 
         monkeypatch.setattr(bench_pkg, "run_suites", _fake_rows)
