@@ -33,7 +33,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._lapack import bidiagonal_singular_values
+from ._lapack import bidiagonal_singular_values, bidiagonal_svd
 
 __all__ = ["chain_frequencies", "chain_modes", "tree_frequencies", "dense_modes", "EPS"]
 
@@ -86,12 +86,40 @@ def chain_frequencies(inertias, stiffnesses, *, grounded: bool) -> np.ndarray:
     return np.concatenate([[0.0], np.sort(bidiagonal_singular_values(d, e))])
 
 
+#: chains up to this many masses get relatively accurate (dbdsqr) mode shapes; O(n³) above
+SVD_MODES_MAX = 400
+
+
+def _chain_singular_vectors(rj: np.ndarray, sk: np.ndarray, grounded: bool) -> np.ndarray:
+    """Orthonormal eigenvectors ``y`` of ``J^{-1/2} K J^{-1/2}``, ascending, from the SVD of the
+    bidiagonal ``G = diag(√k) B J^{-1/2}`` (``rj`` = J^{-1/2}, ``sk`` = √k)."""
+    if grounded:
+        # (Bx)_0 = x_0, (Bx)_i = x_i − x_{i−1}: G is lower bidiagonal, Gᵀ upper; the wanted
+        # vectors (right singular vectors of G) are the left singular vectors of Gᵀ
+        s, u, _ = bidiagonal_svd(sk * rj, -sk[1:] * rj[:-1])
+        y = u
+    else:
+        # (Bx)_i = x_{i+1} − x_i for the n−1 springs; a zero last row makes G square (n×n
+        # upper bidiagonal) and gives the rigid-body mode an exactly zero singular value
+        d = np.zeros(rj.size)
+        d[:-1] = -sk * rj[:-1]
+        s, _, vt = bidiagonal_svd(d, sk * rj[1:])
+        y = vt.T
+    return y[:, np.argsort(s, kind="stable")]
+
+
 def chain_modes(inertias, stiffnesses, *, grounded: bool):
     """Mode shapes of a chain, columns ordered like :func:`chain_frequencies`.
 
-    Eigenvectors of the scaled tridiagonal ``J^{-1/2} K J^{-1/2}`` by MRRR (LAPACK ``dstemr``),
-    mapped back by ``x = J^{-1/2} y`` and mass-normalised (``xᵀ J x = 1``); absolute accuracy
-    ~ n·eps/gap. The rigid-body mode of a free chain is set exactly to the constant vector.
+    Up to :data:`SVD_MODES_MAX` masses the shapes are the singular vectors of the bidiagonal
+    factor ``G = diag(√k) B J^{-1/2}`` (``K = Bᵀ diag(k) B``, ``GᵀG = J^{-1/2} K J^{-1/2}``) by
+    LAPACK ``dbdsqr`` (Demmel-Kahan zero-shift QR), whose vectors are accurate relative to the
+    *relative* gaps: at stiffness ratio 1e12 and inertia ratio 1e8 every shape is within ~1e-14
+    (J-norm) of a 60-digit reference, where MRRR on the scaled tridiagonal is off by 3e-5 (free)
+    or entirely wrong (grounded). It costs O(n³) (0.2 s at 500 masses), so longer chains use
+    MRRR (LAPACK ``dstemr``) on the scaled tridiagonal: absolute accuracy ~ n·eps·‖A‖/gap, fine
+    for well-scaled chains. Shapes are mapped back by ``x = J^{-1/2} y`` (``xᵀ J x = 1``); the
+    rigid-body mode of a free chain is set exactly to the constant vector.
 
     Returns
     -------
@@ -114,6 +142,8 @@ def chain_modes(inertias, stiffnesses, *, grounded: bool):
     rj = 1.0 / np.sqrt(inertias)
     if n == 1:
         vectors = np.ones((1, 1))
+    elif n <= SVD_MODES_MAX:
+        vectors = _chain_singular_vectors(rj, np.sqrt(stiffnesses), grounded)
     else:
         _, vectors = eigh_tridiagonal(kd * rj * rj, -koff * rj[:-1] * rj[1:],
                                       lapack_driver="stemr")

@@ -135,11 +135,6 @@ def test_extreme_chain_mode_shapes_are_not_garbage():
     assert err.max() <= 1e-4
 
 
-@pytest.mark.xfail(strict=True, reason="predict.torsion.eigen.chain_modes (dstemr on the scaled "
-                   "tridiagonal) is only normwise accurate: at stiffness ratio 1e12 / inertia "
-                   "ratio 1e8 the first elastic mode shape is off by 2.7e-5 (J-norm) and "
-                   "XᵀJX deviates from I by 2.7e-5, while the frequencies are relatively "
-                   "accurate to 1e-13")
 def test_extreme_chain_mode_shapes_relatively_accurate():
     """Mode shapes as accurate as the frequencies: every mode within 1e-9 of mpmath's."""
     j, k = _extreme_chain(20, 3, grounded=False)
