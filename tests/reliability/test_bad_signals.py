@@ -10,6 +10,8 @@ xfails with the fault in ``reason``.
 from __future__ import annotations
 
 import importlib.util
+import json
+import re
 import sys
 import warnings
 from pathlib import Path
@@ -288,3 +290,40 @@ def test_record_without_resonances_is_compared_not_crashed():
         assert "resonance" in str(exc)
         return
     assert result is not None
+
+
+def _bench_file(tmp_path, case, name):
+    """A record file with the damaged channel ``acc`` and a speed channel on the same clock."""
+    c = sig.CHANNEL_CASES[case]()
+    rec = make_record({
+        "acc": dict(data=c.data, sample_rate=FS, units="m/s^2", quantity="acceleration"),
+        "speed": dict(data=c.rpm * np.pi / 30.0, sample_rate=FS, units="rad/s",
+                      quantity="rotational_speed"),
+    }, allow_nonfinite=True)
+    path = tmp_path / name
+    mio.write(rec, path)
+    return path, c
+
+
+def test_cli_analyse_of_dropout_record_names_file_channel_and_span(tmp_path, capsys):
+    from analysis.cli import main as cli_main
+
+    path, _ = _bench_file(tmp_path, "channel_dropout_nan", "drop.h5")
+    assert cli_main(["analyse", str(path), "--channel", "acc", "--orders", "2"]) == 2
+    err = capsys.readouterr().err
+    assert re.search(r"drop\.h5: channel 'acc' has 100 NaN/inf sample\(s\) in 1 run\(s\): "
+                     r"samples 4000\.\.4099 \(t = 2\.\.2\.0495 s\)", err), err
+    assert "Traceback" not in err
+
+
+def test_cli_analyse_of_clipped_record_warns_and_still_analyses(tmp_path, capsys):
+    """Usable in part: the analysis runs, and the user is told which spans are clipped."""
+    from analysis.cli import main as cli_main
+
+    path, _ = _bench_file(tmp_path, "channel_clipped", "clip.h5")
+    with pytest.warns(RecordWarning, match=r"clip\.h5: channel 'acc' looks clipped.*"
+                                           r"clipped_spans_s"):
+        status = cli_main(["analyse", str(path), "--channel", "acc", "--orders", "2", "--json"])
+    assert status == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out

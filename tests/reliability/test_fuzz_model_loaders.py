@@ -1,9 +1,10 @@
 """Property-based tests of the model loaders on random TOML documents.
 
-Valid engine, shaft-line and rotor models (the bases of ``tests/corpus/make_bad_models.py``)
+Valid engine, shaft-line, rotor and scene models (bases in ``tests/corpus/make_bad_models.py``)
 are mutated by hypothesis — keys set to random values of any TOML type (negative, zero, NaN,
 inf, huge, strings, booleans, arrays, tables), deleted, or misspelt — written as TOML and
-loaded. Each load gives a :class:`~predict.errors.ModelError` naming the file, or a model whose
+loaded. Each load gives a :class:`~predict.errors.ModelError` (a scene: ``ConfigError``, or
+``FileNotFoundError`` for a model path that does not resolve) naming the file, or a model whose
 derived numbers are finite; never another exception.
 """
 
@@ -22,7 +23,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from predict.errors import CrankbenchError, ModelError
+from predict.errors import ConfigError, CrankbenchError, ModelError
 
 CORPUS = Path(__file__).resolve().parents[1] / "corpus"
 FUZZ = settings(max_examples=30, deadline=None, derandomize=True,
@@ -41,8 +42,11 @@ def _load_generator():
 
 
 gen = _load_generator()
+ROOT = Path(__file__).resolve().parents[2]
 BASES = {"engine": tomllib.loads(gen.ENGINE), "shaftline": tomllib.loads(gen.SHAFTLINE),
-         "rotor": tomllib.loads(gen.ROTOR)}
+         "rotor": tomllib.loads(gen.ROTOR),
+         "scene": tomllib.loads(gen.SCENE.replace("../../../../sample_data",
+                                                  str(ROOT / "sample_data")))}
 
 
 # ------------------------------------------------------------------------------ TOML writing
@@ -149,6 +153,10 @@ def _load(kind, path):
         from predict.torsion import from_toml
 
         return from_toml(path)
+    if kind == "scene":
+        from measure.synth.scene import Scene
+
+        return Scene.from_toml(path)
     from predict.lateral import load_rotor
 
     return load_rotor(path)
@@ -175,13 +183,19 @@ def _roundtrip(kind, doc, tmp_path):
     except ModelError as exc:
         assert path.name in str(exc), f"message does not name the file: {exc}"
         return None
+    except (ConfigError, FileNotFoundError) as exc:
+        # scenes: their own keys are ConfigErrors; a model path that does not resolve is a
+        # FileNotFoundError; both name the scene file
+        assert kind == "scene", f"{type(exc).__name__} from the {kind} loader: {exc}"
+        assert path.name in str(exc), f"message does not name the file: {exc}"
+        return None
     except CrankbenchError as exc:  # pragma: no cover - would be a wrong family for a model
         raise AssertionError(f"{type(exc).__name__} instead of ModelError: {exc}") from None
     _check_model(kind, model)
     return model
 
 
-@pytest.mark.parametrize("kind", ["engine", "shaftline", "rotor"])
+@pytest.mark.parametrize("kind", ["engine", "shaftline", "rotor", "scene"])
 @FUZZ
 @given(data=st.data())
 def test_mutated_model_gives_model_error_or_valid_model(kind, data, tmp_path):
