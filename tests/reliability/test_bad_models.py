@@ -112,9 +112,9 @@ def test_bad_list_element_message_has_no_numpy_repr():
     assert "np.float64" not in str(info.value)
 
 
-@pytest.mark.xfail(strict=True, reason="predict/lateral/toml.py re-raises a Table error through "
-                   "Table.fail, naming the file and key twice")
 def test_rotor_error_names_file_once():
+    """(Found: the rotor loader re-raised Table errors through Table.fail, naming the file
+    and key twice; fixed in efac06b.)"""
     path = gen.OUT / "rotor_negative_disk_mass.toml"
     with pytest.raises(ModelError) as info:
         _loader("rotor")(path)
