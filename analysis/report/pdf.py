@@ -152,14 +152,22 @@ def _matplotlib_pdf(report, path: Path) -> None:
             fig = plt.figure(figsize=_A4)
             y = top
 
-        for style, content in entries:
+        def fig_size(content):
+            img = mpimg.imread(io.BytesIO(content), format="png")
+            h_px, w_px = img.shape[:2]
+            width = 0.86
+            height = min(width * h_px / w_px * _A4[0] / _A4[1], 0.55)
+            return img, height * w_px / h_px * _A4[1] / _A4[0], height
+
+        for k, (style, content) in enumerate(entries):
+            nxt = entries[k + 1] if k + 1 < len(entries) else (None, None)
+            if style in ("h2", "h3") and nxt[0] == "figure":
+                # keep a heading with its figure
+                _, _, h_next = fig_size(nxt[1])
+                if y - line_h * _STYLE[style]["lines"] - h_next < bottom:
+                    new_page()
             if style == "figure":
-                img = mpimg.imread(io.BytesIO(content), format="png")
-                h_px, w_px = img.shape[:2]
-                width = 0.86
-                height = width * h_px / w_px * _A4[0] / _A4[1]
-                height = min(height, 0.55)
-                width = height * w_px / h_px * _A4[1] / _A4[0]
+                img, width, height = fig_size(content)
                 if y - height < bottom:
                     new_page()
                 ax = fig.add_axes([left, y - height, width, height])
