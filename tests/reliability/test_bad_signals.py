@@ -327,3 +327,51 @@ def test_cli_analyse_of_clipped_record_warns_and_still_analyses(tmp_path, capsys
     assert status == 0
     out = json.loads(capsys.readouterr().out)
     assert out
+
+
+@pytest.mark.parametrize("case, pattern", [
+    ("tacho_reversed", r"pulse-time channel 'tacho': non-monotonic edge time at index 1 "
+                       r"\(0\.719 s then 0\.718 s\); expected strictly increasing"),
+    ("tacho_duplicated_edge", r"pulse-time channel 'tacho': duplicated edge time at index 101"),
+    ("tacho_nan_edge", r"pulse-time channel 'tacho' has NaN/inf edge time at index 50"),
+])
+def test_damaged_pulse_channel_is_refused_by_the_record_schema(case, pattern):
+    """A damaged edge-time channel cannot even become a Record: the schema names it."""
+    tacho = sig.TACHO_CASES[case]()
+    with pytest.raises(RecordError, match=pattern):
+        make_record({"tacho": dict(data=tacho.edge_times, quantity="pulse_times", units="s",
+                                   pulses_per_rev=PPR)})
+
+
+@pytest.mark.parametrize("ext", [".h5", ".tdms", ".csv"])
+@pytest.mark.parametrize("case, n_edges", [("tacho_no_pulses", 0), ("tacho_one_pulse", 1)])
+def test_empty_pulse_channel_round_trips_and_consumer_names_the_problem(case, n_edges, ext,
+                                                                        tmp_path):
+    """A tacho that never fired is a valid (empty) channel on disk; speed from it is our
+    error saying how many edges there are."""
+    tacho = sig.TACHO_CASES[case]()
+    fs, n = 1000.0, 100
+    rec = make_record({
+        "acc": dict(data=np.zeros(n), sample_rate=fs, units="m/s^2", quantity="acceleration"),
+        "tacho": dict(data=tacho.edge_times, quantity="pulse_times", units="s",
+                      pulses_per_rev=PPR),
+    })
+    path = tmp_path / f"tacho{ext}"
+    try:
+        mio.write(rec, path)
+    except RecordError as exc:           # a format that cannot hold it must say so
+        assert "tacho" in str(exc)
+        return
+    back = mio.read(path)
+    edges = back["tacho"].values
+    assert edges.size == n_edges
+    with pytest.raises(AnalysisError, match=rf"edge_times has {n_edges} edges; at least 3"):
+        speed_from_pulses(edges, pulses_per_rev=int(back["tacho"].attrs["pulses_per_rev"]))
+
+
+def test_every_generated_signal_is_exercised():
+    """Each case of make_bad_signals.py is named in this module's tests."""
+    source = Path(__file__).read_text()
+    unused = [name for name in sig.SIGNALS if f'"{name}"' not in source
+              and f"sig.{name}(" not in source]
+    assert unused == []
