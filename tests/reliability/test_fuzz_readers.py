@@ -43,7 +43,8 @@ def time_limit(seconds: int):
 
 @pytest.fixture(scope="module")
 def valid_files(tmp_path_factory):
-    """One small two-channel record per format; returns {ext: bytes} (and the sidecar)."""
+    """One small record per format: two channels on the main clock, a tacho pulse-time
+    channel and a channel on a second clock; returns {ext: bytes} (and the WAV sidecar)."""
     folder = tmp_path_factory.mktemp("fuzz_valid")
     fs, n = 1000.0, 200
     t = np.arange(n) / fs
@@ -52,6 +53,10 @@ def valid_files(tmp_path_factory):
                     quantity="acceleration"),
         "disp": dict(data=1e-4 * np.cos(2 * np.pi * 30 * t), sample_rate=fs, units="m",
                      quantity="displacement"),
+        "tacho": dict(data=np.arange(0.0, 0.2, 0.004), quantity="pulse_times", units="s",
+                      pulses_per_rev=4),
+        "slow": dict(data=np.linspace(0.0, 1e-3, 20), sample_rate=100.0, units="m",
+                     quantity="displacement", dim="time_slow"),
     })
     out = {}
     for ext in FORMATS:
