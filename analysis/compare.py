@@ -43,6 +43,11 @@ def _measured_frame(measured):
         if col not in frame:
             raise AnalysisError(f"measured resonances need a column {col!r}; columns: "
                                 f"{list(frame.columns)}")
+    # an empty table (no resonance found) has object columns: make the numbers numbers
+    for col in ("order", "speed_rpm", "frequency_hz", "amplitude", "amplitude_corrected",
+                "confidence", "damping_ratio"):
+        if col in frame:
+            frame[col] = pd.to_numeric(frame[col], errors="coerce").astype(float)
     if "amplitude_corrected" in frame:
         amp = frame["amplitude_corrected"].where(np.isfinite(frame["amplitude_corrected"]),
                                                  frame.get("amplitude"))

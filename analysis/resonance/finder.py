@@ -227,6 +227,12 @@ class ResonanceTable:
 
         cols = list(Resonance.__dataclass_fields__)
         frame = pd.DataFrame([asdict(r) for r in self.resonances], columns=cols)
+        if frame.empty:  # keep the dtypes of a filled table
+            types = {k: v.type for k, v in Resonance.__dataclass_fields__.items()}
+            frame = frame.astype({k: ("float64" if t in ("float", float) else
+                                      "int64" if t in ("int", int) else
+                                      "bool" if t in ("bool", bool) else "object")
+                                  for k, t in types.items()})
         frame.attrs.update(units=self.units, amplitude_convention=self.amplitude_convention)
         return frame
 

@@ -160,3 +160,18 @@ def test_weak_criticals_are_listed_not_judged():
     weak = c.matched[c.matched["mode"] == 2].iloc[0]
     assert not weak.significant and not weak.speed_ok
     assert c.agrees
+
+
+def test_no_measured_resonance_leaves_criticals_unmatched():
+    """A record that crosses no critical gives an empty resonance table: the comparison
+    lists the criticals as not found instead of failing."""
+    from analysis.resonance import ResonanceTable
+
+    empty = ResonanceTable(())
+    assert empty.to_frame()["speed_rpm"].dtype == float
+    pred = pd.DataFrame({"mode": [1], "order": [2.0], "speed_rpm": [3000.0],
+                         "amplitude": [1e-3]})
+    c = match_criticals(empty, pred)
+    assert len(c.matched) == 0 and len(c.unmatched_predicted) == 1
+    assert c.flags == ("mode 1 order 2: predicted critical at 3000.0 rpm not found in the "
+                       "measurement (gate ±15 %)",)
