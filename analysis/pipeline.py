@@ -56,6 +56,12 @@ class LoadCase:
     reference_rpm : float or None
         Speed where ``imep`` applies for the propeller law (default: the engine's rated
         speed).
+
+    Examples
+    --------
+    >>> load = LoadCase(imep=2.4e6, law="propeller", reference_rpm=720.0)
+    >>> print(load.scale([360.0, 720.0]))
+    [0.25 1.  ]
     """
 
     imep: float | None = None
@@ -186,6 +192,14 @@ def torsional_channel(record, channel=None) -> str:
     ------
     RecordError
         Unknown channel (with a did-you-mean) or no torsional channel in the record.
+
+    Examples
+    --------
+    >>> import xarray as xr
+    >>> rec = xr.Dataset({"acc": ("time", np.zeros(4), {"quantity": "acceleration"}),
+    ...                   "tv": ("time", np.zeros(4), {"quantity": "angle"})})
+    >>> torsional_channel(rec)
+    'tv'
     """
     names = [str(n) for n in record.data_vars]
     if channel is not None:
@@ -411,6 +425,17 @@ def analyse(record, model, *, channel=None, speed_channel=None, orders=None, max
     ------
     RecordError, ConfigError, ModelError, AnalysisError
         Naming the file, channel or key at fault.
+
+    Examples
+    --------
+    The demo's chain (a few seconds; ``crankbench demo`` runs it from the command line):
+
+    >>> from measure.synth import Scene, synthesize             # doctest: +SKIP
+    >>> scene = Scene.from_toml("sample_data/scenes/marine_6l_runup.toml")  # doctest: +SKIP
+    >>> res = analyse(synthesize(scene).record, "sample_data/shaftlines/marine_6l.toml",
+    ...               load=LoadCase.from_any(scene.load, scene.engine))  # doctest: +SKIP
+    >>> res.comparison.agrees, len(res.comparison.matched)       # doctest: +SKIP
+    (True, 10)
     """
     from .compare import match_criticals
     from .resonance import find_resonances

@@ -141,6 +141,12 @@ def build_report(result, *, title=None, parameters=None, record_path=None, model
     Returns
     -------
     Report
+
+    Examples
+    --------
+    >>> from analysis.pipeline import analyse                    # doctest: +SKIP
+    >>> rep = build_report(analyse("run.h5", "shaftline.toml"))  # doctest: +SKIP
+    >>> rep.save("report.html")                                  # doctest: +SKIP
     """
     from pathlib import Path
 
