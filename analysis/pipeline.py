@@ -167,6 +167,16 @@ class PipelineResult:
         """True when prediction and measurement agree and every limit check passed."""
         return self.comparison.agrees and all(c.passed for c in self.limits)
 
+    def to_frame(self):
+        """The summary as a one-row DataFrame."""
+        import pandas as pd
+
+        return pd.DataFrame([self.summary()])
+
+    def plot(self, ax=None):
+        """Measured against predicted critical speeds (see CriticalComparison.plot)."""
+        return self.comparison.plot(ax=ax)
+
     def summary(self) -> dict:
         """One flat row for batch tables and ``--json``."""
         s = self.comparison.summary()
