@@ -33,7 +33,8 @@ def configure(parser) -> None:
                         help="threads for the local scheduler (default: dask's choice)")
     parser.add_argument("--no-cache", action="store_true", help="ignore and do not write cache")
     parser.add_argument("--reports", metavar="DIR", default=None,
-                        help="also write one HTML report per record into DIR")
+                        help="also write one HTML report per record into DIR (existing "
+                             "reports are replaced only with --overwrite)")
     add_common_arguments(parser)
     parser.add_argument("--json", action="store_true", help="print the summary as JSON")
 
@@ -73,7 +74,8 @@ def cache_key(record_path, model_sha, options) -> str:
     return h.hexdigest()[:20]
 
 
-def process_one(record_path, model_path, options, cache_file=None, report_dir=None) -> dict:
+def process_one(record_path, model_path, options, cache_file=None, report_dir=None,
+                overwrite=False) -> dict:
     """Analyse one record; return its summary row (``status`` 'ok' or 'error').
 
     Never raises for a bad record: the error is returned in the row (``error``) so the batch
@@ -104,7 +106,7 @@ def process_one(record_path, model_path, options, cache_file=None, report_dir=No
 
             out = Path(report_dir) / (Path(record_path).stem + ".html")
             build_report(result, record_path=record_path, model_path=model_path).save(
-                out, overwrite=True)
+                out, overwrite=overwrite, option="--overwrite")
             row["report"] = str(out)
     except Exception as exc:  # noqa: BLE001 - a failing record is reported, never fatal
         log.warning("%s: failed: %s", record_path, exc)
@@ -198,7 +200,7 @@ def run(args) -> int:
                     log.info("%s: unreadable cache entry, recomputing", cache_file)
         task = dask.delayed(process_one, pure=False, name=f"record-{Path(f).name}")(
             f, str(model), options, None if cache_file is None else str(cache_file),
-            args.reports)
+            args.reports, args.overwrite)
         tasks.append(task)
     log.info("%d records: %d cached, %d to run", len(files), len(rows), len(tasks))
     quiet = args.json or log.getEffectiveLevel() > logging.INFO
