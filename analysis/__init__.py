@@ -24,6 +24,8 @@ _LAZY = {
     "differentiate": "spectra",
     "find_resonances": "resonance",
     "match_criticals": "compare",
+    "compare_balance": "compare",
+    "analyse": "pipeline",
     "Report": "report",
 }
 
