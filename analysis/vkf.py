@@ -126,10 +126,10 @@ def _decimate(values: np.ndarray, fs: float, f_max: float):
     f_stop = fs_new - f_max  # aliases of f >= f_stop fall at >= f_max ... keep them out
     numtaps, beta = signal.kaiserord(100.0, (f_stop - f_max) / (0.5 * fs))
     numtaps |= 1
+    if values.shape[0] <= numtaps + 4 * q:  # before designing: the filter could be huge
+        return values, np.arange(values.shape[0]), fs
     h = signal.firwin(numtaps, 0.5 * (f_max + f_stop), window=("kaiser", beta), fs=fs)
     half = numtaps // 2
-    if values.shape[0] <= numtaps + 4 * q:
-        return values, np.arange(values.shape[0]), fs
     filtered = signal.oaconvolve(values, h, mode="valid")[::q]
     index = half + q * np.arange(filtered.shape[0])
     return filtered, index, fs_new

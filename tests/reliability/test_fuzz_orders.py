@@ -182,10 +182,6 @@ def test_speed_far_below_sample_rate_is_our_error(monkeypatch):
         angle_resample(x, fs=200.0, rpm=np.full(64, 1e-5), samples_per_rev=16)
 
 
-@pytest.mark.xfail(strict=True, reason="analysis.vkf._decimate designs its Kaiser FIR before "
-                   "comparing the tap count with the record length (the check is two lines "
-                   "later): rpm = 1e-6 at fs = 200 Hz on 8 samples asks for 1.5e10 taps "
-                   "(115 GiB), MemoryError/OOM instead of the no-decimation path")
 def test_vkf_at_extremely_low_speed_does_not_design_a_huge_filter(monkeypatch):
     from scipy import signal as sps
 
