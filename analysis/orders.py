@@ -254,6 +254,15 @@ def order_track(x, *, fs=None, rpm, orders, amplitude: str = "peak", method: str
     method = check_option(method, "method", _METHODS, error=AnalysisError)
     factor = amplitude_factor(amplitude)
     orders = _check_orders(orders)
+    masked = _dropout_spans(x, fs)
+    if masked is not None:
+        return _track_around_dropouts(x, fs, masked, rpm=rpm, orders=orders,
+                                      amplitude=amplitude, method=method,
+                                      samples_per_rev=samples_per_rev, revolutions=revolutions,
+                                      overlap=overlap, window=window,
+                                      interpolation=interpolation, bandwidth_hz=bandwidth_hz,
+                                      bandwidth_orders=bandwidth_orders,
+                                      filter_order=filter_order)
     if method == "vkf":
         from .vkf import vold_kalman
 
@@ -304,6 +313,68 @@ def order_track(x, *, fs=None, rpm, orders, amplitude: str = "peak", method: str
                      "samples_per_rev": samples_per_rev, "revolutions": revolutions,
                      "resolution_orders": 1.0 / revolutions, "overlap": overlap,
                      "interpolation": interpolation, "enbw_bins": enbw})
+    return ds
+
+
+def _dropout_spans(x, fs):
+    """NaN/inf spans ``[(start, stop), ...]`` of a 1-D signal with some finite samples, else
+    None (a clean signal, or one that is not usable at all: left to the normal checks)."""
+    from measure.record import nonfinite_spans
+
+    values = getattr(x, "values", x)
+    try:
+        values = np.asarray(values, dtype=float)
+    except (TypeError, ValueError):
+        return None
+    if values.ndim != 1 or np.isfinite(values).all() or not np.isfinite(values).any():
+        return None
+    if fs is None and getattr(x, "attrs", {}).get("sample_rate") is None:
+        return None
+    return nonfinite_spans(values)
+
+
+def _track_around_dropouts(x, fs, spans, **options):
+    """Order-track a signal with dropouts (NaN/inf runs, e.g. a record read with
+    ``allow_nonfinite=True``): the runs are bridged by linear interpolation for the computation
+    only, and every result whose analysis window reaches a run is set to NaN, with a warning
+    naming the spans. The window is the block (``revolutions``) for COT and ±2/bandwidth
+    (the filter's memory: outside it the bridged gap moves a 2nd-order VKF track by ~1e-4
+    relative) for VKF, plus one revolution of guard."""
+    import warnings
+
+    from measure.record import RecordWarning
+
+    values = np.asarray(getattr(x, "values", x), dtype=float)
+    fs_ = float(fs if fs is not None else x.attrs["sample_rate"])
+    label = str(getattr(x, "name", None) or "x")
+    good = np.isfinite(values)
+    idx = np.arange(values.shape[0])
+    filled = values.copy()
+    filled[~good] = np.interp(idx[~good], idx[good], values[good])
+    t0 = _t0(x)
+    times = [(t0 + a / fs_, t0 + (b - 1) / fs_) for a, b in spans]
+    shown = ", ".join(f"{a:.6g}..{b:.6g} s" for a, b in times[:5])
+    more = f" and {len(times) - 5} more" if len(times) > 5 else ""
+    warnings.warn(f"{label}: {int((~good).sum())} NaN/inf sample(s) masked at {shown}{more}; "
+                  "order-track results whose analysis window reaches them are NaN",
+                  RecordWarning, stacklevel=3)
+    signal = x.copy(data=filled) if hasattr(x, "dims") else filled
+    ds = order_track(signal, fs=fs, **options)
+    rpm = ds["rpm"].values
+    rev = 60.0 / rpm                                            # s per revolution at each result
+    if options["method"] == "vkf":
+        half = 2.0 / float(ds.attrs["bandwidth_hz_min"]) + rev
+    else:
+        half = (0.5 * options["revolutions"] + 1.0) * rev
+    t = ds["time"].values
+    hit = np.zeros(t.shape[0], bool)
+    for a, b in times:
+        hit |= (t + half >= a) & (t - half <= b)
+    for name in ("amplitude", "phase"):
+        ds[name] = ds[name].where(~hit)
+    if "amplitude_noise" in ds:
+        ds["amplitude_noise"] = ds["amplitude_noise"].where(~hit)
+    ds.attrs["masked_spans_s"] = [v for span in times for v in span]
     return ds
 
 

@@ -381,6 +381,7 @@ def vold_kalman(x, *, fs=None, rpm, orders, bandwidth_hz=None, bandwidth_orders=
                 "rpm": ("time", speeds[0, index], {"units": "rpm"})},
         attrs={"method": "Vold-Kalman filter (joint, banded Cholesky)",
                "channel": label, "bandwidth": kind, "filter_order": p,
+               "bandwidth_hz_min": float(bw_t.min()),
                "solve_rate_hz": fs_d, "decimation": int(round(fs / fs_d)),
                "block_samples": block, "overlap_samples": overlap, "knot_spacing_samples": m,
                "amplitude_std_estimate": std.tolist(),
