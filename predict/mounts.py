@@ -245,9 +245,18 @@ class MountedEngine:
             raise ModelError("mounts must list at least one Mount")
         self.name = name
         self.source = source
+        # singular = some rigid-body motion (practically) unrestrained. Judged on the
+        # Jacobi-scaled stiffness D^-1/2 K D^-1/2 (D = diag K): unit-free (K mixes N/m and
+        # N·m/rad) and blind to a direction that is merely soft, which stays exactly
+        # computable. Its condition number κ bounds the relative error of the softest mode
+        # (~eps·κ, Demmel & Veselić 1992); κ > 1e10 (error > ~1e-6) is refused
         k = self.stiffness_matrix()
-        lam = np.linalg.eigvalsh(k)
-        if lam.min() <= 1e-12 * lam.max():
+        d = np.sqrt(np.diag(k))
+        if np.any(d <= 0):
+            lam = np.zeros(1)
+        else:
+            lam = np.linalg.eigvalsh(k / np.outer(d, d))
+        if lam.min() <= 1e-10 * lam.max():
             raise ModelError("the mounts do not restrain all six rigid-body motions (the "
                              "stiffness matrix is singular); add mounts or stiffness components")
 
