@@ -14,7 +14,8 @@ from ..record import is_pulse_dim, time_coordinate
 from ..units import QUANTITIES, SI_UNITS, sensitivity_to_si, to_si_owned
 
 __all__ = ["clean_attr", "clean_attrs", "regular_start", "channel_meta", "dims_of",
-           "si_channel", "build_dataset", "select", "meta_json", "META_KEYS", "REGULAR_KEY"]
+           "si_channel", "build_dataset", "select", "meta_json", "jsonable_attrs",
+           "refuse_truth", "META_KEYS", "REGULAR_KEY"]
 
 #: Channel attrs carried through every format's metadata slot.
 META_KEYS = ("units", "quantity", "sample_rate", "location", "direction", "sensitivity",
@@ -38,6 +39,22 @@ def clean_attr(value):
             return [clean_attr(v) for v in value.tolist()]
         return value
     return value
+
+
+def jsonable_attrs(attrs: dict) -> dict:
+    """Attrs as JSON-ready values (string keys, numpy arrays as lists) for formats that keep
+    our metadata in a text slot (MDF comments, TDMS properties, UFF ids, WAV sidecar)."""
+    out = {}
+    for key, value in attrs.items():
+        value = clean_attr(value)
+        out[str(key)] = value.tolist() if isinstance(value, np.ndarray) else value
+    return out
+
+
+def refuse_truth(path, truth) -> None:
+    """Raise RecordError if ground truth is given for a format that cannot store it."""
+    if truth is not None:
+        raise RecordError(f"{path}: ground truth can only be stored in .h5/.hdf5/.nc records")
 
 
 def clean_attrs(attrs) -> dict:

@@ -32,7 +32,16 @@ import xarray as xr
 from predict.errors import RecordError
 
 from ..record import is_pulse_dim
-from ._common import build_dataset, channel_meta, clean_attr, dims_of, meta_json, select, si_channel
+from ._common import (
+    build_dataset,
+    channel_meta,
+    clean_attr,
+    dims_of,
+    meta_json,
+    refuse_truth,
+    select,
+    si_channel,
+)
 
 __all__ = ["FORMAT", "check_magic", "read", "write"]
 
@@ -48,8 +57,7 @@ def check_magic(head: bytes) -> bool:
 
 def write(record: xr.Dataset, path, *, truth=None) -> dict:
     """Write ``record`` in the layout above (``truth`` is not storable in CSV)."""
-    if truth is not None:
-        raise RecordError(f"{path}: ground truth can only be stored in .h5/.hdf5/.nc records")
+    refuse_truth(path, truth)
     columns: list[tuple[str, np.ndarray]] = []
     lines = ["# crankbench-record: " + meta_json({str(k): _jsonable(v)
                                                   for k, v in record.attrs.items()})]

@@ -29,7 +29,15 @@ import xarray as xr
 from predict.errors import RecordError
 
 from ..record import is_pulse_dim
-from ._common import build_dataset, channel_meta, clean_attr, dims_of, select, si_channel
+from ._common import (
+    build_dataset,
+    channel_meta,
+    dims_of,
+    jsonable_attrs,
+    refuse_truth,
+    select,
+    si_channel,
+)
 
 __all__ = ["FORMAT", "check_magic", "read", "write"]
 
@@ -48,18 +56,10 @@ def _asammdf():
     return asammdf
 
 
-def _jsonable(d: dict) -> dict:
-    out = {}
-    for k, v in d.items():
-        v = clean_attr(v)
-        out[str(k)] = v.tolist() if isinstance(v, np.ndarray) else v
-    return out
-
 
 def write(record: xr.Dataset, path, *, truth=None) -> dict:
     """Write ``record`` as MDF 4.10."""
-    if truth is not None:
-        raise RecordError(f"{path}: ground truth can only be stored in .h5/.hdf5/.nc records")
+    refuse_truth(path, truth)
     asammdf = _asammdf()
     mdf = asammdf.MDF(version="4.10")
     try:
@@ -76,9 +76,9 @@ def write(record: xr.Dataset, path, *, truth=None) -> dict:
                 meta.pop("units", None)
                 signals.append(asammdf.Signal(values, stamps, name=name,
                                               unit=str(var.attrs.get("units", "")),
-                                              comment=json.dumps(_jsonable(meta))))
+                                              comment=json.dumps(jsonable_attrs(meta))))
             mdf.append(signals, comment=f"crankbench clock {dim}")
-        attrs = _jsonable(dict(record.attrs))
+        attrs = jsonable_attrs(dict(record.attrs))
         mdf.header.comment = _TAG + json.dumps(attrs)
         if "start_time" in attrs:
             start = _dt.datetime.fromisoformat(str(attrs["start_time"]))

@@ -24,8 +24,16 @@ import xarray as xr
 from predict.errors import RecordError
 
 from ..record import is_pulse_dim, time_coordinate
-from ._common import build_dataset, channel_meta, clean_attr, dims_of, regular_start, select, \
-    si_channel
+from ._common import (
+    build_dataset,
+    channel_meta,
+    dims_of,
+    jsonable_attrs,
+    refuse_truth,
+    regular_start,
+    select,
+    si_channel,
+)
 
 __all__ = ["FORMAT", "check_magic", "read", "write", "open"]
 
@@ -44,13 +52,6 @@ def _nptdms():
     return nptdms
 
 
-def _jsonable(d: dict) -> dict:
-    out = {}
-    for k, v in d.items():
-        v = clean_attr(v)
-        out[str(k)] = v.tolist() if isinstance(v, np.ndarray) else v
-    return out
-
 
 def _datetime64(iso: str):
     import datetime as _dt
@@ -63,10 +64,9 @@ def _datetime64(iso: str):
 
 def write(record: xr.Dataset, path, *, truth=None) -> dict:
     """Write ``record`` as one TDMS segment per group."""
-    if truth is not None:
-        raise RecordError(f"{path}: ground truth can only be stored in .h5/.hdf5/.nc records")
+    refuse_truth(path, truth)
     nptdms = _nptdms()
-    attrs = _jsonable(dict(record.attrs))
+    attrs = jsonable_attrs(dict(record.attrs))
     root_props = {"crankbench": json.dumps(attrs)}
     start64 = _datetime64(str(attrs["start_time"])) if "start_time" in attrs else None
     objects = [nptdms.RootObject(properties=root_props)]
@@ -81,7 +81,7 @@ def write(record: xr.Dataset, path, *, truth=None) -> dict:
         for name in names:
             var = record[name]
             props = {"unit_string": str(var.attrs.get("units", "")),
-                     "crankbench": json.dumps({**_jsonable(channel_meta(var, dim=dim)),
+                     "crankbench": json.dumps({**jsonable_attrs(channel_meta(var, dim=dim)),
                                                "n": int(var.size)})}
             if regular is not None:
                 props.update(wf_start_offset=regular, wf_increment=1.0 / float(fs),

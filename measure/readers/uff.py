@@ -26,8 +26,16 @@ import xarray as xr
 from predict.errors import RecordError
 
 from ..record import is_pulse_dim, nonfinite_spans, time_coordinate
-from ._common import build_dataset, channel_meta, clean_attr, dims_of, regular_start, select, \
-    si_channel
+from ._common import (
+    build_dataset,
+    channel_meta,
+    dims_of,
+    jsonable_attrs,
+    refuse_truth,
+    regular_start,
+    select,
+    si_channel,
+)
 
 __all__ = ["FORMAT", "check_magic", "read", "write"]
 
@@ -73,21 +81,13 @@ def _unpack(lines: list[str]) -> dict | None:
     return meta if isinstance(meta, dict) else None
 
 
-def _jsonable(d: dict) -> dict:
-    out = {}
-    for k, v in d.items():
-        v = clean_attr(v)
-        out[str(k)] = v.tolist() if isinstance(v, np.ndarray) else v
-    return out
-
 
 def write(record: xr.Dataset, path, *, truth=None) -> dict:
     """Write ``record`` as a 151 header plus one binary dataset 58 per channel."""
-    if truth is not None:
-        raise RecordError(f"{path}: ground truth can only be stored in .h5/.hdf5/.nc records")
+    refuse_truth(path, truth)
     pyuff = _pyuff()
     file = str(path)
-    header = _jsonable(dict(record.attrs))
+    header = jsonable_attrs(dict(record.attrs))
     header["_n_channels"] = len(record.data_vars)
     d1, d2, d3 = _pack(header, 3, "record", file)
     sets = [dict(type=151, model_name="crankbench record", description=d1, db_app=d2,
@@ -121,7 +121,7 @@ def write(record: xr.Dataset, path, *, truth=None) -> dict:
             if values.size < 2:
                 raise RecordError(f"{file}: channel {name!r} has {values.size} sample(s); UFF 58 "
                                   "needs at least 2")
-            ids = _pack(_jsonable(meta), 4, f"channel {name!r}", file)
+            ids = _pack(jsonable_attrs(meta), 4, f"channel {name!r}", file)
             sets.append(dict(
                 type=58, binary=1, id1=name[:_LINE], id2=ids[0], id3=ids[1], id4=ids[2],
                 id5=ids[3], func_type=1, func_id=i + 1, ver_num=0, load_case_id=0,

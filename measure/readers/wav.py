@@ -47,8 +47,16 @@ import xarray as xr
 from predict.errors import RecordError
 
 from ..record import RecordWarning, is_pulse_dim, time_coordinate
-from ._common import build_dataset, channel_meta, clean_attr, dims_of, regular_start, select, \
-    si_channel
+from ._common import (
+    build_dataset,
+    channel_meta,
+    dims_of,
+    jsonable_attrs,
+    refuse_truth,
+    regular_start,
+    select,
+    si_channel,
+)
 
 __all__ = ["FORMAT", "SIDECARS", "check_magic", "read", "write", "open", "sidecar_path"]
 
@@ -74,18 +82,10 @@ def _sf():
     return soundfile
 
 
-def _jsonable(d: dict) -> dict:
-    out = {}
-    for k, v in d.items():
-        v = clean_attr(v)
-        out[str(k)] = v.tolist() if isinstance(v, np.ndarray) else v
-    return out
-
 
 def write(record: xr.Dataset, path, *, truth=None) -> dict:
     """Write the main clock to ``path`` and return the sidecar bytes for ``.json``."""
-    if truth is not None:
-        raise RecordError(f"{path}: ground truth can only be stored in .h5/.hdf5/.nc records")
+    refuse_truth(path, truth)
     sf = _sf()
     groups = dims_of(record)
     clocks = [d for d in groups if not is_pulse_dim(d)]
@@ -108,10 +108,10 @@ def write(record: xr.Dataset, path, *, truth=None) -> dict:
         raise RecordError(f"{path}: sample rate {fs} Hz is below 1 Hz; WAV cannot hold it")
     sf.write(str(path), frames, header_rate, subtype="DOUBLE" if wide else "FLOAT",
              format="WAV")
-    side = {"crankbench_sidecar": SCHEMA_VERSION, "attrs": _jsonable(dict(record.attrs)),
+    side = {"crankbench_sidecar": SCHEMA_VERSION, "attrs": jsonable_attrs(dict(record.attrs)),
             "sample_rate": fs, "t0": t0, "channels": [], "extra": []}
     for n in names:
-        meta = _jsonable(channel_meta(record[n]))
+        meta = jsonable_attrs(channel_meta(record[n]))
         meta.pop("sample_rate", None)
         side["channels"].append({"name": n, **meta, "dtype": str(record[n].dtype)})
     for dim, others in groups.items():
@@ -119,7 +119,7 @@ def write(record: xr.Dataset, path, *, truth=None) -> dict:
             continue
         for n in others:
             var = record[n]
-            meta = {"name": n, **_jsonable(channel_meta(var, dim=dim)),
+            meta = {"name": n, **jsonable_attrs(channel_meta(var, dim=dim)),
                     "dtype": str(var.dtype)}
             if not is_pulse_dim(dim):
                 td = np.asarray(record[dim].values, dtype=np.float64)
