@@ -4,7 +4,8 @@ Top of the import graph: may import ``measure`` and ``predict``. Public function
 on first use so ``import analysis`` does no work.
 """
 
-import importlib
+from predict._lazy import lazy_names
+
 
 #: public name -> submodule that defines it
 _LAZY = {
@@ -29,15 +30,4 @@ _LAZY = {
     "Report": "report",
 }
 
-__all__ = sorted(_LAZY)
-
-
-def __getattr__(name):
-    if name in _LAZY:
-        module = importlib.import_module(f"{__name__}.{_LAZY[name]}")
-        return getattr(module, name)
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-
-
-def __dir__():
-    return __all__
+__getattr__, __dir__, __all__ = lazy_names(__name__, _LAZY)

@@ -5,8 +5,7 @@ May import ``predict`` (the synthetic bench drives the prediction models), never
 Public functions are loaded on first use so ``import measure`` does no work.
 """
 
-import importlib
-
+from predict._lazy import lazy_names
 from predict.errors import RecordError
 
 _LAZY = {
@@ -30,15 +29,4 @@ _LAZY = {
     "angular_vibration": "torsiograph",
 }
 
-__all__ = sorted([*_LAZY, "RecordError"])
-
-
-def __getattr__(name):
-    if name in _LAZY:
-        module = importlib.import_module(f"{__name__}.{_LAZY[name]}")
-        return getattr(module, name)
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-
-
-def __dir__():
-    return __all__
+__getattr__, __dir__, __all__ = lazy_names(__name__, _LAZY, extra=("RecordError",))

@@ -10,7 +10,8 @@ torsional response), :mod:`.vibrograph` (mount channels), :mod:`.pulses` (tacho/
 trains), :mod:`.imperfections`, :mod:`.run` (``synthesize``). Names are loaded on first use.
 """
 
-import importlib
+from predict._lazy import lazy_names
+
 
 _LAZY = {
     "synthesize": "run",
@@ -21,15 +22,4 @@ _LAZY = {
     "Imperfections": "imperfections",
 }
 
-__all__ = sorted(_LAZY)
-
-
-def __getattr__(name):
-    if name in _LAZY:
-        module = importlib.import_module(f"{__name__}.{_LAZY[name]}")
-        return getattr(module, name)
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-
-
-def __dir__():
-    return __all__
+__getattr__, __dir__, __all__ = lazy_names(__name__, _LAZY)

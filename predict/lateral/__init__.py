@@ -20,7 +20,8 @@ Submodules, imported on use so ``import predict.lateral`` does no work:
     The ``[rotor]`` model-file loader.
 """
 
-import importlib
+from .._lazy import lazy_names
+
 
 #: public name -> submodule that defines it
 _LAZY = {
@@ -47,15 +48,4 @@ _LAZY = {
     "RotorModel": "toml",
 }
 
-__all__ = sorted(_LAZY)
-
-
-def __getattr__(name):
-    if name in _LAZY:
-        module = importlib.import_module(f"{__name__}.{_LAZY[name]}")
-        return getattr(module, name)
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-
-
-def __dir__():
-    return __all__
+__getattr__, __dir__, __all__ = lazy_names(__name__, _LAZY)

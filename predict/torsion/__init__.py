@@ -10,7 +10,8 @@ Public names are imported lazily (no work at import time).
 
 from __future__ import annotations
 
-import importlib
+from .._lazy import lazy_names
+
 
 __all__ = ["chain", "TorsionalSystem", "Modes", "from_toml", "forced_response",
            "ForcedResponse", "ShaftLine", "resonance_amplitudes", "engine_excitation",
@@ -31,13 +32,4 @@ _LAZY = {
     "check_stress": "stress",
 }
 
-
-def __getattr__(name):
-    if name in _LAZY:
-        module = importlib.import_module(f"{__name__}.{_LAZY[name]}")
-        return getattr(module, name)
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-
-
-def __dir__():
-    return sorted(set(globals()) | set(__all__))
+__getattr__, __dir__, _names = lazy_names(__name__, _LAZY)
