@@ -314,7 +314,8 @@ def read_truth(path) -> xr.Dataset:
         raise _wrap(path, module, exc) from exc
 
 
-def open(path, *, chunk_seconds: float = 10.0, channels=None) -> xr.Dataset:  # noqa: A001
+def open(path, *, chunk_seconds: float = 10.0, channels=None,  # noqa: A001
+         allow_nonfinite: bool = False) -> xr.Dataset:
     """Open a record lazily: a Record whose channels are dask arrays of ``chunk_seconds``.
 
     Parameters
@@ -327,12 +328,17 @@ def open(path, *, chunk_seconds: float = 10.0, channels=None) -> xr.Dataset:  # 
         Target chunk length per clock, s (> 0).
     channels : list of str, optional
         Only these channels.
+    allow_nonfinite : bool
+        Keep NaN/inf samples. By default every block is checked as it is computed, and one
+        holding NaN/inf raises :class:`RecordError` naming the file, the channel and the time
+        of the first bad sample (a lazy record cannot be scanned up front without reading it
+        all).
 
     Returns
     -------
     xarray.Dataset
-        Lazily loaded Record (attrs ``source`` and ``sha256`` set; NaN scan left to the
-        consumer). Use :func:`iter_blocks` or dask reductions to process it.
+        Lazily loaded Record (attrs ``source`` and ``sha256`` set). Use :func:`iter_blocks` or
+        dask reductions to process it.
 
     Notes
     -----
@@ -377,9 +383,37 @@ def open(path, *, chunk_seconds: float = 10.0, channels=None) -> xr.Dataset:  # 
     ds.attrs["source"] = path.name
     ds.attrs["sha256"] = sha256_of(path)
     try:
-        return validate(ds, allow_nonfinite=True)
+        ds = validate(ds, allow_nonfinite=True)
     except RecordError as exc:
         raise _named(path, exc) from None
+    return ds if allow_nonfinite else _guard_finite(ds, path)
+
+
+def _guard_finite(ds: xr.Dataset, path: Path) -> xr.Dataset:
+    """Wrap each lazy float channel so a block with NaN/inf raises RecordError when computed."""
+    import dask.array as da
+
+    for name, var in ds.data_vars.items():
+        data = var.data
+        if not isinstance(data, da.Array) or data.dtype.kind != "f" or data.ndim != 1:
+            continue
+        fs = var.attrs.get("sample_rate")
+        t0 = float(ds[var.dims[0]][0]) if fs and var.dims[0] in ds.coords and var.size else 0.0
+
+        def check(block, block_info=None, _name=name, _fs=fs, _t0=t0):
+            bad = ~np.isfinite(block)
+            if bad.any():
+                start = block_info[0]["array-location"][0][0] if block_info else 0
+                i = start + int(np.flatnonzero(bad)[0])
+                when = f" (t = {_t0 + i / float(_fs):.6g} s)" if _fs else ""
+                raise RecordError(
+                    f"{path.name}: channel {_name!r} has {int(bad.sum())} NaN/inf value(s) in "
+                    f"the block from sample {start}, first at sample {i}{when}; expected finite "
+                    "samples (open(..., allow_nonfinite=True) keeps them)")
+            return block
+
+        ds[name] = var.copy(data=data.map_blocks(check, dtype=data.dtype))
+    return ds
 
 
 def iter_blocks(record: xr.Dataset, name: str):

@@ -261,8 +261,13 @@ class _LazyH5:
 
     def __getitem__(self, key):
         h5py = _h5()
-        with h5py.File(self.path, "r") as f:
-            return f["channels"][self.name][key]
+        try:
+            with h5py.File(self.path, "r") as f:
+                return f["channels"][self.name][key]
+        except (OSError, KeyError) as exc:  # damage found only now, at a deferred read
+            raise RecordError(f"{self.path}: channel {self.name!r} cannot be read at {key!r} "
+                              f"(damaged or truncated HDF5 file: {exc}); expected an intact "
+                              "record file") from None
 
 
 def open(path, *, chunk_seconds: float = 10.0, channels=None) -> xr.Dataset:  # noqa: A001

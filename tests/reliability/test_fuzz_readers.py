@@ -141,3 +141,44 @@ def test_every_truncation_point_of_small_file(ext, valid_files, tmp_path):
         if ext == ".wav":
             path.with_name(path.name + ".json").write_bytes(valid_files[".wav.json"])
         _check_read(path, path.name)
+
+
+def _check_open(path, expected_name):
+    """Lazy open of a damaged file, then load every channel: the same contract as read —
+    our error naming the file (at open or at load) or valid finite data."""
+    try:
+        with time_limit(20):
+            rec = mio.open(path, chunk_seconds=0.05)
+            rec = rec.load()
+    except CrankbenchError as exc:
+        assert expected_name in str(exc), f"error does not name the file: {exc}"
+        return None
+    except FileNotFoundError as exc:
+        assert path.name in str(exc) or ".json" in str(exc), str(exc)
+        return None
+    for name, var in rec.data_vars.items():
+        values = np.asarray(var.values)
+        if values.dtype.kind == "f":
+            assert np.all(np.isfinite(values)), f"channel {name!r} has NaN/inf without error"
+    return rec
+
+
+@pytest.mark.parametrize("ext", [".h5", ".nc", ".tdms", ".wav"])
+@FUZZ
+@given(m=mutation)
+def test_damaged_file_opened_lazily_gives_our_error_or_valid_data(ext, m, valid_files,
+                                                                   tmp_path):
+    """The streaming readers defer reading samples: damage found at load time must still be
+    our error naming the file, not a dask/h5py/npTDMS exception."""
+    path = tmp_path / f"lazy{ext}"
+    path.write_bytes(_mutate(valid_files[ext], *m))
+    if ext == ".wav":
+        path.with_name(path.name + ".json").write_bytes(valid_files[".wav.json"])
+    _check_open(path, path.name)
+
+
+def test_lazy_h5_with_zeroed_tail_fails_with_our_error_at_load(valid_files, tmp_path):
+    path = tmp_path / "zeroed.h5"
+    path.write_bytes(_mutate(valid_files[".h5"], "zero-tail", 0.8632, 3, 1448))
+    with pytest.raises(CrankbenchError, match=r"zeroed\.h5"):
+        mio.open(path, chunk_seconds=0.05).load()
