@@ -21,14 +21,42 @@ def configure(parser) -> None:
     parser.add_argument("--pdf", action="store_true", help="also write REPORT.pdf")
     parser.add_argument("--overwrite", action="store_true", help="replace existing outputs")
     parser.add_argument("--title", default=None, help="report title")
+    parser.add_argument("--bench", action="store_true",
+                        help="append the speed-against-error tables of `crankbench bench "
+                             "--quick` (about a minute)")
     add_common_arguments(parser)
     parser.add_argument("--json", action="store_true",
                         help="print the written paths and the summary as JSON")
 
 
+def add_bench_appendix(rep, rows) -> None:
+    """Append the bench table (one table and one speed-against-error plot per suite)."""
+    from analysis.commands.bench import plot_suite, rows_to_frame
+
+    frame = rows_to_frame(rows)
+    section = "Appendix: speed against error"
+    failed = int((~frame["passed"]).sum())
+    rep.add_text(f"{len(frame)} rows from `crankbench bench --quick`, run with this report: each "
+                 "row is one method at one setting, its error against an independent reference "
+                 "(closed form, mpmath, a second method), its median time and the ratio to a "
+                 "baseline timed in the same run. "
+                 + (f"{failed} row(s) exceed their documented bound." if failed else
+                    "Every row is within its documented error bound."),
+                 title=section, section=section)
+    cols = ["method", "setting", "error", "error_kind", "bound", "time_s", "baseline", "ratio",
+            "passed"]
+    for suite, part in frame.groupby("suite"):
+        rep.add_table(part[cols], title=f"bench: {suite}", section=section)
+        rep.add_figure(plot_suite(part, suite), title=f"bench: {suite}, error against time",
+                       section=section)
+
+
 def write_outputs(result, output, *, pdf, overwrite, title=None, parameters=None,
-                  record_path=None, model_path=None):
-    """Build the report and write HTML (and PDF); return the written paths."""
+                  record_path=None, model_path=None, bench_rows=None):
+    """Build the report and write HTML (and PDF); return the written paths.
+
+    ``bench_rows`` (rows of :func:`analysis.bench.run_suites`) adds the bench appendix.
+    """
     from pathlib import Path
 
     from measure._atomic import check_overwrite
@@ -42,6 +70,8 @@ def write_outputs(result, output, *, pdf, overwrite, title=None, parameters=None
         check_overwrite(t, overwrite, option="--overwrite")
     rep = build_report(result, title=title, parameters=parameters, record_path=record_path,
                        model_path=model_path)
+    if bench_rows is not None:
+        add_bench_appendix(rep, bench_rows)
     return [rep.save(t, overwrite=overwrite, option="--overwrite") for t in targets]
 
 
@@ -71,9 +101,15 @@ def run(args) -> int:
         bar.close()
     params = {"channel": result.channel, "method": args.method, "gate": args.gate,
               "tolerance": args.tolerance, "machine class": args.machine_class}
+    bench_rows = None
+    if args.bench:
+        from analysis.bench import run_suites
+
+        log.info("report: running the quick bench suites for the appendix ...")
+        bench_rows = run_suites(quick=True, progress=lambda n: log.info("bench: suite %s", n))
     paths = write_outputs(result, out, pdf=args.pdf, overwrite=args.overwrite,
                           title=args.title, parameters=params, record_path=args.record,
-                          model_path=args.model)
+                          model_path=args.model, bench_rows=bench_rows)
     if args.json:
         print_json({"written": [str(p) for p in paths], "summary": result.summary()})
     else:
