@@ -17,7 +17,7 @@ import sys
 
 from predict.errors import CrankbenchError
 
-__all__ = ["main", "build_parser", "COMMANDS"]
+__all__ = ["main", "build_parser", "verbosity_parent", "COMMANDS"]
 
 log = logging.getLogger("crankbench")
 
@@ -33,6 +33,18 @@ def _load(name: str):
         if exc.name == f"analysis.commands.{name}":
             return None  # command not part of this build
         raise
+
+
+def verbosity_parent() -> argparse.ArgumentParser:
+    """Parent parser giving a sub-command ``-v``/``-q`` after its name too
+    (``crankbench report ... -q``); SUPPRESS keeps the top-level value unless given there."""
+    common = argparse.ArgumentParser(add_help=False)
+    group = common.add_mutually_exclusive_group()
+    group.add_argument("-v", "--verbose", action="count", default=argparse.SUPPRESS,
+                       help="more log output (-vv for debug, with tracebacks on error)")
+    group.add_argument("-q", "--quiet", action="store_true", default=argparse.SUPPRESS,
+                       help="only warnings and errors")
+    return common
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -52,12 +64,13 @@ def build_parser() -> argparse.ArgumentParser:
     verbosity.add_argument("-v", "--verbose", action="count", default=0,
                            help="more log output (-vv for debug, with tracebacks on error)")
     verbosity.add_argument("-q", "--quiet", action="store_true", help="only warnings and errors")
+    common = verbosity_parent()
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     for name in COMMANDS:
         module = _load(name)
         if module is None:
             continue
-        p = sub.add_parser(name, help=module.HELP, description=module.HELP)
+        p = sub.add_parser(name, help=module.HELP, description=module.HELP, parents=[common])
         module.configure(p)
         p.set_defaults(_run=module.run)
     return parser

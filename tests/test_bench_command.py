@@ -48,3 +48,14 @@ def test_median_time_reports_per_call_time():
     import time
     t = median_time(lambda: time.sleep(0.002), repeats=3, warmup=0)
     assert 0.0015 < t < 0.05
+
+
+def test_verbosity_flags_work_before_and_after_the_command(capsys):
+    from analysis.cli import build_parser
+
+    parser = build_parser()
+    assert parser.parse_args(["-q", "bench", "--list"]).quiet is True
+    assert parser.parse_args(["bench", "--list", "-q"]).quiet is True
+    assert parser.parse_args(["bench", "--list"]).quiet is False
+    assert parser.parse_args(["bench", "-vv", "--list"]).verbose == 2
+    assert parser.parse_args(["predict", "torsion", "m.toml", "-q"]).quiet is True

@@ -15,6 +15,9 @@ PREDICTIONS = ("balance", "torsion", "lateral", "flywheel")
 
 
 def configure(parser) -> None:
+    from analysis.cli import verbosity_parent
+
+    common = verbosity_parent()
     sub = parser.add_subparsers(dest="prediction", metavar="WHAT", required=True)
     for what in PREDICTIONS:
         try:
@@ -23,7 +26,7 @@ def configure(parser) -> None:
             if exc.name == f"analysis.commands.predict_{what}":
                 continue
             raise
-        p = sub.add_parser(what, help=module.HELP, description=module.HELP)
+        p = sub.add_parser(what, help=module.HELP, description=module.HELP, parents=[common])
         module.configure(p)
         p.set_defaults(_predict=module.run)
 
