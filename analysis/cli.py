@@ -14,6 +14,7 @@ import argparse
 import importlib
 import logging
 import sys
+import warnings
 
 from predict.errors import CrankbenchError
 
@@ -96,9 +97,17 @@ def main(argv: list[str] | None = None) -> int:
         if not getattr(args, "_run", None):
             parser.print_help()
             return 1
-        return _run(args)
+        with warnings.catch_warnings():  # restores showwarning on the way out
+            # a warning (masked dropout, clipped channel...) reads as one log line, not as
+            # Python's "file:line: Category: message" with a source line
+            warnings.showwarning = _log_warning
+            return _run(args)
     finally:  # main() may be called in-process (tests, notebooks): leave logging as found
         log.handlers[:], log.level, log.propagate = saved
+
+
+def _log_warning(message, category, filename, lineno, file=None, line=None):
+    log.warning("warning: %s", message)
 
 
 def _run(args) -> int:

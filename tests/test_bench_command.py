@@ -59,3 +59,20 @@ def test_verbosity_flags_work_before_and_after_the_command(capsys):
     assert parser.parse_args(["bench", "--list"]).quiet is False
     assert parser.parse_args(["bench", "-vv", "--list"]).verbose == 2
     assert parser.parse_args(["predict", "torsion", "m.toml", "-q"]).quiet is True
+
+
+def test_warnings_reach_the_cli_user_as_one_log_line(monkeypatch, capsys):
+    import warnings
+
+    def warn_suite(quick):
+        warnings.warn("channel 'acc': 3 samples clipped at 1.2..1.3 s", UserWarning)
+        return [Row("demo", "m", "s", 0.0, "abs", "ref", 1e-3)]
+
+    module = types.ModuleType("analysis.bench.suite_warn")
+    module.run = warn_suite
+    monkeypatch.setitem(sys.modules, "analysis.bench.suite_warn", module)
+    monkeypatch.setattr(bench, "suites", lambda: ["warn"])
+    assert main(["bench", "--quick"]) == 0
+    err = capsys.readouterr().err
+    assert "warning: channel 'acc': 3 samples clipped at 1.2..1.3 s" in err
+    assert "UserWarning" not in err and "warnings.warn(" not in err
