@@ -26,19 +26,50 @@ CSV columns: ``run, measurement_plane, amplitude, phase_deg`` and optionally
 The first run without trial masses is the initial run; runs with trial masses are the trial
 runs (masses relative to the initial state); ``--check NAME`` marks a run made after fitting
 the corrections.
+
+Records. With ``--channel`` (repeatable, one per measurement plane, in plane order) every RUN is
+a measurement record (any file :func:`measure.read` reads: .h5, .nc, .csv, .mf4, .tdms, ...;
+the run's name is the file stem). The 1st-order amplitude (SI units of the channels) and phase
+of each channel are averaged over the steady part of the run by
+:func:`analysis.balancing.first_order_phasors`, with the phase referred to a once-per-rev tacho
+when the record has one (all runs must share the same kind of reference). The trial masses of
+record runs are given by ``--trial RUN:PLANE:MASS_KG@ANGLE_DEG`` (repeatable; RUN is the run's
+1-based position among RUNS or its name), e.g.::
+
+    crankbench balance initial.h5 trial_plane1.h5 trial_plane2.h5 \
+        --channel bearing_a --channel bearing_b --trial 2:1:0.010@0 --trial 3:2:0.010@0
+
+(sample records: ``sample_data/balance/records/``, see its ``generate.py``).
 """
 
 from __future__ import annotations
 
 from pathlib import Path
 
-HELP = "rotor balancing from trial-weight runs: correction masses, conditioning, ISO grade"
+HELP = ("rotor balancing from trial-weight runs (run files or records with --channel): "
+        "correction masses, conditioning, ISO grade")
 
-__all__ = ["HELP", "configure", "run", "read_runs"]
+__all__ = ["HELP", "configure", "run", "read_runs", "read_record_runs", "parse_trial"]
 
 
 def configure(parser) -> None:
-    parser.add_argument("runs", nargs="+", help="run files (.toml one run each, .csv any number)")
+    parser.add_argument("runs", nargs="+",
+                        help="run files (.toml one run each, .csv any number) or, with "
+                             "--channel, records (.h5 .nc .csv .mf4 .tdms ...; e.g. "
+                             "sample_data/balance/records/*.h5)")
+    parser.add_argument("--channel", action="append", default=None, metavar="NAME",
+                        help="record channel of a measurement plane (repeat, in plane order); "
+                             "makes every RUN a record")
+    parser.add_argument("--trial", action="append", default=[], metavar="RUN:PLANE:KG@DEG",
+                        help="trial mass carried by record run RUN (1-based position or name): "
+                             "correction plane, mass kg, angle deg from the mark (repeatable)")
+    parser.add_argument("--speed-channel", default=None,
+                        help="record speed source (rotational_speed channel or pulse train; "
+                             "default: found)")
+    parser.add_argument("--steady-fraction", type=float, default=0.8,
+                        help="central fraction of each record averaged (default 0.8)")
+    parser.add_argument("--revolutions", type=int, default=16,
+                        help="order-tracking block length, revolutions (default 16)")
     parser.add_argument("--json", action="store_true", help="print JSON instead of tables")
     parser.add_argument("--check", default=None,
                         help="name of the check run (made with the corrections fitted)")
@@ -138,6 +169,92 @@ def read_runs(paths) -> list[dict]:
     return runs
 
 
+def parse_trial(text: str) -> tuple[str, int, float, float]:
+    """Parse ``RUN:PLANE:MASS_KG@ANGLE_DEG`` into (run, plane, mass kg, angle deg).
+
+    Examples
+    --------
+    >>> parse_trial("2:1:0.010@30")
+    ('2', 1, 0.01, 30.0)
+    """
+    from predict.errors import ConfigError
+
+    try:
+        run_id, plane, rest = text.rsplit(":", 2)
+        mass, _, angle = rest.partition("@")
+        out = (run_id.strip(), int(plane), float(mass), float(angle or 0.0))
+    except ValueError:
+        raise ConfigError(f"--trial {text!r}: expected RUN:PLANE:MASS_KG@ANGLE_DEG, e.g. "
+                          "2:1:0.010@0") from None
+    if not out[0] or out[1] < 1 or not out[2] > 0 or not _finite(out[2], out[3]):
+        raise ConfigError(f"--trial {text!r}: needs a run, a plane >= 1, a mass > 0 kg and a "
+                          "finite angle")
+    return out
+
+
+def _finite(*values) -> bool:
+    import math
+
+    return all(math.isfinite(v) for v in values)
+
+
+def read_record_runs(paths, channels, trials=(), *, speed_channel=None, steady_fraction=0.8,
+                     revolutions=16):
+    """Read records into run dicts (like :func:`read_runs`) plus the table of phasors.
+
+    ``trials`` are :func:`parse_trial` tuples. Returns (runs, phasors DataFrame).
+    """
+    import pandas as pd
+
+    from measure import read
+    from predict.errors import ConfigError, RecordError
+
+    from ..balancing import first_order_phasors
+
+    paths = [Path(p) for p in paths]
+    names = [p.stem for p in paths]
+    dup = {n for n in names if names.count(n) > 1}
+    if dup:
+        raise RecordError(f"record runs are named by file stem, repeated: {sorted(dup)}")
+    carried = {n: [] for n in names}
+    for run_id, plane, mass, angle in trials:
+        if run_id.isdigit():
+            k = int(run_id)
+            if not 1 <= k <= len(paths):
+                raise ConfigError(f"--trial {run_id}:...: run position must be 1..{len(paths)}")
+            name = names[k - 1]
+        elif run_id in carried:
+            name = run_id
+        else:
+            raise ConfigError(f"--trial {run_id}:...: no run named {run_id!r}; runs: {names}")
+        carried[name].append((plane, mass, angle))
+    runs, frames = [], []
+    for p, name in zip(paths, names):
+        if not p.exists():
+            raise FileNotFoundError(f"{p}: no such record file")
+        record = read(p)
+        ph = first_order_phasors(record, channels, speed_channel=speed_channel,
+                                 steady_fraction=steady_fraction, revolutions=revolutions)
+        ph.insert(0, "run", name)
+        ph.insert(2, "measurement_plane", range(1, len(ph) + 1))
+        frames.append(ph)
+        runs.append(dict(name=name, source=str(p), speed_rpm=float(ph.rpm.mean()),
+                         trials=sorted(carried[name]),
+                         meas=[(k, a, d) for k, a, d in zip(ph.measurement_plane, ph.amplitude,
+                                                           ph.phase_deg)]))
+    phasors = pd.concat(frames, ignore_index=True)
+    refs = {r.split(" ")[0] for r in phasors.phase_reference}
+    if len(refs) > 1:
+        bad = phasors.groupby("run").phase_reference.first().to_dict()
+        raise RecordError("runs have different phase references (some have a 1/rev tacho, some "
+                          f"not); influence coefficients would be inconsistent: {bad}")
+    units = set(phasors.units)
+    if len(units) > 1:
+        raise RecordError(f"channels have different units {sorted(units)}; use channels of one "
+                          "quantity")
+    return runs, phasors
+
+
 def run(args) -> int:
     import warnings
 
@@ -148,7 +265,17 @@ def run(args) -> int:
     from predict.errors import ConfigError, RecordError
     from predict.rotor_balance import BalanceWarning, grade_check, influence_balance, phasor
 
-    runs = read_runs(args.runs)
+    phasors = None
+    if getattr(args, "channel", None):
+        runs, phasors = read_record_runs(
+            args.runs, args.channel, [parse_trial(t) for t in args.trial],
+            speed_channel=args.speed_channel, steady_fraction=args.steady_fraction,
+            revolutions=args.revolutions)
+    else:
+        if getattr(args, "trial", None):
+            raise ConfigError("--trial applies to record runs (with --channel); run files "
+                              "carry their trial masses")
+        runs = read_runs(args.runs)
     planes = sorted({m[0] for r in runs for m in r["meas"]})
     for r in runs:
         got = [m[0] for m in r["meas"]]
@@ -187,6 +314,7 @@ def run(args) -> int:
                influence=result.influence_frame(), condition_number=result.condition_number,
                trial_condition=result.trial_condition,
                response_change=list(result.response_change), warnings=list(result.warnings),
+               phasors=phasors,
                predicted_residual=pd.DataFrame({
                    "measurement_plane": planes, "amplitude": np.abs(result.residual),
                    "phase_deg": np.degrees(np.angle(result.residual))}))
@@ -204,11 +332,16 @@ def run(args) -> int:
                                        smallest_grade_met=g.smallest_grade, planes=g.to_frame())
         elif any(v is not None for v in (args.radius, args.rotor_mass, args.max_speed)):
             raise ConfigError("the ISO check needs all of --radius, --rotor-mass, --max-speed")
+    if phasors is None:
+        del out["phasors"]
     if args.json:
         print_json(out)
         return 0
     print(f"initial run {initial['name']!r}, trial runs {out['trial_runs']}, "
           f"{len(planes)} measurement planes, {n_planes} correction planes")
+    if phasors is not None:
+        print_table(phasors.drop(columns=["units"]),
+                    title=f"1st-order phasors ({phasors.units.iloc[0]}, peak)")
     print_table(out["corrections"], title="\ncorrection masses (at the trial-weight radius)")
     print(f"\ninfluence matrix condition number {result.condition_number:.4g}; response change "
           f"per trial {', '.join(f'{100 * c:.3g} %' for c in result.response_change)}")

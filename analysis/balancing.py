@@ -1,0 +1,190 @@
+"""1st-order vibration phasors of balancing runs from records (input to influence balancing).
+
+Influence-coefficient balancing (:mod:`predict.rotor_balance`) needs, for every run and every
+measurement plane, the once-per-revolution vibration as amplitude and phase against a mark on
+the rotor. :func:`first_order_phasors` takes them from a Record: the shaft speed comes from
+:func:`analysis.speedref.speed_reference`, the 1st order from computed order tracking
+(:func:`analysis.orders.order_track`, blocks of ``revolutions`` shaft revolutions), and the
+block phasors ``A e^{ip}`` of the steady part of the run are averaged (vector mean).
+
+Phase reference. ``order_track`` gives the phase of ``A cos(φ + p)`` with the shaft angle ``φ``
+zero at the record's first sample, which differs from run to run. When the record holds a
+once-per-revolution pulse train (a tacho: ``pulses_per_rev = 1``), the phase is moved to the
+tacho mark: each block's phase is referred to the tacho edge nearest its centre,
+``p' = p + φ(t_edge)``, so ``x = A cos(θ + p')`` with ``θ`` the shaft angle since the mark passed the pick-up. Without
+a tacho the reference stays the record start, which is consistent between runs only when the
+acquisition was triggered at the same shaft angle; the reference used is reported in the
+``phase_reference`` column and the balance command refuses runs with different references.
+
+Error: the averaged phasor's scatter is reported as ``std`` (the RMS distance of the block
+phasors from their mean, units of the channel) and ``phase_std_deg`` (``std/amplitude`` in
+degrees); blocks overlap by half, so the standard error of the mean is about
+``std·sqrt(2/n_blocks)``. The angle integration between tacho edges adds ``Δn/n · 360°`` per
+revolution for a speed error ``Δn``, at most half a revolution away from an edge.
+
+References
+----------
+交通大学《内燃机动力学》(1958) 第二篇第五章 §1 (angle marks on vibration records).
+ISO 21940-11:2016 (balancing of rotors; initial, trial and check runs).
+"""
+
+from __future__ import annotations
+
+import logging
+
+import numpy as np
+
+from predict._validate import check_int, check_range, suggest
+from predict.errors import AnalysisError, RecordError
+
+__all__ = ["first_order_phasors", "tacho_channel"]
+
+log = logging.getLogger("crankbench")
+
+
+def tacho_channel(record) -> str | None:
+    """Name of the record's once-per-revolution pulse train (the phase mark), or None.
+
+    Examples
+    --------
+    >>> import xarray as xr
+    >>> rec = xr.Dataset({"key": ("pulse", [0.0, 0.1], {"quantity": "pulse_times",
+    ...                                                 "pulses_per_rev": 1})})
+    >>> tacho_channel(rec)
+    'key'
+    """
+    for name in map(str, record.data_vars):
+        var = record[name]
+        if var.attrs.get("quantity") == "pulse_times" or str(var.dims[0]).startswith("pulse"):
+            if int(var.attrs.get("pulses_per_rev", 0)) == 1 and not int(
+                    var.attrs.get("missing_teeth", 0)):
+                return name
+    return None
+
+
+def _steady_mask(rpm: np.ndarray, steady_fraction: float, speed_tolerance: float) -> np.ndarray:
+    n = rpm.size
+    drop = int(np.floor(n * (1.0 - steady_fraction) / 2.0))
+    keep = np.zeros(n, bool)
+    keep[drop:n - drop] = True
+    mid = np.median(rpm[keep])
+    return keep & (np.abs(rpm - mid) <= speed_tolerance * mid)
+
+
+def first_order_phasors(record, channels, *, speed_channel: str | None = None,
+                        steady_fraction: float = 0.8, speed_tolerance: float = 0.02,
+                        revolutions: int = 16):
+    """Averaged 1st-order amplitude and phase of measurement channels over a steady run.
+
+    Parameters
+    ----------
+    record : xarray.Dataset
+        A Record (see DESIGN.md) with the vibration channels and a speed reference (a
+        ``rotational_speed`` channel or a pulse train; a 1/rev tacho also sets the phase mark).
+    channels : sequence of str
+        Measurement-plane channels, in plane order.
+    speed_channel : str, optional
+        Speed source (default: found by :func:`analysis.speedref.find_speed_channel`).
+    steady_fraction : float
+        Central fraction of the run's order-track blocks used (0–1]; the run-in and run-out
+        ends are dropped.
+    speed_tolerance : float
+        Of those, blocks whose speed is within this fraction of the median speed are averaged.
+    revolutions : int
+        Order-tracking block length, revolutions (fidelity knob: longer blocks reject more
+        broadband noise, error ∝ 1/sqrt(revolutions)).
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per channel: ``channel``, ``amplitude`` (peak, SI units of the channel),
+        ``phase_deg`` (of ``A cos(θ + phase)``), ``std`` (scatter of the block phasors, units
+        of the channel), ``phase_std_deg``, ``rpm`` (mean speed of the averaged blocks),
+        ``n_blocks``, ``units`` and ``phase_reference`` ('tacho <name>' or 'record start').
+
+    References
+    ----------
+    Fyfe & Munck, "Analysis of computed order tracking", MSSP 11(2) (1997) (order tracking);
+    ISO 21940-11:2016 (trial-weight runs).
+
+    Examples
+    --------
+    >>> from measure.record import make_record
+    >>> fs, f = 1000.0, 20.0                     # 1200 rpm
+    >>> t = np.arange(int(8 * fs)) / fs
+    >>> rec = make_record({
+    ...     "brg": dict(data=2e-5 * np.cos(2 * np.pi * f * t + 0.5), sample_rate=fs, units="m"),
+    ...     "key": dict(data=(np.arange(160) + 0.25) / f, quantity="pulse_times", units="s",
+    ...                 pulses_per_rev=1)})
+    >>> df = first_order_phasors(rec, ["brg"])
+    >>> print(f"{df.amplitude[0] * 1e6:.3f} µm, {df.phase_deg[0]:.2f}°, {df.rpm[0]:.1f} rpm")
+    20.000 µm, 118.65°, 1200.0 rpm
+    """
+    import pandas as pd
+
+    from .orders import order_track
+    from .resample import shaft_angle
+    from .speedref import _times, speed_reference
+
+    steady_fraction = check_range(steady_fraction, "steady_fraction", 0.0, 1.0,
+                                  error=AnalysisError)
+    if steady_fraction <= 0:
+        raise AnalysisError("steady_fraction must be > 0 (fraction of the run averaged)")
+    speed_tolerance = check_range(speed_tolerance, "speed_tolerance", 0.0, 1.0,
+                                  error=AnalysisError)
+    revolutions = check_int(revolutions, "revolutions", minimum=1, error=AnalysisError)
+    if isinstance(channels, str):
+        channels = [channels]
+    channels = list(channels)
+    if not channels:
+        raise AnalysisError("channels must name at least one measurement-plane channel")
+    names = list(map(str, record.data_vars))
+    source = record.attrs.get("source", "record")
+    for ch in channels:
+        if ch not in names:
+            raise RecordError(f"{source}: no channel {ch!r}{suggest(ch, names)}; channels: "
+                              f"{', '.join(names)}")
+    mark = tacho_channel(record)
+    rows = []
+    for ch in channels:
+        rpm = speed_reference(record, ch, speed_channel=speed_channel)
+        track = order_track(record[ch], rpm=rpm, orders=[1], revolutions=revolutions)
+        amp = track.amplitude.values[0]
+        phase = track.phase.values[0]
+        t_blk = track.time.values
+        r_blk = track.rpm.values
+        if mark is not None:
+            t_ch = _times(record, ch)
+            fs = (t_ch.size - 1) / (t_ch[-1] - t_ch[0])
+            phi = shaft_angle(rpm, fs)
+            edges = np.asarray(record[mark].values, float)
+            edges = edges[(edges >= t_ch[0]) & (edges <= t_ch[-1])]
+            if edges.size == 0:
+                raise RecordError(f"{source}: tacho {mark!r} has no edge within channel "
+                                  f"{ch!r}'s time span")
+            near = edges[np.clip(np.searchsorted(edges, t_blk), 0, edges.size - 1)]
+            prev = edges[np.clip(np.searchsorted(edges, t_blk) - 1, 0, edges.size - 1)]
+            near = np.where(np.abs(prev - t_blk) < np.abs(near - t_blk), prev, near)
+            phase = phase + np.interp(near, t_ch, phi)
+            reference = f"tacho {mark}"
+        else:
+            reference = "record start"
+        good = _steady_mask(r_blk, steady_fraction, speed_tolerance) & np.isfinite(amp)
+        if not good.any():
+            raise AnalysisError(f"{source}: channel {ch!r}: no steady order-track block (speed "
+                                f"within {100 * speed_tolerance:g} % of the median); record "
+                                f"holds {t_blk.size} blocks of {revolutions} revolutions")
+        z = amp[good] * np.exp(1j * phase[good])
+        mean = z.mean()
+        if good.sum() > 1:
+            std = float(np.sqrt(np.mean(np.abs(z - mean) ** 2)))
+        else:  # one block: the broadband-noise error estimate of order_track
+            std = float(track.amplitude_noise.values[good][0])
+        rows.append(dict(channel=ch, amplitude=float(abs(mean)),
+                         phase_deg=float(np.degrees(np.angle(mean))), std=std,
+                         phase_std_deg=float(np.degrees(std / abs(mean))) if abs(mean) > 0
+                         else 180.0,
+                         rpm=float(r_blk[good].mean()), n_blocks=int(good.sum()),
+                         units=str(record[ch].attrs.get("units", "")),
+                         phase_reference=reference))
+    return pd.DataFrame(rows)
