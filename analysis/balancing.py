@@ -11,16 +11,17 @@ Phase reference. ``order_track`` gives the phase of ``A cos(φ + p)`` with the s
 zero at the record's first sample, which differs from run to run. When the record holds a
 once-per-revolution pulse train (a tacho: ``pulses_per_rev = 1``), the phase is moved to the
 tacho mark: each block's phase is referred to the tacho edge nearest its centre,
-``p' = p + φ(t_edge)``, so ``x = A cos(θ + p')`` with ``θ`` the shaft angle since the mark passed the pick-up. Without
-a tacho the reference stays the record start, which is consistent between runs only when the
-acquisition was triggered at the same shaft angle; the reference used is reported in the
+``p' = p + φ(t_edge)``, so ``x = A cos(θ + p')`` with ``θ`` the shaft angle since the mark
+passed the pick-up. Without a tacho the reference stays the record start, which is consistent
+between runs only when the acquisition was triggered at the same shaft angle; the reference
+used is reported in the
 ``phase_reference`` column and the balance command refuses runs with different references.
 
 Error: the averaged phasor's scatter is reported as ``std`` (the RMS distance of the block
 phasors from their mean, units of the channel) and ``phase_std_deg`` (``std/amplitude`` in
 degrees); blocks overlap by half, so the standard error of the mean is about
-``std·sqrt(2/n_blocks)``. The angle integration between tacho edges adds ``Δn/n · 360°`` per
-revolution for a speed error ``Δn``, at most half a revolution away from an edge.
+``std·sqrt(2/n_blocks)``. Integrating the angle between tacho edges adds ``Δn/n · 360°``
+per revolution for a speed error ``Δn``, at most half a revolution away from an edge.
 
 References
 ----------
@@ -55,10 +56,11 @@ def tacho_channel(record) -> str | None:
     """
     for name in map(str, record.data_vars):
         var = record[name]
-        if var.attrs.get("quantity") == "pulse_times" or str(var.dims[0]).startswith("pulse"):
-            if int(var.attrs.get("pulses_per_rev", 0)) == 1 and not int(
-                    var.attrs.get("missing_teeth", 0)):
-                return name
+        pulses = (var.attrs.get("quantity") == "pulse_times"
+                  or str(var.dims[0]).startswith("pulse"))
+        if pulses and int(var.attrs.get("pulses_per_rev", 0)) == 1 and not int(
+                var.attrs.get("missing_teeth", 0)):
+            return name
     return None
 
 
@@ -100,7 +102,7 @@ def first_order_phasors(record, channels, *, speed_channel: str | None = None,
         One row per channel: ``channel``, ``amplitude`` (peak, SI units of the channel),
         ``phase_deg`` (of ``A cos(θ + phase)``), ``std`` (scatter of the block phasors, units
         of the channel), ``phase_std_deg``, ``rpm`` (mean speed of the averaged blocks),
-        ``n_blocks``, ``units`` and ``phase_reference`` ('tacho <name>' or 'record start').
+        ``n_blocks``, ``units`` and ``phase_reference`` ("1/rev tacho '<name>'" or 'record start').
 
     References
     ----------
@@ -146,8 +148,12 @@ def first_order_phasors(record, channels, *, speed_channel: str | None = None,
                               f"{', '.join(names)}")
     mark = tacho_channel(record)
     rows = []
+    speeds = {}  # one speed reference per clock
     for ch in channels:
-        rpm = speed_reference(record, ch, speed_channel=speed_channel)
+        clock = record[ch].dims
+        if clock not in speeds:
+            speeds[clock] = speed_reference(record, ch, speed_channel=speed_channel)
+        rpm = speeds[clock]
         track = order_track(record[ch], rpm=rpm, orders=[1], revolutions=revolutions)
         amp = track.amplitude.values[0]
         phase = track.phase.values[0]
@@ -166,7 +172,7 @@ def first_order_phasors(record, channels, *, speed_channel: str | None = None,
             prev = edges[np.clip(np.searchsorted(edges, t_blk) - 1, 0, edges.size - 1)]
             near = np.where(np.abs(prev - t_blk) < np.abs(near - t_blk), prev, near)
             phase = phase + np.interp(near, t_ch, phi)
-            reference = f"tacho {mark}"
+            reference = f"1/rev tacho {mark!r}"
         else:
             reference = "record start"
         good = _steady_mask(r_blk, steady_fraction, speed_tolerance) & np.isfinite(amp)

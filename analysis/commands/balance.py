@@ -49,7 +49,7 @@ from pathlib import Path
 HELP = ("rotor balancing from trial-weight runs (run files or records with --channel): "
         "correction masses, conditioning, ISO grade")
 
-__all__ = ["HELP", "configure", "run", "read_runs", "read_record_runs", "parse_trial"]
+__all__ = ["HELP", "configure", "parse_trial", "read_record_runs", "read_runs", "run"]
 
 
 def configure(parser) -> None:

@@ -7,6 +7,15 @@ bearings, µm peak, phase of x(t) = A cos(Ωt + φ). Trial weights 10 g at 0° i
 ``crankbench balance initial.toml trial_plane1.toml trial_plane2.toml`` should recover
 12.4 g at 223° and 8.7 g at 32° (the masses that cancel the unbalance). The check run is made
 with those corrections as a fitter would place them: rounded to 1 g and 5°.
+
+``records/*.h5`` are the same four runs as measurement records: x displacement (m) at the two
+bearings (channels ``bearing_a`` at 0 m, ``bearing_b`` at 1.5 m), 1024 Hz for 6 s, white noise
+of 5 % of each channel's amplitude, and a once-per-rev tacho ``tacho`` whose mark is at 0° of
+the rotor; each run starts at another shaft angle (as real runs do). ::
+
+    crankbench balance sample_data/balance/records/{initial,trial_plane1,trial_plane2,check}.h5 \
+        --channel bearing_a --channel bearing_b --trial 2:1:0.010@0 --trial 3:2:0.010@0 \
+        --check check
 """
 
 from pathlib import Path
@@ -28,6 +37,32 @@ def measure(rotor, masses):
     items = [(p, abs(m) * RADIUS, np.angle(m)) for p, m in zip(PLANES, masses) if abs(m) > 0]
     x = rotor.unbalance_response([SPEED], items, probes=[0.0, 1.5]).response[0, :, 0]
     return x * 1e6  # µm
+
+
+FS = 1024.0
+DURATION = 6.0
+
+
+def write_record(name, v_um, start_angle, seed):
+    """Record of x(t) = Re(X e^{i(Ωt + start)}) + noise with a 1/rev tacho at rotor angle 0."""
+    from measure import write
+    from measure.record import make_record
+
+    rng = np.random.default_rng(seed)
+    t = np.arange(int(DURATION * FS)) / FS
+    chans = {}
+    for ch, z in zip(("bearing_a", "bearing_b"), np.asarray(v_um) * 1e-6):
+        x = np.real(z * np.exp(1j * (SPEED * t + start_angle)))
+        chans[ch] = {"data": x + 0.05 * abs(z) * rng.standard_normal(t.size),
+                     "sample_rate": FS, "units": "m", "quantity": "displacement",
+                     "direction": "x"}
+    k = np.arange(np.ceil(start_angle / (2 * np.pi)),
+                  (SPEED * DURATION + start_angle) / (2 * np.pi))
+    chans["tacho"] = {"data": (2 * np.pi * k - start_angle) / SPEED, "quantity": "pulse_times",
+                      "units": "s", "pulses_per_rev": 1}
+    rec = make_record(chans, attrs={"test_id": f"balancing run {name}"})
+    (HERE / "records").mkdir(exist_ok=True)
+    write(rec, HERE / "records" / f"{name}.h5", overwrite=True)
 
 
 def write_toml(name, title, v, trials=()):
@@ -63,6 +98,9 @@ def main():
             tm = f"{trial:g},0" if tp else ","
             rows.append(f"{name},{k},{abs(z):.6g},{np.degrees(np.angle(z)):.6g},{tp},{tm}")
     (HERE / "runs.csv").write_text("\n".join(rows) + "\n", encoding="utf-8")
+    for seed, (name, v, start) in enumerate((("initial", v0, 0.0), ("trial_plane1", v1, 1.9),
+                                             ("trial_plane2", v2, 4.4), ("check", vc, 2.7))):
+        write_record(name, v, start, seed)
 
 
 if __name__ == "__main__":

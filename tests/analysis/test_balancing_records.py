@@ -99,7 +99,7 @@ def test_exact_records_with_tacho_recover_unbalance(tmp_path, capsys, responses)
     want_ph = np.degrees(np.angle(np.concatenate(
         [responses[n] for n in ("initial", "trial1", "trial2")]) * np.exp(0.3j)))
     assert np.allclose(np.angle(np.exp(1j * np.radians(phases - want_ph))), 0, atol=2e-3)
-    assert all(r["phase_reference"] == "tacho tacho" for r in ph)
+    assert all(r["phase_reference"] == "1/rev tacho 'tacho'" for r in ph)
 
 
 def test_speed_channel_records_start_at_same_angle(tmp_path, capsys, responses):
@@ -144,3 +144,18 @@ def test_bad_trial_and_channel_named(tmp_path, capsys, responses):
     assert "bearing_x" in err and "bearing_a" in err
     assert main(["balance", str(a), "--channel", "bearing_a", "--trial", "7:1:0.01@0"]) == 2
     assert "1..1" in capsys.readouterr().err
+
+
+def test_sample_records(capsys):
+    """The shipped records (sample_data/balance/generate.py, 5 % noise) give the known
+    corrections -U within 2 % and a check run that passes ISO 21940-11 G 6.3."""
+    d = ROOT / "sample_data" / "balance" / "records"
+    capsys.readouterr()
+    assert main(["balance", *(str(d / f"{n}.h5") for n in
+                              ("initial", "trial_plane1", "trial_plane2", "check")),
+                 "--channel", "bearing_a", "--channel", "bearing_b", "--trial", "2:1:0.010@0",
+                 "--trial", "3:2:0.010@0", "--check", "check", "--radius", "0.14",
+                 "--rotor-mass", "50", "--max-speed", "3000", "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert np.max(np.abs(_corrections(out) + U) / np.abs(U)) < 0.02
+    assert out["iso_21940_11"]["passed"] is True
