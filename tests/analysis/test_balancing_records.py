@@ -159,3 +159,29 @@ def test_sample_records(capsys):
     out = json.loads(capsys.readouterr().out)
     assert np.max(np.abs(_corrections(out) + U) / np.abs(U)) < 0.02
     assert out["iso_21940_11"]["passed"] is True
+
+
+def test_run_up_excluded_from_average():
+    """A run-up 1800 -> 2400 rpm in the first 2 s (response ∝ speed², unbalance force) is left
+    out: only blocks at the steady speed are averaged; the tacho edges follow the varying speed.
+    """
+    from analysis.balancing import first_order_phasors
+
+    t = np.arange(int(8 * FS)) / FS
+    rpm = 1800 + 600 * np.minimum(t / 2.0, 1.0)
+    om = rpm * np.pi / 30
+    phi = np.concatenate([[0.0], np.cumsum(0.5 * (om[1:] + om[:-1]) / FS)])
+    x = np.array([3e-5 * np.exp(0.7j), 5e-5 * np.exp(-2.1j)])
+    start, mark = 1.3, 0.4
+    chans = {n: {"data": np.real(z * (rpm / RPM) ** 2 * np.exp(1j * (phi + start))),
+                 "sample_rate": FS, "units": "m"} for n, z in zip("ab", x)}
+    ang = phi + start - mark
+    k = np.arange(np.ceil(ang[0] / (2 * np.pi)), ang[-1] / (2 * np.pi))
+    chans["key"] = {"data": np.interp(2 * np.pi * k, ang, t), "quantity": "pulse_times",
+                    "units": "s", "pulses_per_rev": 1}
+    df = first_order_phasors(make_record(chans), ["a", "b"], speed_tolerance=0.005)
+    assert np.allclose(df.amplitude, np.abs(x), rtol=1e-3)
+    dphi = np.radians(df.phase_deg) - np.angle(x) - mark
+    assert np.allclose(np.angle(np.exp(1j * dphi)), 0.0, atol=1e-3)
+    assert np.allclose(df.rpm, RPM, rtol=1e-6)
+    assert (df["std"] / df.amplitude < 1e-3).all()
