@@ -170,7 +170,9 @@ def speed_reference(record, channel: str, *, speed_channel: str | None = None) -
                             "time range where it turns")
     rev_time = 60.0 / float(np.median(rpm))
     outside = max(t_in[0] - t_out[0], t_out[-1] - t_in[-1])
-    if outside > rev_time:
+    # speed from pulses starts a window (1-2 revolutions) after the first edge: holding it over
+    # that stretch is expected; beyond 3 revolutions the user should know
+    if outside > 3.0 * rev_time:
         log.warning("%s covers %.6g–%.6g s but channel %r spans %.6g–%.6g s; the speed is held "
                     "constant beyond its ends", source, t_in[0], t_in[-1], channel, t_out[0],
                     t_out[-1])
