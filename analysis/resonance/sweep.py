@@ -14,7 +14,7 @@ import numpy as np
 from predict._validate import check_option, check_positive, check_range
 from predict.errors import AnalysisError
 
-from .sdof import RESPONSES, _modal_fit, _peak_and_half_power, half_power_damping
+from .sdof import RESPONSES, _background, _modal_fit, _peak_and_half_power, half_power_damping
 
 __all__ = ["sweep_peak_loss"]
 
@@ -192,17 +192,20 @@ def _deinflate(zeta_app, fn, alpha, p, key, complex_data):
 
 
 
-def _swept_fit(x, c, order, rate, fn0, zeta0, p, complex_data):
-    """SDOF fit that models the sweep: c ≈ R E(x; fn, ζ, sweep) + B0 + B1 (x − x̄)/x̄.
+def _swept_fit(x, c, order, rate, fn0, zeta0, p, complex_data, terms="cl",
+               peak_range=None):
+    """SDOF fit that models the sweep: c ≈ R E(x; fn, ζ, sweep) + B·b(x).
 
     ``E`` is the swept envelope of :func:`_swept_envelope` read at the data's instantaneous
-    speeds; ``x`` and ``fn`` in rpm of this order, ``rate`` in rpm/s. Variable projection as in
-    :func:`_modal_fit`. Returns (fn, ζ, r2, steady-state peak amplitude) or None.
+    speeds, ``b(x)`` the out-of-band residual terms of :func:`_background` (treated as
+    quasi-static: they vary slowly); ``x`` and ``fn`` in rpm of this order, ``rate`` in rpm/s.
+    Variable projection as in :func:`_modal_fit`. Returns (fn, ζ, r2, steady-state peak
+    amplitude — the largest over ``peak_range``, default the window) or None.
     """
     from scipy.optimize import least_squares
 
     xm = float(np.mean(x))
-    lin = (x - xm) / xm
+    bg = _background(x, xm, terms)
     up = rate > 0
 
     def envelope(theta):
@@ -223,7 +226,7 @@ def _swept_fit(x, c, order, rate, fn0, zeta0, p, complex_data):
         return e if complex_data else np.abs(e)
 
     def solve(theta):
-        a = np.column_stack([envelope(theta), np.ones_like(x), lin])
+        a = np.column_stack([envelope(theta), bg])
         coef, *_ = np.linalg.lstsq(a, c, rcond=None)
         return coef, c - a @ coef
 
@@ -249,10 +252,14 @@ def _swept_fit(x, c, order, rate, fn0, zeta0, p, complex_data):
     fn, zeta = float(np.exp(sol.x[0])), float(np.exp(sol.x[1]))
     # the steady-state order amplitude the fitted model predicts: same R and background, the
     # steady SDOF response in place of the swept envelope
-    xg = np.linspace(x.min(), x.max(), 4001)
+    # the steady-state order amplitude the fitted model predicts (same R and residual terms,
+    # the steady SDOF response in place of the swept envelope): its largest value over the
+    # resonance's neighbourhood ``peak_range`` (default: the window)
+    x_lo, x_hi = (x.min(), x.max()) if peak_range is None else peak_range
+    xg = np.linspace(max(x.min(), x_lo), min(x.max(), x_hi), 4001)
     nu = xg / fn
     h = (1j * nu) ** p / (1.0 - nu**2 + 2j * zeta * nu)
-    steady = coef[0] * (h if complex_data else np.abs(h)) + coef[1] + coef[2] * (xg - xm) / xm
+    steady = coef[0] * (h if complex_data else np.abs(h)) + _background(xg, xm, terms) @ coef[1:]
     return fn, zeta, float(r2), float(np.max(np.abs(steady)))
 
 

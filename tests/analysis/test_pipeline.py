@@ -40,10 +40,10 @@ def _truth_critical(truth, mode, order):
 def test_significant_criticals_found_matched_and_accurate(marine):
     """Every significant critical (predicted amplitude ≥ 5 % of the largest) inside the run
     is found and assigned to the right (mode, order). Against the truth's damped-model
-    resonance peaks (sweep 14 rpm/s): mode 1 and mode 3 within 0.5 % in speed and 5 % in
-    amplitude; mode 2 — the damper mode, weak at the free end on a large background of the
-    other modes — within 1 % in speed and 6 % in amplitude (the SDOF identification's
-    background bias, measured: 0.74–0.77 %)."""
+    resonance peaks (sweep 14 rpm/s): every mode within 0.5 % in speed and 5 % in amplitude
+    (issue 8). Mode 2 — the damper mode, weak at the free end on a large background of the
+    other modes — needs the modal fit's residual terms (measured: −0.32…+0.02 % in speed,
+    ≤ 4.4 % in amplitude; a single-mode fit with a linear background gave +0.74…+0.79 %)."""
     run, result = marine
     truth = run.truth
     comp = result.comparison
@@ -66,7 +66,7 @@ def test_significant_criticals_found_matched_and_accurate(marine):
         assert int(truth["critical_mode"].values[nearest]) == int(m["mode"])
         steady = truth["amplitude_steady"].sel(channel=result.channel, order=m.order).values
         amp = steady[np.abs(rpm - crit) < 0.06 * crit].max()
-        speed_tol, amp_tol = (0.01, 0.06) if int(m["mode"]) == 2 else (0.005, 0.05)
+        speed_tol, amp_tol = 0.005, 0.05
         assert res.resonance_speed_rpm == pytest.approx(crit, rel=speed_tol)
         assert res.amplitude_corrected == pytest.approx(amp, rel=amp_tol)
 
@@ -147,9 +147,10 @@ def test_balance_residuals_at_the_mounts_i4():
 
 @pytest.mark.slow
 def test_fast_sweep_100_rpm_per_s(tmp_path):
-    """The same scene run up in 5.6 s (100 rpm/s): significant criticals of modes 1 and 3
+    """The same scene run up in 5.6 s (100 rpm/s): significant criticals of every mode
     within 0.5 % (speed) and 5 % (steady-state amplitude, after the sweep correction; the raw
-    peaks are up to 18 % low); mode 2 (weak at the free end) within 1 % and 7 %."""
+    peaks are up to 18 % low); mode 2 (weak at the free end, identified with the residual
+    terms) within the same figures (measured: −0.09 % and +4.2 %)."""
     from measure.synth import Scene, synthesize
 
     text = SCENE.read_text().replace("duration = 40.0", "duration = 5.6")
@@ -169,7 +170,7 @@ def test_fast_sweep_100_rpm_per_s(tmp_path):
                    if r.order == m.order and np.isclose(r.speed_rpm, m.speed_rpm_measured))
         steady = truth["amplitude_steady"].sel(channel=result.channel, order=m.order).values
         amp = steady[np.abs(rpm - crit) < 0.06 * crit].max()
-        speed_tol, amp_tol = (0.01, 0.07) if int(m["mode"]) == 2 else (0.005, 0.05)
+        speed_tol, amp_tol = 0.005, 0.05
         assert res.resonance_speed_rpm == pytest.approx(crit, rel=speed_tol), (m["mode"], m.order)
         assert res.amplitude_corrected == pytest.approx(amp, rel=amp_tol), (m["mode"], m.order)
         checked += 1
