@@ -44,7 +44,7 @@ import numpy as np
 from predict._validate import check_int, check_option, check_positive, check_range
 from predict.errors import AnalysisError, RecordError
 
-__all__ = ["order_track_stream", "order_map_stream", "SpanSpeed"]
+__all__ = ["order_track_stream", "order_map_stream", "decimate_stream", "SpanSpeed"]
 
 log = logging.getLogger("crankbench")
 
@@ -80,15 +80,22 @@ class SpanSpeed:
 
     def __init__(self, n, fs, t0, *, rpm=None, t_in=None, omega=None):
         self.n, self.fs, self.t0 = int(n), float(fs), float(t0)
-        self._rpm = None if rpm is None else (np.asarray(rpm, float) if not np.isscalar(rpm)
-                                              else float(rpm))
+        if rpm is None or hasattr(rpm, "compute"):      # dask: sliced per span, never whole
+            self._rpm = rpm
+        else:
+            self._rpm = np.asarray(rpm, float) if not np.isscalar(rpm) else float(rpm)
         self._t_in, self._omega = t_in, omega
 
     def __call__(self, a: int, b: int) -> np.ndarray:
         if self._rpm is not None:
             if np.ndim(self._rpm) == 0:
                 return np.full(b - a, self._rpm)
-            return np.asarray(self._rpm[a:b], float)
+            part = self._rpm[a:b]
+            part = np.asarray(part.compute() if hasattr(part, "compute") else part, float)
+            if not np.isfinite(part).all() or part.min() <= 0:
+                raise AnalysisError(f"speed between samples {a} and {b} is not finite and > 0 "
+                                    "rpm; order analysis needs the shaft turning")
+            return part
         t = self.t0 + np.arange(a, b) / self.fs
         return np.interp(t, self._t_in, self._omega) * (60.0 / _TWO_PI)
 
@@ -113,9 +120,8 @@ def _speed_for(record, channel, var, *, rpm, speed_channel) -> SpanSpeed:
         if sv.attrs.get("units", "rad/s") != "rad/s":
             raise RecordError(f"speed channel {name!r} has units {sv.attrs.get('units')!r}; "
                               "expected 'rad/s'")
-        if sv.dims == var.dims:
-            raise AnalysisError(f"speed channel {name!r} is on the clock of {channel!r}; pass "
-                                "rpm= per sample or a speed channel on its own (slow) clock")
+        if sv.dims == var.dims:       # same clock: read the span of the speed channel itself
+            return SpanSpeed(n, fs, t0, rpm=sv.data * (60.0 / _TWO_PI))
         rate = sv.attrs.get("sample_rate")
         if rate is not None and sv.dims[0] in record.coords:   # regular clock: t0 + i/rate
             t_in = _first_time(record, sv) + np.arange(sv.shape[0]) / float(rate)
@@ -623,3 +629,82 @@ def _vkf_stream(record, channel, *, orders, rpm, speed_channel, segment_seconds,
                      "streamed_segment_seconds": float(segment_seconds),
                      "streamed_overlap_s": pad / fs})
     return ds
+
+
+# ---------------------------------------------------------------------------- decimation
+
+
+def decimate_stream(record, channel: str, *, max_frequency: float, rpm=None,
+                    speed_channel=None):
+    """Low-pass and decimate a (lazy) channel block by block, with the speed at the kept samples.
+
+    For analyses that need the whole channel in memory but only a low band (e.g. the Campbell
+    map of a long record). An 8th-order Butterworth low-pass (second-order sections, state
+    carried across blocks, so the result does not depend on the block size) at
+    ``1.25 · max_frequency`` precedes keeping every ``q``-th sample, ``q`` the largest integer
+    with ``fs/q ≥ 3 · max_frequency``. Error: pass-band ripple 0 (Butterworth), attenuation
+    ≤ 0.03 % below ``max_frequency/2`` and ≤ 3 % at ``max_frequency``; aliases are ≥ 48 dB down.
+
+    Parameters
+    ----------
+    record : xarray.Dataset
+        Record (lazy or not).
+    channel : str
+        Sampled channel.
+    max_frequency : float
+        Highest frequency to keep, Hz.
+    rpm, speed_channel
+        Speed source as in :func:`order_track_stream`.
+
+    Returns
+    -------
+    (xarray.DataArray, ndarray)
+        The decimated channel (attrs with the new ``sample_rate``; time coordinate in s) and
+        the speed at its samples, rpm.
+
+    Examples
+    --------
+    >>> from measure.record import make_record
+    >>> rec = make_record({"x": dict(data=np.cos(2 * np.pi * 5 * np.arange(8000) / 1000.0),
+    ...                              sample_rate=1000.0, units="V")})
+    >>> y, r = decimate_stream(rec, "x", max_frequency=20.0, rpm=600.0)
+    >>> y.attrs["sample_rate"], round(float(np.abs(y[200:]).max()), 3), r[:2].tolist()
+    (62.5, 1.0, [600.0, 600.0])
+    """
+    import xarray as xr
+    from scipy import signal
+
+    from measure.io import iter_blocks
+
+    var = _channel(record, channel)
+    max_frequency = check_positive(max_frequency, "max_frequency", error=AnalysisError)
+    speed = _speed_for(record, channel, var, rpm=rpm, speed_channel=speed_channel)
+    fs = speed.fs
+    q = max(1, int(fs // (3.0 * max_frequency)))
+    kept, start = [], 0
+    if q == 1:
+        for _, block in iter_blocks(record, channel):
+            kept.append(np.asarray(block, np.float64))
+    else:
+        sos = signal.butter(8, 1.25 * max_frequency, fs=fs, output="sos")
+        zi = np.zeros((sos.shape[0], 2))
+        for _, block in iter_blocks(record, channel):
+            y, zi = signal.sosfilt(sos, np.asarray(block, np.float64), zi=zi)
+            first = (-start) % q
+            kept.append(y[first::q])
+            start += block.shape[0]
+    data = np.concatenate(kept)
+    idx = np.arange(data.shape[0]) * q
+    t = speed.t0 + idx / fs
+    if speed._rpm is None:
+        r = np.interp(t, speed._t_in, speed._omega) * (60.0 / _TWO_PI)
+    elif np.ndim(speed._rpm) == 0:
+        r = np.full(data.shape[0], speed._rpm)
+    else:
+        r = np.asarray(speed._rpm[::q], float)
+    attrs = dict(var.attrs)
+    attrs.update(sample_rate=fs / q, decimation=q,
+                 antialias="butterworth order 8 at 1.25 max_frequency" if q > 1 else "none")
+    out = xr.DataArray(data, dims=(var.dims[0],), name=channel, attrs=attrs,
+                       coords={var.dims[0]: (var.dims[0], t, {"units": "s"})})
+    return out, r

@@ -6,6 +6,9 @@ the largest amplitude, the speed where it occurs and the mean amplitude. ``--jso
 same plus the parameters used and the tracks (at most ``--json-points`` points per order).
 ``--plot DIR`` writes ``order_map.png``, ``campbell.png`` and ``order_tracks.png`` atomically;
 existing files are kept unless ``--overwrite``.
+
+Records larger than 256 MB are opened lazily (``measure.open``) and tracked segment by segment
+(``analysis.stream``) with bounded memory; the output has the same form.
 """
 
 from __future__ import annotations
@@ -18,6 +21,9 @@ HELP = "order analysis of a record channel (order tracks, order map, Campbell di
 log = logging.getLogger("crankbench")
 
 PLOTS = ("order_map.png", "campbell.png", "order_tracks.png")
+
+#: record files larger than this (bytes) are opened lazily and order-tracked segment by segment
+STREAM_BYTES = 256 * 1024 * 1024
 
 
 def _orders(text: str) -> list[float]:
@@ -98,7 +104,16 @@ def run(args) -> int:
         targets = [out_dir / name for name in PLOTS]
         for path in targets:           # refuse before any work, never half a set of plots
             check_overwrite(path, args.overwrite, option="--overwrite")
-    record = measure.read(args.record)
+    import os
+
+    streaming = os.path.getsize(args.record) > STREAM_BYTES
+    if streaming:
+        log.info("%s: %.3g MB > %.3g MB, streaming it segment by segment (measure.open + "
+                 "analysis.stream)", args.record, os.path.getsize(args.record) / 1e6,
+                 STREAM_BYTES / 1e6)
+        record = measure.open(args.record)
+    else:
+        record = measure.read(args.record)
     names = [str(n) for n in record.data_vars]
     if args.channel not in names:
         raise RecordError(f"{args.record}: no channel {args.channel!r}"
@@ -107,14 +122,21 @@ def run(args) -> int:
     if channel.attrs.get("sample_rate") is None:
         raise RecordError(f"{args.record}: channel {args.channel!r} is not a sampled channel "
                           "(no sample_rate); choose a signal channel")
-    rpm = speed_reference(record, args.channel, speed_channel=args.speed_channel)
-    channel = channel.load() if hasattr(channel, "load") else channel
-    kwargs = dict(rpm=rpm, orders=args.orders, amplitude=args.amplitude, method=args.method,
+    kwargs = dict(orders=args.orders, amplitude=args.amplitude, method=args.method,
                   samples_per_rev=args.samples_per_rev, revolutions=args.revolutions)
     if args.method == "vkf":
         kwargs.update(bandwidth_hz=args.bandwidth_hz, bandwidth_orders=args.bandwidth_orders,
                       filter_order=args.filter_order)
-    tracks = order_track(channel, **kwargs)
+    if streaming:
+        from analysis.stream import order_track_stream
+
+        rpm = None
+        tracks = order_track_stream(record, args.channel, speed_channel=args.speed_channel,
+                                    **kwargs)
+    else:
+        rpm = speed_reference(record, args.channel, speed_channel=args.speed_channel)
+        channel = channel.load() if hasattr(channel, "load") else channel
+        tracks = order_track(channel, rpm=rpm, **kwargs)
     summary = _summary(tracks)
     units = tracks["amplitude"].attrs.get("units", "")
     if args.json:
@@ -144,8 +166,24 @@ def run(args) -> int:
         from analysis.plots import plot_campbell, plot_order_map, plot_order_tracks
 
         fs = float(channel.attrs["sample_rate"])
-        omap = order_map(channel, rpm=rpm, samples_per_rev=args.samples_per_rev,
-                         revolutions=args.revolutions, amplitude=args.amplitude)
+        if streaming:
+            from analysis.stream import order_map_stream
+
+            omap = order_map_stream(record, args.channel, speed_channel=args.speed_channel,
+                                    samples_per_rev=args.samples_per_rev,
+                                    revolutions=args.revolutions, amplitude=args.amplitude)
+            # the Campbell map needs the channel in memory: low-passed and decimated, streamed
+            from analysis.stream import decimate_stream
+
+            top = max(args.orders) * float(tracks["rpm"].max()) / 60.0 * 1.5
+            channel, rpm = decimate_stream(record, args.channel, max_frequency=min(top, fs / 3),
+                                           speed_channel=args.speed_channel)
+            fs = float(channel.attrs["sample_rate"])
+            log.info("Campbell map of the streamed record at %.6g Hz (decimated by %d)", fs,
+                     channel.attrs["decimation"])
+        else:
+            omap = order_map(channel, rpm=rpm, samples_per_rev=args.samples_per_rev,
+                             revolutions=args.revolutions, amplitude=args.amplitude)
         nperseg = int(2 ** np.clip(np.round(np.log2(fs)), 8, 16))
         top = max(args.orders) * float(np.max(rpm)) / 60.0 * 1.5
         camp = campbell_map(channel, rpm=rpm, nperseg=min(nperseg, channel.shape[0]),

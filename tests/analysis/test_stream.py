@@ -103,3 +103,28 @@ def test_errors_name_channel():
         order_track_stream(rec, "acc", orders=[20], rpm=1200.0)
     with pytest.raises(AnalysisError, match="rpm has 3 samples"):
         order_track_stream(rec, "acc", orders=[1], rpm=[1.0, 2.0, 3.0])
+
+
+def test_analyse_command_streams_large_files(runup, monkeypatch, capsys, tmp_path):
+    """``crankbench analyse`` on a file above the streaming threshold gives the same JSON as the
+    in-memory path (threshold lowered so the small test record streams), and writes the plots."""
+    import json
+
+    from analysis.cli import main
+    from analysis.commands import analyse
+
+    path = runup[0]
+    args = ["analyse", str(path), "--channel", "acc", "--orders", "0.5,2", "--revolutions", "8",
+            "--json"]
+    assert main(args) == 0
+    whole = json.loads(capsys.readouterr().out)
+    monkeypatch.setattr(analyse, "STREAM_BYTES", 0)
+    assert main(args + ["--plot", str(tmp_path / "p")]) == 0
+    streamed = json.loads(capsys.readouterr().out)
+    assert streamed["parameters"]["streamed_segment_seconds"] > 0
+    for a, b in zip(whole["summary"], streamed["summary"]):
+        assert a["order"] == b["order"]
+        assert b["max_amplitude"] == pytest.approx(a["max_amplitude"], rel=1e-9)
+        assert b["mean_amplitude"] == pytest.approx(a["mean_amplitude"], rel=1e-9)
+    assert sorted(p.name for p in (tmp_path / "p").iterdir()) == [
+        "campbell.png", "order_map.png", "order_tracks.png"]
