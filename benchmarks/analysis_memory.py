@@ -102,9 +102,9 @@ def make(path: Path, samples: int) -> dict:
 
 def track(path: Path, segment_seconds: float) -> dict:
     import numpy as np
+    import scipy.signal  # noqa: F401
 
     import analysis.stream  # noqa: F401  (imports before the baseline)
-    import scipy.signal  # noqa: F401
     from analysis.stream import order_track_stream
     from measure import io
 
