@@ -370,6 +370,11 @@ def _cot_blocks(record, channel, *, orders, rpm, speed_channel, samples_per_rev,
     segment_seconds = check_positive(segment_seconds, "segment_seconds", error=AnalysisError)
     chunk = check_int(chunk, "chunk", minimum=1024, error=AnalysisError)
     speed = _speed_for(record, channel, var, rpm=rpm, speed_channel=speed_channel)
+    if orders is not None:          # before any work: the top order below the Nyquist frequency
+        top = float(np.max(orders)) * _chunk_plan(speed, chunk)[3] / 60.0
+        if top >= 0.5 * speed.fs:
+            raise AnalysisError(f"order {np.max(orders):g} reaches {top:.6g} Hz, above the "
+                                f"Nyquist frequency {0.5 * speed.fs:.6g} Hz of {label}")
     segment = max(chunk, int(round(segment_seconds * speed.fs)))
     length = samples_per_rev * revolutions
     hop = max(1, int(round(length * (1.0 - overlap))))
@@ -492,10 +497,6 @@ def order_track_stream(record, channel: str, *, orders, rpm=None, speed_channel=
         samples_per_rev=spr, revolutions=revolutions, overlap=overlap, window=window,
         interpolation=interpolation, segment_seconds=segment_seconds, chunk=chunk,
         per_frames=per_frames)
-    top = float(orders.max()) * float(_chunk_plan(speed, chunk)[3]) / 60.0
-    if top >= 0.5 * speed.fs:
-        raise AnalysisError(f"order {orders.max():g} reaches {top:.6g} Hz, above the Nyquist "
-                            f"frequency {0.5 * speed.fs:.6g} Hz of {channel}")
     coef = np.concatenate(parts["coef"])
     floor = np.concatenate(parts["floor"])
     enbw = float(length * np.sum(w ** 2) / np.sum(w) ** 2)

@@ -128,3 +128,9 @@ def test_analyse_command_streams_large_files(runup, monkeypatch, capsys, tmp_pat
         assert b["mean_amplitude"] == pytest.approx(a["mean_amplitude"], rel=1e-9)
     assert sorted(p.name for p in (tmp_path / "p").iterdir()) == [
         "campbell.png", "order_map.png", "order_tracks.png"]
+
+
+def test_order_above_nyquist_refused_before_reading():
+    rec = make_record({"acc": dict(data=np.zeros(8000), sample_rate=200.0, units="m/s^2")})
+    with pytest.raises(AnalysisError, match="Nyquist"):
+        order_track_stream(rec, "acc", orders=[8], rpm=1200.0)      # 160 Hz > 100 Hz
