@@ -33,7 +33,7 @@ for analyses that need the whole (low-band) channel in memory, e.g. the Campbell
 Memory: O(segment) — a few times ``segment_seconds · fs`` float64 samples plus the result.
 ``benchmarks/analysis_memory.py`` measured on a 2 GB float32 .h5 record (500 M samples at
 51.2 kHz, 2.7 h run-up 600 → 3000 rpm, 100 Hz speed channel): peak RSS 395 MB (181 MB of it
-the interpreter and imports), 85 s (5.9 M samples/s, 23 MB/s) on 2 cores; order amplitudes
+the interpreter and imports), 64 s (7.9 M samples/s, 31 MB/s) on 2 cores; order amplitudes
 within the noise (mean error −3e-5 relative, max 4.4 σ over 36 620 blocks) and the phase from
 the record start held over 1.8e5 revolutions.
 
