@@ -22,6 +22,9 @@ __all__ = ["main", "build_parser", "verbosity_parent", "COMMANDS"]
 
 log = logging.getLogger("crankbench")
 
+#: how Python displays a warning when nobody records them (see main)
+_DEFAULT_SHOWWARNMSG = getattr(warnings, "_showwarnmsg_impl", None)
+
 #: Sub-commands in the order ``--help`` lists them.
 COMMANDS = ("info", "demo", "synth", "predict", "analyse", "balance", "compare", "report",
             "batch", "bench")
@@ -99,8 +102,11 @@ def main(argv: list[str] | None = None) -> int:
             return 1
         with warnings.catch_warnings():  # restores showwarning on the way out
             # a warning (masked dropout, clipped channel...) reads as one log line, not as
-            # Python's "file:line: Category: message" with a source line
-            warnings.showwarning = _log_warning
+            # Python's "file:line: Category: message" with a source line -- unless the caller
+            # records warnings itself (catch_warnings(record=True), pytest.warns): then leave
+            # them to it
+            if getattr(warnings, "_showwarnmsg_impl", None) is _DEFAULT_SHOWWARNMSG:
+                warnings.showwarning = _log_warning
             return _run(args)
     finally:  # main() may be called in-process (tests, notebooks): leave logging as found
         log.handlers[:], log.level, log.propagate = saved

@@ -61,18 +61,29 @@ def test_verbosity_flags_work_before_and_after_the_command(capsys):
     assert parser.parse_args(["predict", "torsion", "m.toml", "-q"]).quiet is True
 
 
-def test_warnings_reach_the_cli_user_as_one_log_line(monkeypatch, capsys):
-    import warnings
+def test_warnings_reach_the_cli_user_as_one_log_line(tmp_path):
+    """A real user's process (pytest records warnings in-process, so run the CLI for real): a
+    clipped channel is analysed, and the warning reads as one log line, no Python traceback
+    style 'file:line: RecordWarning' echo."""
+    import subprocess
 
-    def warn_suite(quick):
-        warnings.warn("channel 'acc': 3 samples clipped at 1.2..1.3 s", UserWarning)
-        return [Row("demo", "m", "s", 0.0, "abs", "ref", 1e-3)]
+    import numpy as np
 
-    module = types.ModuleType("analysis.bench.suite_warn")
-    module.run = warn_suite
-    monkeypatch.setitem(sys.modules, "analysis.bench.suite_warn", module)
-    monkeypatch.setattr(bench, "suites", lambda: ["warn"])
-    assert main(["bench", "--quick"]) == 0
-    err = capsys.readouterr().err
-    assert "warning: channel 'acc': 3 samples clipped at 1.2..1.3 s" in err
-    assert "UserWarning" not in err and "warnings.warn(" not in err
+    from measure.io import write
+    from measure.record import make_record
+
+    fs, n = 2000.0, 8000
+    t = np.arange(n) / fs
+    acc = np.clip(1.3 * np.cos(2 * np.pi * 50.0 * t), -0.8, 0.8)      # order 2 at 1500 rpm
+    rec = make_record({"acc": dict(data=acc, sample_rate=fs, units="m/s^2",
+                                   quantity="acceleration"),
+                       "speed": dict(data=np.full(40, 1500 * np.pi / 30), sample_rate=10.0,
+                                     units="rad/s", quantity="rotational_speed")})
+    path = tmp_path / "clip.h5"
+    write(rec, path)
+    done = subprocess.run([sys.executable, "-m", "analysis.cli", "analyse", str(path),
+                           "--channel", "acc", "--orders", "2", "--json"],
+                          capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0, done.stderr
+    assert "warning: clip.h5: channel 'acc' looks clipped" in done.stderr
+    assert "RecordWarning" not in done.stderr and "warnings.warn" not in done.stderr
