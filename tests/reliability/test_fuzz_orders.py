@@ -9,8 +9,6 @@ finite; none hangs (20 s alarm per call). A known order at a known speed is reco
 
 from __future__ import annotations
 
-import contextlib
-import signal
 
 import numpy as np
 import pytest
@@ -20,6 +18,7 @@ from hypothesis import strategies as st
 from analysis.orders import campbell_map, order_map, order_spectrum, order_track
 from analysis.resample import angle_resample, shaft_angle
 from analysis.vkf import vold_kalman
+from hang_guard import time_limit
 from predict.errors import CrankbenchError
 
 FUZZ = settings(max_examples=15, deadline=None, derandomize=True,
@@ -27,18 +26,6 @@ FUZZ = settings(max_examples=15, deadline=None, derandomize=True,
                                        HealthCheck.filter_too_much])
 
 
-@contextlib.contextmanager
-def time_limit(seconds: int):
-    def _alarm(signum, frame):
-        raise TimeoutError(f"order analysis did not finish within {seconds} s")
-
-    old = signal.signal(signal.SIGALRM, _alarm)
-    signal.alarm(seconds)
-    try:
-        yield
-    finally:
-        signal.alarm(0)
-        signal.signal(signal.SIGALRM, old)
 
 
 def _all_finite(result):
@@ -117,7 +104,7 @@ CALLS = {
 def test_random_signal_and_speed_give_our_error_or_finite_result(name, data):
     x, fs, rpm = data
     try:
-        with time_limit(20):
+        with time_limit(20, "order analysis"):
             result = CALLS[name](x, fs, rpm)
     except CrankbenchError as exc:
         assert str(exc)
@@ -158,7 +145,8 @@ def test_vkf_on_zero_signal_is_zero_not_nan(n, fs, rpm):
 
 def test_speed_far_above_sample_rate_is_our_error():
     x = np.random.default_rng(0).standard_normal(200)
-    with time_limit(10), pytest.raises(CrankbenchError, match=r"rpm.*(sample|fs)"):
+    with time_limit(10, "order analysis"), \
+            pytest.raises(CrankbenchError, match=r"rpm.*(sample|fs)"):
         order_map(x, fs=1000.0, rpm=1e6)
 
 

@@ -8,10 +8,8 @@ run-down, a few random dropouts, timing jitter) the speed comes back close to th
 
 from __future__ import annotations
 
-import contextlib
 import logging
 import re
-import signal
 
 import numpy as np
 import pytest
@@ -21,24 +19,13 @@ from hypothesis.extra import numpy as hnp
 
 from measure.tacho import angle_from_pulses, count_pitches, speed_from_pulses
 from measure.torsiograph import angular_vibration
+from hang_guard import time_limit
 from predict.errors import CrankbenchError
 
 FUZZ = settings(max_examples=40, deadline=None, derandomize=True,
                 suppress_health_check=[HealthCheck.too_slow, HealthCheck.filter_too_much])
 
 
-@contextlib.contextmanager
-def time_limit(seconds: int):
-    def _alarm(signum, frame):
-        raise TimeoutError(f"pulse processing did not finish within {seconds} s")
-
-    old = signal.signal(signal.SIGALRM, _alarm)
-    signal.alarm(seconds)
-    try:
-        yield
-    finally:
-        signal.alarm(0)
-        signal.signal(signal.SIGALRM, old)
 
 
 def _finite(*arrays):
@@ -61,7 +48,7 @@ def _run_all(edges, ppr, missing):
         del calls["torsio"]       # needs >= 2 pulses/rev (see test_bad_signals for its error)
     for name, call in calls.items():
         try:
-            with time_limit(20):
+            with time_limit(20, "pulse processing"):
                 res = call()
         except CrankbenchError as exc:
             assert str(exc), name

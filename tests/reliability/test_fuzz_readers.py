@@ -8,8 +8,6 @@ another exception, never a hang (each read runs under a 20 s alarm).
 
 from __future__ import annotations
 
-import contextlib
-import signal
 
 import numpy as np
 import pytest
@@ -18,6 +16,7 @@ from hypothesis import strategies as st
 
 from measure import io as mio
 from measure.record import make_record, validate
+from hang_guard import time_limit
 from predict.errors import CrankbenchError
 
 FORMATS = [".h5", ".nc", ".csv", ".tdms", ".mf4", ".wav", ".uff"]
@@ -26,19 +25,6 @@ FUZZ = settings(max_examples=10, deadline=None, derandomize=True,
                                        HealthCheck.too_slow])
 
 
-@contextlib.contextmanager
-def time_limit(seconds: int):
-    """Raise TimeoutError if the block runs longer than ``seconds`` (a hang)."""
-    def _alarm(signum, frame):
-        raise TimeoutError(f"read did not finish within {seconds} s")
-
-    old = signal.signal(signal.SIGALRM, _alarm)
-    signal.alarm(seconds)
-    try:
-        yield
-    finally:
-        signal.alarm(0)
-        signal.signal(signal.SIGALRM, old)
 
 
 @pytest.fixture(scope="module")
@@ -70,7 +56,7 @@ def valid_files(tmp_path_factory):
 def _check_read(path, expected_name):
     """Read ``path``: a valid Record or one of our errors naming the file."""
     try:
-        with time_limit(20):
+        with time_limit(20, "read"):
             rec = mio.read(path)
     except CrankbenchError as exc:
         assert expected_name in str(exc), f"error does not name the file: {exc}"
@@ -147,7 +133,7 @@ def _check_open(path, expected_name):
     """Lazy open of a damaged file, then load every channel: the same contract as read —
     our error naming the file (at open or at load) or valid finite data."""
     try:
-        with time_limit(20):
+        with time_limit(20, "read"):
             rec = mio.open(path, chunk_seconds=0.05)
             rec = rec.load()
     except CrankbenchError as exc:
