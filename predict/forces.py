@@ -26,6 +26,7 @@ import numpy as np
 
 from ._validate import check_finite_array, check_int, check_nonnegative
 from .errors import ModelError
+from .kinematics import _omega
 from .pressure import PressureTrace, as_trace
 
 __all__ = [
@@ -40,16 +41,6 @@ __all__ = [
 
 #: default crankcase (back-side) pressure, Pa
 CRANKCASE_PRESSURE = 1.0e5
-
-
-def _omega(omega) -> float:
-    try:
-        w = float(omega)
-    except (TypeError, ValueError):
-        raise ModelError(f"omega={omega!r} must be a real number (rad/s)") from None
-    if not np.isfinite(w):
-        raise ModelError(f"omega={omega!r} must be finite (rad/s)")
-    return w
 
 
 def _cylinder(engine, cylinder) -> int:
