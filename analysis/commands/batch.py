@@ -17,7 +17,7 @@ HELP = "run compare on many records in parallel (dask) into one summary table"
 
 
 def configure(parser) -> None:
-    from analysis.pipeline import add_common_arguments
+    from analysis.commands._pipeline_cli import add_common_arguments
 
     parser.add_argument("pattern", metavar="PATTERN", nargs="+",
                         help="record files or glob patterns (quote them: 'runs/*.h5')")
@@ -165,7 +165,7 @@ def run(args) -> int:
     from tqdm import tqdm
 
     from analysis._output import print_json, print_table, to_jsonable
-    from analysis.pipeline import options_from_args
+    from analysis.commands._pipeline_cli import options_from_args
     from analysis.report import file_sha256
     from measure._atomic import atomic_path, check_overwrite
     from predict.errors import ConfigError

@@ -44,7 +44,8 @@ def run(args) -> int:
 
     from analysis._output import print_json
     from analysis.commands.report import write_outputs
-    from analysis.pipeline import LoadCase, analyse, progress_bar
+    from analysis.commands._pipeline_cli import progress_bar
+    from analysis.pipeline import LoadCase, analyse
     from measure._atomic import check_overwrite
     from measure.io import write
     from measure.synth import Scene, synthesize

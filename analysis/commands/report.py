@@ -12,7 +12,7 @@ HELP = "write the test report (HTML, optionally PDF) of a record against a shaft
 
 
 def configure(parser) -> None:
-    from analysis.pipeline import add_common_arguments
+    from analysis.commands._pipeline_cli import add_common_arguments
 
     parser.add_argument("record", metavar="RECORD", help="record file (any supported format)")
     parser.add_argument("model", metavar="MODEL.toml", help="shaft-line model (TOML)")
@@ -80,7 +80,8 @@ def run(args) -> int:
     from pathlib import Path
 
     from analysis._output import print_json
-    from analysis.pipeline import analyse, options_from_args, progress_bar
+    from analysis.commands._pipeline_cli import options_from_args, progress_bar
+    from analysis.pipeline import analyse
     from measure._atomic import check_overwrite
 
     log = logging.getLogger("crankbench")
