@@ -24,12 +24,12 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import resource
-import subprocess
 import sys
 import threading
 import time
 from pathlib import Path
+
+from _memory import peak_mb, rss_mb, run_phases
 
 ROOT = Path(__file__).resolve().parents[1]
 if str(ROOT) not in sys.path:
@@ -42,17 +42,6 @@ RPM0, RPM1 = 600.0, 3000.0
 ORDERS = {1.0: (0.5, 0.3), 2.0: (2.0, -0.7)}   # order: (peak amplitude m/s², phase rad)
 NOISE = 0.5
 
-
-def _rss_mb() -> float:
-    with open("/proc/self/status") as f:
-        for line in f:
-            if line.startswith("VmRSS:"):
-                return int(line.split()[1]) / 1024
-    return float("nan")
-
-
-def _peak_mb() -> float:
-    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024  # KiB on Linux
 
 
 def _accel(samples: int) -> float:
@@ -96,7 +85,7 @@ def make(path: Path, samples: int) -> dict:
         RangeIndex.linspace(0.0, (m - 1) / FS_SPEED, m, dim="time_speed")))
     t0 = time.perf_counter()
     io.write(rec, path, overwrite=True)
-    return {"write_s": time.perf_counter() - t0, "write_peak_rss_mb": _peak_mb(),
+    return {"write_s": time.perf_counter() - t0, "write_peak_rss_mb": peak_mb(),
             "file_gb": path.stat().st_size / 1e9}
 
 
@@ -108,13 +97,13 @@ def track(path: Path, segment_seconds: float) -> dict:
     from analysis.stream import order_track_stream
     from measure import io
 
-    base = _rss_mb()
+    base = rss_mb()
     peak = [base]
     done = threading.Event()
 
     def sample():
         while not done.wait(0.05):
-            peak[0] = max(peak[0], _rss_mb())
+            peak[0] = max(peak[0], rss_mb())
 
     thread = threading.Thread(target=sample, daemon=True)
     thread.start()
@@ -131,7 +120,7 @@ def track(path: Path, segment_seconds: float) -> dict:
            "throughput_MB_s": samples * 4 / 1e6 / elapsed,
            "throughput_Msamples_s": samples / 1e6 / elapsed,
            "rss_after_imports_mb": base, "sampled_peak_rss_mb": peak[0],
-           "stream_peak_rss_mb": _peak_mb(),
+           "stream_peak_rss_mb": peak_mb(),
            "speed_rpm_range": [float(res.rpm.min()), float(res.rpm.max())]}
     for o, (a, p) in ORDERS.items():
         amp = res.amplitude.sel(order=o).values
@@ -158,18 +147,11 @@ def main(argv=None) -> int:
     if args.phase == "track":
         print(json.dumps(track(args.path, args.segment_seconds)))
         return 0
-    out = {}
-    for phase in ("make", "track"):  # each in a fresh process: its own peak RSS
-        if phase == "make" and args.path.exists() and args.keep:
-            continue
-        res = subprocess.run([sys.executable, __file__, "--phase", phase, "--path",
-                              str(args.path), "--samples", str(args.samples),
-                              "--segment-seconds", str(args.segment_seconds)],
-                             capture_output=True, text=True, check=False)
-        if res.returncode:
-            print(res.stderr, file=sys.stderr)
-            return res.returncode
-        out.update(json.loads(res.stdout.strip().splitlines()[-1]))
+    # each phase in a fresh process: its own peak RSS
+    out = run_phases(__file__, ("make", "track"),
+                     ["--path", str(args.path), "--samples", str(args.samples),
+                      "--segment-seconds", str(args.segment_seconds)],
+                     skip=("make",) if args.path.exists() and args.keep else ())
     out["target_peak_rss_mb"] = 500
     out["passed"] = max(out["stream_peak_rss_mb"], out["sampled_peak_rss_mb"]) <= 500
     print(json.dumps(out, indent=2))

@@ -20,11 +20,11 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import resource
-import subprocess
 import sys
 import time
 from pathlib import Path
+
+from _memory import peak_mb, rss_mb, run_phases
 
 ROOT = Path(__file__).resolve().parents[1]
 if str(ROOT) not in sys.path:
@@ -33,17 +33,6 @@ if str(ROOT) not in sys.path:
 FS = 51_200.0
 BLOCK = 2**21  # samples per generated block (8 MB float32)
 
-
-def _rss_mb() -> float:
-    with open("/proc/self/status") as f:
-        for line in f:
-            if line.startswith("VmRSS:"):
-                return int(line.split()[1]) / 1024
-    return float("nan")
-
-
-def _peak_mb() -> float:
-    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024  # KiB on Linux
 
 
 def make(path: Path, samples: int) -> dict:
@@ -70,7 +59,7 @@ def make(path: Path, samples: int) -> dict:
         RangeIndex.linspace(0.0, (samples - 1) / FS, samples, dim="time")))
     t0 = time.perf_counter()
     io.write(rec, path, overwrite=True)
-    return {"write_s": time.perf_counter() - t0, "write_peak_rss_mb": _peak_mb(),
+    return {"write_s": time.perf_counter() - t0, "write_peak_rss_mb": peak_mb(),
             "file_gb": path.stat().st_size / 1e9}
 
 
@@ -79,7 +68,7 @@ def stream(path: Path, chunk_seconds: float) -> dict:
 
     from measure import io
 
-    base = _rss_mb()
+    base = rss_mb()
     t0 = time.perf_counter()
     lazy = io.open(path, chunk_seconds=chunk_seconds)
     t_open = time.perf_counter() - t0
@@ -99,7 +88,7 @@ def stream(path: Path, chunk_seconds: float) -> dict:
     rms = np.concatenate(rms)
     return {"samples": total_n, "chunk_seconds": chunk_seconds, "open_s": t_open,
             "stream_s": elapsed, "throughput_MB_s": total_n * 4 / 1e6 / elapsed,
-            "rss_after_imports_mb": base, "stream_peak_rss_mb": _peak_mb(),
+            "rss_after_imports_mb": base, "stream_peak_rss_mb": peak_mb(),
             "overall_rms": float(np.sqrt(total_sq / total_n)),
             "expected_rms": float(np.sqrt(2.0**2 / 2 + 1.0)),
             "windows": int(rms.size), "window_rms_min": float(rms.min()),
@@ -120,18 +109,11 @@ def main(argv=None) -> int:
     if args.phase == "stream":
         print(json.dumps(stream(args.path, args.chunk_seconds)))
         return 0
-    out = {}
-    for phase in ("make", "stream"):  # each in a fresh process: its own peak RSS
-        if phase == "make" and args.path.exists() and args.keep:
-            continue
-        res = subprocess.run([sys.executable, __file__, "--phase", phase, "--path",
-                              str(args.path), "--samples", str(args.samples),
-                              "--chunk-seconds", str(args.chunk_seconds)],
-                             capture_output=True, text=True, check=False)
-        if res.returncode:
-            print(res.stderr, file=sys.stderr)
-            return res.returncode
-        out.update(json.loads(res.stdout.strip().splitlines()[-1]))
+    # each phase in a fresh process: its own peak RSS
+    out = run_phases(__file__, ("make", "stream"),
+                     ["--path", str(args.path), "--samples", str(args.samples),
+                      "--chunk-seconds", str(args.chunk_seconds)],
+                     skip=("make",) if args.path.exists() and args.keep else ())
     out["target_peak_rss_mb"] = 500
     out["passed"] = out["stream_peak_rss_mb"] <= 500
     print(json.dumps(out, indent=2))
