@@ -313,14 +313,7 @@ def validate(record: xr.Dataset, *, allow_nonfinite: bool = False,
         fs = var.attrs.get("sample_rate")
         if fs is None:
             raise RecordError(f"channel {name!r} has no 'sample_rate' attr; expected Hz > 0")
-        try:
-            fs = float(fs)
-        except (TypeError, ValueError):
-            raise RecordError(f"channel {name!r}: sample_rate={fs!r} is not a number "
-                              "(expected Hz > 0)") from None
-        if not np.isfinite(fs) or fs <= 0:
-            raise RecordError(f"channel {name!r}: sample_rate={fs!r} Hz; expected a finite "
-                              "value > 0")
+        fs = _rate(name, fs)
         if dim not in record.coords:
             raise RecordError(f"channel {name!r}: dim {dim!r} has no time coordinate; expected "
                               "s from record start")
