@@ -90,6 +90,17 @@ def _jtrig(psi):
     return (c, -s, -c), (s, c, -s)
 
 
+
+def _optional_per_cylinder(values, name: str, n: int) -> np.ndarray:
+    """A per-cylinder list (one finite value per cylinder) or zeros when None."""
+    if values is None:
+        return np.zeros(n)
+    arr = check_finite_array(values, name, ndim=1, error=ModelError)
+    if arr.size != n:
+        raise ModelError(f"{name} has {arr.size} values, expected {n} "
+                         "(one per cylinder, like crank_angles_deg)")
+    return arr
+
 class Engine:
     """A reciprocating engine's crank train: geometry, masses, layout, cycle and firing order.
 
@@ -171,24 +182,8 @@ class Engine:
         self._alpha_deg = _readonly(alpha)
         self._recip = _readonly(self._per_cylinder(reciprocating_mass, "reciprocating_mass"))
         self._rot = _readonly(self._per_cylinder(rotating_mass, "rotating_mass"))
-        if cylinder_positions is None:
-            pos = np.zeros(n)
-        else:
-            pos = check_finite_array(cylinder_positions, "cylinder_positions", ndim=1,
-                                     error=ModelError)
-            if pos.size != n:
-                raise ModelError(f"cylinder_positions has {pos.size} values, expected {n} "
-                                 "(one per cylinder, like crank_angles_deg)")
-        self._pos = _readonly(pos)
-        if bank_angles_deg is None:
-            beta = np.zeros(n)
-        else:
-            beta = check_finite_array(bank_angles_deg, "bank_angles_deg", ndim=1,
-                                      error=ModelError)
-            if beta.size != n:
-                raise ModelError(f"bank_angles_deg has {beta.size} values, expected {n} "
-                                 "(one per cylinder, like crank_angles_deg)")
-        self._beta_deg = _readonly(beta)
+        self._pos = _readonly(_optional_per_cylinder(cylinder_positions, "cylinder_positions", n))
+        self._beta_deg = _readonly(_optional_per_cylinder(bank_angles_deg, "bank_angles_deg", n))
         self.cycle = check_int(cycle, "cycle", error=ModelError)
         if self.cycle not in (2, 4):
             raise ModelError(f"cycle={cycle!r} must be 2 or 4 (strokes per cycle)")
