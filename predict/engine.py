@@ -90,7 +90,6 @@ def _jtrig(psi):
     return (c, -s, -c), (s, c, -s)
 
 
-
 def _optional_per_cylinder(values, name: str, n: int) -> np.ndarray:
     """A per-cylinder list (one finite value per cylinder) or zeros when None."""
     if values is None:
@@ -100,6 +99,7 @@ def _optional_per_cylinder(values, name: str, n: int) -> np.ndarray:
         raise ModelError(f"{name} has {arr.size} values, expected {n} "
                          "(one per cylinder, like crank_angles_deg)")
     return arr
+
 
 class Engine:
     """A reciprocating engine's crank train: geometry, masses, layout, cycle and firing order.
