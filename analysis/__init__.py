@@ -4,7 +4,7 @@ Top of the import graph: may import ``measure`` and ``predict``. Public function
 on first use so ``import analysis`` does no work.
 """
 
-from predict._lazy import lazy_names
+from crankbench.predict._lazy import lazy_names
 
 
 #: public name -> submodule that defines it

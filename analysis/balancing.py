@@ -35,8 +35,8 @@ import logging
 
 import numpy as np
 
-from predict._validate import check_int, check_range, suggest
-from predict.errors import AnalysisError, RecordError
+from crankbench.predict._validate import check_int, check_range, suggest
+from crankbench.predict.errors import AnalysisError, RecordError
 
 __all__ = ["first_order_phasors", "tacho_channel"]
 
@@ -81,7 +81,7 @@ def first_order_phasors(record, channels, *, speed_channel: str | None = None,
     Parameters
     ----------
     record : xarray.Dataset
-        A Record (see DESIGN.md) with the vibration channels and a speed reference (a
+        A Record (see docs/DESIGN.md) with the vibration channels and a speed reference (a
         ``rotational_speed`` channel or a pulse train; a 1/rev tacho also sets the phase mark).
     channels : sequence of str
         Measurement-plane channels, in plane order.
@@ -111,7 +111,7 @@ def first_order_phasors(record, channels, *, speed_channel: str | None = None,
 
     Examples
     --------
-    >>> from measure.record import make_record
+    >>> from crankbench.measure.record import make_record
     >>> fs, f = 1000.0, 20.0                     # 1200 rpm
     >>> t = np.arange(int(8 * fs)) / fs
     >>> rec = make_record({

@@ -16,7 +16,7 @@ import logging
 import sys
 import warnings
 
-from predict.errors import CrankbenchError
+from crankbench.predict.errors import CrankbenchError
 
 __all__ = ["main", "build_parser", "verbosity_parent", "COMMANDS"]
 
@@ -32,9 +32,9 @@ COMMANDS = ("info", "demo", "synth", "predict", "analyse", "balance", "compare",
 
 def _load(name: str):
     try:
-        return importlib.import_module(f"analysis.commands.{name}")
+        return importlib.import_module(f"crankbench.analysis.commands.{name}")
     except ModuleNotFoundError as exc:
-        if exc.name == f"analysis.commands.{name}":
+        if exc.name == f"crankbench.analysis.commands.{name}":
             return None  # command not part of this build
         raise
 

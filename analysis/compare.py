@@ -19,8 +19,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from predict._validate import check_positive, check_range
-from predict.errors import AnalysisError
+from crankbench.predict._validate import check_positive, check_range
+from crankbench.predict.errors import AnalysisError
 
 __all__ = ["CriticalComparison", "match_criticals", "BalanceComparison", "compare_balance"]
 

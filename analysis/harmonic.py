@@ -33,8 +33,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from predict._validate import check_finite_array, check_int
-from predict.errors import AnalysisError
+from crankbench.predict._validate import check_finite_array, check_int
+from crankbench.predict.errors import AnalysisError
 
 __all__ = ["HarmonicCoefficients", "harmonics", "runge12", "ordinate_schedule"]
 

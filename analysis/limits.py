@@ -34,13 +34,13 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from predict._validate import (
+from crankbench.predict._validate import (
     check_finite_array,
     check_option,
     check_positive,
     check_range,
 )
-from predict.errors import AnalysisError
+from crankbench.predict.errors import AnalysisError
 
 __all__ = ["ZoneBoundaries", "ISO_10816_1_CLASSES", "zone_boundaries", "LimitCheck",
            "vibration_severity", "check_vibration_severity", "check_torsional_stress",
@@ -408,7 +408,7 @@ def check_torsional_stress(speed_rpm, stress, limits, *, section="", operating_r
 
     Examples
     --------
-    >>> from predict.torsion.stress import StressLimits
+    >>> from crankbench.predict.torsion.stress import StressLimits
     >>> lim = StressLimits([0, 1000], [30e6, 30e6], [60e6, 60e6])
     >>> c = check_torsional_stress([100, 200, 300], [10e6, 45e6, 10e6], lim)
     >>> print(c.passed, c.detail)
@@ -416,7 +416,7 @@ def check_torsional_stress(speed_rpm, stress, limits, *, section="", operating_r
     """
     from types import SimpleNamespace
 
-    from predict.torsion.stress import StressLimits, check_stress
+    from crankbench.predict.torsion.stress import StressLimits, check_stress
 
     if not isinstance(limits, StressLimits):
         raise AnalysisError(f"limits must be a predict.torsion.stress.StressLimits, got "
@@ -500,7 +500,7 @@ def check_residual_unbalance(residual, *, rotor_mass, speed_rpm, grade=6.3, plan
     >>> print(c.passed, c.detail)
     True achieved G 5.65 (smallest standard grade met: G 6.3; required G 6.3)
     """
-    from predict.rotor_balance import grade_check
+    from crankbench.predict.rotor_balance import grade_check
 
     speed = check_positive(speed_rpm, "speed_rpm", error=AnalysisError)
     g = grade_check(residual, rotor_mass=rotor_mass, max_speed=speed * np.pi / 30.0,

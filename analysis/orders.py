@@ -65,9 +65,9 @@ import logging
 
 import numpy as np
 
-from predict._validate import (check_finite_array, check_int, check_option, check_positive,
+from crankbench.predict._validate import (check_finite_array, check_int, check_option, check_positive,
                                check_range)
-from predict.errors import AnalysisError
+from crankbench.predict.errors import AnalysisError
 
 from .resample import INTERPOLATIONS, _as_rpm, _as_signal, angle_resample
 
@@ -113,7 +113,7 @@ def get_window(window, length: int) -> np.ndarray:
         return scipy_window(window, length, fftbins=True)
     except (ValueError, TypeError) as exc:
         names = sorted(k for k in getattr(_windows, "_win_equiv", {}) if isinstance(k, str))
-        from predict._validate import suggest
+        from crankbench.predict._validate import suggest
 
         raise AnalysisError(f"window={window!r} is not a scipy window ({exc}); valid names "
                             f"include {', '.join(names[:30])}"
@@ -242,7 +242,7 @@ def order_track(x, *, fs=None, rpm, orders, amplitude: str = "peak", method: str
     >>> fs = 4000.0
     >>> t = np.arange(int(8 * fs)) / fs
     >>> rpm = 900 + 60 * t                                  # slow run-up
-    >>> from analysis.resample import shaft_angle
+    >>> from crankbench.analysis.resample import shaft_angle
     >>> phi = shaft_angle(rpm, fs)
     >>> x = 2.0 * np.cos(2 * phi + 0.3) + 0.5 * np.cos(0.5 * phi)
     >>> res = order_track(x, fs=fs, rpm=rpm, orders=[0.5, 2], revolutions=8)
@@ -319,7 +319,7 @@ def order_track(x, *, fs=None, rpm, orders, amplitude: str = "peak", method: str
 def _dropout_spans(x, fs):
     """NaN/inf spans ``[(start, stop), ...]`` of a 1-D signal with some finite samples, else
     None (a clean signal, or one that is not usable at all: left to the normal checks)."""
-    from measure.record import nonfinite_spans
+    from crankbench.measure.record import nonfinite_spans
 
     values = getattr(x, "values", x)
     try:
@@ -342,7 +342,7 @@ def _track_around_dropouts(x, fs, spans, **options):
     relative) for VKF, plus one revolution of guard."""
     import warnings
 
-    from measure.record import RecordWarning
+    from crankbench.measure.record import RecordWarning
 
     values = np.asarray(getattr(x, "values", x), dtype=float)
     fs_ = float(fs if fs is not None else x.attrs["sample_rate"])
@@ -462,7 +462,7 @@ def order_map(x, *, fs=None, rpm, samples_per_rev: int = 64, revolutions: int = 
     >>> fs = 4000.0
     >>> t = np.arange(int(6 * fs)) / fs
     >>> rpm = 1200 + 100 * t
-    >>> from analysis.resample import shaft_angle
+    >>> from crankbench.analysis.resample import shaft_angle
     >>> x = 0.7 * np.cos(3 * shaft_angle(rpm, fs))
     >>> m = order_map(x, fs=fs, rpm=rpm, revolutions=8)
     >>> round(float(m.sel(order=3).mean()), 4), m.dims
@@ -542,7 +542,7 @@ def order_spectrum(x, *, fs=None, rpm, samples_per_rev: int = 64, revolutions=No
     --------
     >>> fs = 2000.0
     >>> t = np.arange(int(4 * fs)) / fs
-    >>> from analysis.resample import shaft_angle
+    >>> from crankbench.analysis.resample import shaft_angle
     >>> x = 1.5 * np.cos(2 * shaft_angle(np.full(t.size, 1500.0), fs))
     >>> s = order_spectrum(x, fs=fs, rpm=1500.0, revolutions=20)
     >>> round(float(s.sel(order=2)), 4)
@@ -595,7 +595,7 @@ def band_amplitude(power, orders, *, half_width, amplitude: str = "peak"):
     --------
     >>> fs = 2000.0
     >>> t = np.arange(int(4 * fs)) / fs
-    >>> from analysis.resample import shaft_angle
+    >>> from crankbench.analysis.resample import shaft_angle
     >>> x = np.cos(2.025 * shaft_angle(np.full(t.size, 1500.0), fs))   # between bins
     >>> p = order_spectrum(x, fs=fs, rpm=1500.0, revolutions=20, scaling="power")
     >>> round(float(band_amplitude(p, [2.025], half_width=0.2)[0]), 4)

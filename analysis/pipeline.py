@@ -32,8 +32,8 @@ from pathlib import Path
 
 import numpy as np
 
-from predict._validate import check_option, check_positive, suggest
-from predict.errors import AnalysisError, ConfigError, RecordError
+from crankbench.predict._validate import check_option, check_positive, suggest
+from crankbench.predict.errors import AnalysisError, ConfigError, RecordError
 
 __all__ = ["LoadCase", "PipelineResult", "analyse", "torsional_channel"]
 
@@ -237,7 +237,7 @@ def _node_of(record, channel, system):
 
 def _load_record(record):
     if isinstance(record, (str, Path)):
-        import measure
+        from crankbench import measure
 
         path = Path(record)
         return measure.read(path), str(path)
@@ -249,7 +249,7 @@ def _load_record(record):
 
 def _load_model(model):
     if isinstance(model, (str, Path)):
-        from predict.torsion import from_toml
+        from crankbench.predict.torsion import from_toml
 
         return from_toml(model), str(model)
     if hasattr(model, "critical_speeds"):
@@ -264,9 +264,9 @@ def predicted_response(system, speed_rpm, orders, node, *, load, quantity="angle
     Returns (amplitude (n_s, n_o), stress (n_s, n_o, n_edges) complex Pa — NaN where a
     section has no diameter —, the ForcedResponse).
     """
-    from predict.torsion.forced import stress_factor
+    from crankbench.predict.torsion.forced import stress_factor
 
-    from predict.torsion.excitation import engine_excitation
+    from crankbench.predict.torsion.excitation import engine_excitation
 
     imep = load.imep if load.imep is not None else system.operating.get("imep")
     exc = engine_excitation(system, imep=imep, orders=orders)
@@ -440,7 +440,7 @@ def analyse(record, model, *, channel=None, speed_channel=None, orders=None, max
     --------
     The demo's chain (a few seconds; ``crankbench demo`` runs it from the command line):
 
-    >>> from measure.synth import Scene, synthesize             # doctest: +SKIP
+    >>> from crankbench.measure.synth import Scene, synthesize             # doctest: +SKIP
     >>> scene = Scene.from_toml("sample_data/scenes/marine_6l_runup.toml")  # doctest: +SKIP
     >>> res = analyse(synthesize(scene).record, "sample_data/shaftlines/marine_6l.toml",
     ...               load=LoadCase.from_any(scene.load, scene.engine))  # doctest: +SKIP
@@ -606,7 +606,7 @@ def _balance(rec, system, lo, hi, orders=(1.0, 2.0)):
     if engine is None or not source:
         return []
     try:
-        from predict.mounts import MountedEngine
+        from crankbench.predict.mounts import MountedEngine
 
         mounted = MountedEngine.from_toml(source)
     except (ValueError, OSError, KeyError):
@@ -620,7 +620,7 @@ def _balance(rec, system, lo, hi, orders=(1.0, 2.0)):
         if q not in ("acceleration", "velocity", "displacement") or v.ndim != 1 or \
                 v.attrs.get("location") not in names or direction not in ("x", "y", "z"):
             continue
-        from measure.synth.vibrograph import MountChannels
+        from crankbench.measure.synth.vibrograph import MountChannels
 
         grid = np.linspace(lo, hi, 60) * np.pi / 30.0
         mc = MountChannels(mounted, engine, None, list(orders), [names[v.attrs["location"]]],
@@ -739,7 +739,7 @@ def load_from_record_file(path):
     """
     import json
 
-    from measure.io import read_truth
+    from crankbench.measure.io import read_truth
 
     try:
         truth = read_truth(path)

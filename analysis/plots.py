@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from predict.errors import AnalysisError
+from crankbench.predict.errors import AnalysisError
 
 __all__ = ["plot_order_map", "plot_campbell", "plot_order_tracks"]
 

@@ -39,8 +39,8 @@ import math
 
 import numpy as np
 
-from predict._validate import check_finite_array, check_int, check_option, check_positive
-from predict.errors import AnalysisError
+from crankbench.predict._validate import check_finite_array, check_int, check_option, check_positive
+from crankbench.predict.errors import AnalysisError
 
 __all__ = ["angle_resample", "shaft_angle", "INTERPOLATIONS"]
 

@@ -35,8 +35,8 @@ import logging
 
 import numpy as np
 
-from predict._validate import check_int, check_option, check_positive, check_range
-from predict.errors import AnalysisError
+from crankbench.predict._validate import check_int, check_option, check_positive, check_range
+from crankbench.predict.errors import AnalysisError
 
 from .orders import _frame_batches, _frames, _scale_spectrum, amplitude_factor, get_window
 from .resample import _as_signal, angle_resample
@@ -179,7 +179,7 @@ def synchronous_average(x, *, fs=None, rpm, revolutions_per_cycle: int = 1,
     --------
     >>> fs = 5000.0
     >>> t = np.arange(int(10 * fs)) / fs
-    >>> from analysis.resample import shaft_angle
+    >>> from crankbench.analysis.resample import shaft_angle
     >>> rpm = np.full(t.size, 1200.0)
     >>> rng = np.random.default_rng(0)
     >>> x = np.cos(shaft_angle(rpm, fs)) + rng.normal(0, 1.0, t.size)

@@ -23,8 +23,8 @@ import logging
 
 import numpy as np
 
-from predict._validate import check_positive, suggest
-from predict.errors import AnalysisError, RecordError
+from crankbench.predict._validate import check_positive, suggest
+from crankbench.predict.errors import AnalysisError, RecordError
 
 __all__ = ["speed_reference", "find_speed_channel"]
 
@@ -88,7 +88,7 @@ def _pulse_speed(var, name):
         raise RecordError(f"pulse channel {name!r} has no 'pulses_per_rev' attr")
     missing = int(var.attrs.get("missing_teeth", 0))
     try:
-        from measure.tacho import speed_from_pulses
+        from crankbench.measure.tacho import speed_from_pulses
     except ImportError:  # pragma: no cover - measure.tacho is part of the distribution
         speed_from_pulses = None
     if speed_from_pulses is not None:
@@ -110,7 +110,7 @@ def speed_reference(record, channel: str, *, speed_channel: str | None = None) -
     Parameters
     ----------
     record : xarray.Dataset
-        A Record (DESIGN.md data model).
+        A Record (docs/DESIGN.md data model).
     channel : str
         The channel to be analysed (its time samples are where the speed is wanted).
     speed_channel : str, optional

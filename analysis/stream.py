@@ -49,8 +49,8 @@ import math
 
 import numpy as np
 
-from predict._validate import check_int, check_option, check_positive, check_range
-from predict.errors import AnalysisError, RecordError
+from crankbench.predict._validate import check_int, check_option, check_positive, check_range
+from crankbench.predict.errors import AnalysisError, RecordError
 
 __all__ = ["SpanSpeed", "decimate_stream", "order_map_stream", "order_track_stream"]
 
@@ -168,7 +168,7 @@ def _reader(var):
 
 def _channel(record, channel):
     if channel not in record.data_vars:
-        from predict._validate import suggest
+        from crankbench.predict._validate import suggest
 
         raise RecordError(f"record has no channel {channel!r}"
                           f"{suggest(channel, map(str, record.data_vars))}; channels: "
@@ -446,8 +446,8 @@ def order_track_stream(record, channel: str, *, orders, rpm=None, speed_channel=
 
     Examples
     --------
-    >>> from measure.record import make_record
-    >>> from analysis.resample import shaft_angle
+    >>> from crankbench.measure.record import make_record
+    >>> from crankbench.analysis.resample import shaft_angle
     >>> fs = 2000.0
     >>> t = np.arange(int(6 * fs)) / fs
     >>> rpm = 1200.0 + 60.0 * t
@@ -535,8 +535,8 @@ def order_map_stream(record, channel: str, *, rpm=None, speed_channel=None,
 
     Examples
     --------
-    >>> from measure.record import make_record
-    >>> from analysis.resample import shaft_angle
+    >>> from crankbench.measure.record import make_record
+    >>> from crankbench.analysis.resample import shaft_angle
     >>> fs = 2000.0
     >>> rpm = np.full(12000, 1500.0)
     >>> rec = make_record({"acc": dict(data=0.7 * np.cos(3 * shaft_angle(rpm, fs)),
@@ -679,7 +679,7 @@ def decimate_stream(record, channel: str, *, max_frequency: float, rpm=None,
 
     Examples
     --------
-    >>> from measure.record import make_record
+    >>> from crankbench.measure.record import make_record
     >>> rec = make_record({"x": dict(data=np.cos(2 * np.pi * 5 * np.arange(8000) / 1000.0),
     ...                              sample_rate=1000.0, units="V")})
     >>> y, r = decimate_stream(rec, "x", max_frequency=20.0, rpm=600.0)
@@ -689,7 +689,7 @@ def decimate_stream(record, channel: str, *, max_frequency: float, rpm=None,
     import xarray as xr
     from scipy import signal
 
-    from measure.io import iter_blocks
+    from crankbench.measure.io import iter_blocks
 
     var = _channel(record, channel)
     max_frequency = check_positive(max_frequency, "max_frequency", error=AnalysisError)

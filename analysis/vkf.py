@@ -47,8 +47,8 @@ import math
 
 import numpy as np
 
-from predict._validate import check_int, check_option, check_positive
-from predict.errors import AnalysisError
+from crankbench.predict._validate import check_int, check_option, check_positive
+from crankbench.predict.errors import AnalysisError
 
 from .resample import _as_rpm, _as_signal, shaft_angle
 

@@ -54,7 +54,7 @@ def make(path: Path, samples: int) -> dict:
     import xarray as xr
     from xarray.indexes import RangeIndex
 
-    from measure import io
+    from crankbench.measure import io
 
     acc = _accel(samples)
 
@@ -93,9 +93,9 @@ def track(path: Path, segment_seconds: float) -> dict:
     import numpy as np
     import scipy.signal  # noqa: F401
 
-    import analysis.stream  # noqa: F401  (imports before the baseline)
-    from analysis.stream import order_track_stream
-    from measure import io
+    import crankbench.analysis.stream  # noqa: F401  (imports before the baseline)
+    from crankbench.analysis.stream import order_track_stream
+    from crankbench.measure import io
 
     base = rss_mb()
     peak = [base]

@@ -41,7 +41,7 @@ def make(path: Path, samples: int) -> dict:
     import xarray as xr
     from xarray.indexes import RangeIndex
 
-    from measure import io
+    from crankbench.measure import io
 
     def block(_, block_info=None):
         start, stop = block_info[None]["array-location"][0]
@@ -66,7 +66,7 @@ def make(path: Path, samples: int) -> dict:
 def stream(path: Path, chunk_seconds: float) -> dict:
     import numpy as np
 
-    from measure import io
+    from crankbench.measure import io
 
     base = rss_mb()
     t0 = time.perf_counter()

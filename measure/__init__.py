@@ -5,8 +5,8 @@ May import ``predict`` (the synthetic bench drives the prediction models), never
 Public functions are loaded on first use so ``import measure`` does no work.
 """
 
-from predict._lazy import lazy_names
-from predict.errors import RecordError
+from crankbench.predict._lazy import lazy_names
+from crankbench.predict.errors import RecordError
 
 _LAZY = {
     "read": "io",

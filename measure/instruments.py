@@ -41,13 +41,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from predict._validate import (
+from crankbench.predict._validate import (
     check_finite_array,
     check_option,
     check_positive,
     check_range,
 )
-from predict.errors import AnalysisError
+from crankbench.predict.errors import AnalysisError
 
 __all__ = ["SeismicInstrument", "vibrograph", "torsiograph", "accelerometer",
            "velocity_pickup", "Correction", "KINDS"]

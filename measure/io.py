@@ -30,7 +30,7 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
-from predict.errors import CrankbenchError, RecordError
+from crankbench.predict.errors import CrankbenchError, RecordError
 
 from ._atomic import atomic_path, check_overwrite
 from .readers import EXTENSIONS, format_of_magic, module_for
@@ -205,7 +205,7 @@ def read(path, *, channels=None, allow_nonfinite: bool = False) -> xr.Dataset:
     Examples
     --------
     >>> import tempfile, pathlib
-    >>> from measure.record import make_record
+    >>> from crankbench.measure.record import make_record
     >>> rec = make_record({"acc": dict(data=np.arange(4.0), sample_rate=1000.0, units="g")})
     >>> p = pathlib.Path(tempfile.mkdtemp()) / "r.h5"
     >>> write(rec, p)
@@ -257,7 +257,7 @@ def write(record: xr.Dataset, path, *, truth: xr.Dataset | None = None,
     Examples
     --------
     >>> import tempfile, pathlib
-    >>> from measure.record import make_record
+    >>> from crankbench.measure.record import make_record
     >>> rec = make_record({"v": dict(data=np.ones(3), sample_rate=10.0, units="mm/s")})
     >>> p = pathlib.Path(tempfile.mkdtemp()) / "r.csv"
     >>> write(rec, p)
@@ -295,7 +295,7 @@ def read_truth(path) -> xr.Dataset:
     Examples
     --------
     >>> import tempfile, pathlib
-    >>> from measure.record import make_record
+    >>> from crankbench.measure.record import make_record
     >>> rec = make_record({"v": dict(data=np.ones(3), sample_rate=10.0, units="V")})
     >>> truth = xr.Dataset({"critical_speed_rpm": ("mode", [1200.0, 2900.0])})
     >>> p = pathlib.Path(tempfile.mkdtemp()) / "synth.h5"
@@ -350,7 +350,7 @@ def open(path, *, chunk_seconds: float = 10.0, channels=None,  # noqa: A001
     Examples
     --------
     >>> import tempfile, pathlib
-    >>> from measure.record import make_record
+    >>> from crankbench.measure.record import make_record
     >>> rec = make_record({"acc": dict(data=np.ones(5000), sample_rate=1000.0, units="m/s^2")})
     >>> p = pathlib.Path(tempfile.mkdtemp()) / "long.h5"
     >>> write(rec, p)
@@ -358,7 +358,7 @@ def open(path, *, chunk_seconds: float = 10.0, channels=None,  # noqa: A001
     >>> print(lazy["acc"].chunks, float(lazy["acc"].mean()))
     ((2000, 2000, 1000),) 1.0
     """
-    from predict._validate import check_positive
+    from crankbench.predict._validate import check_positive
 
     chunk_seconds = check_positive(chunk_seconds, "chunk_seconds", error=RecordError)
     path, module = _check_input(path)
@@ -424,13 +424,13 @@ def iter_blocks(record: xr.Dataset, name: str):
 
     Examples
     --------
-    >>> from measure.record import make_record
+    >>> from crankbench.measure.record import make_record
     >>> rec = make_record({"x": dict(data=np.arange(6.0), sample_rate=2.0, units="V")})
     >>> [(t0, b.tolist()) for t0, b in iter_blocks(rec.chunk({"time": 4}), "x")]
     [(0.0, [0.0, 1.0, 2.0, 3.0]), (2.0, [4.0, 5.0])]
     """
     if name not in record.data_vars:
-        from predict._validate import suggest
+        from crankbench.predict._validate import suggest
 
         raise RecordError(f"record has no channel {name!r}"
                           f"{suggest(name, map(str, record.data_vars))}")

@@ -1,6 +1,6 @@
 """The Record: a measurement as an :class:`xarray.Dataset`, its validator and builders.
 
-Schema (DESIGN.md "Data model")
+Schema (docs/DESIGN.md "Data model")
 -------------------------------
 Each channel is a 1-D data variable with attrs
 
@@ -27,7 +27,7 @@ import numpy as np
 import pandas as pd
 import xarray as xr
 
-from predict.errors import RecordError
+from crankbench.predict.errors import RecordError
 
 from .units import QUANTITIES, QUANTITY_UNITS, SI_UNITS, sensitivity_to_si, to_si
 
@@ -617,7 +617,7 @@ def channel_time(record: xr.Dataset, name: str) -> np.ndarray:
     array([0. , 0.5, 1. ])
     """
     if name not in record.data_vars:
-        from predict._validate import suggest
+        from crankbench.predict._validate import suggest
         raise RecordError(f"record has no channel {name!r}{suggest(name, map(str, record.data_vars))}; "
                           f"channels: {', '.join(map(str, record.data_vars))}")
     var = record[name]

@@ -40,14 +40,14 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from predict._validate import (
+from crankbench.predict._validate import (
     check_finite_array,
     check_int,
     check_option,
     check_positive,
     check_range,
 )
-from predict.errors import AnalysisError
+from crankbench.predict.errors import AnalysisError
 
 __all__ = [
     "detect_edges",

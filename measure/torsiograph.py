@@ -44,9 +44,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from predict._validate import (check_finite_array, check_int, check_option,
+from crankbench.predict._validate import (check_finite_array, check_int, check_option,
                                check_positive)
-from predict.errors import AnalysisError
+from crankbench.predict.errors import AnalysisError
 
 from .tacho import SpeedTrace, count_pitches
 from .torsiograph_floor import ErrorFloor, error_floor

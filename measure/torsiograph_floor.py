@@ -10,7 +10,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from predict._validate import check_int, check_nonnegative, check_positive
+from crankbench.predict._validate import check_int, check_nonnegative, check_positive
 
 __all__ = ["ErrorFloor", "error_floor"]
 

@@ -20,7 +20,7 @@ import re
 
 import numpy as np
 
-from predict.errors import RecordError
+from crankbench.predict.errors import RecordError
 
 __all__ = [
     "SI_UNITS",

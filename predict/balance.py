@@ -246,7 +246,7 @@ def unbalance(engine, *, omega, orders=(1, 2, 4, 6, 8), counterweights=(), shaft
 
     Examples
     --------
-    >>> from predict.engine import Engine
+    >>> from crankbench.predict.engine import Engine
     >>> e = Engine(crank_angles_deg=[0, 180, 180, 0], crank_radius=0.04, rod_length=0.14,
     ...            reciprocating_mass=0.5, cylinder_positions=[0, 0.09, 0.18, 0.27])
     >>> ds = unbalance(e, omega=600.0, orders=(1, 2))
@@ -289,7 +289,7 @@ def shaking_forces(engine, theta, *, omega, counterweights=(), shafts=(), pressu
 
     Examples
     --------
-    >>> from predict.engine import Engine
+    >>> from crankbench.predict.engine import Engine
     >>> e = Engine(crank_angles_deg=[0], crank_radius=0.05, rod_length=0.2,
     ...            reciprocating_mass=2.0, rotating_mass=1.0)
     >>> ds = shaking_forces(e, [0.0, np.pi / 2], omega=100.0)
@@ -370,7 +370,7 @@ def counterweights(engine, *, balance_factor=0.0, rotating_fraction=1.0, radius=
 
     Examples
     --------
-    >>> from predict.engine import Engine
+    >>> from crankbench.predict.engine import Engine
     >>> e = Engine(crank_angles_deg=[0], crank_radius=3.0, rod_length=12.0,
     ...            reciprocating_mass=8.0, rotating_mass=4.0)
     >>> cw = counterweights(e, balance_factor=0.5)
@@ -416,7 +416,7 @@ def lanchester_shafts(engine, *, order, positions=None, counterweights=()):
 
     Examples
     --------
-    >>> from predict.engine import Engine
+    >>> from crankbench.predict.engine import Engine
     >>> e = Engine(crank_angles_deg=[0, 180, 180, 0], crank_radius=0.04, rod_length=0.14,
     ...            reciprocating_mass=0.5, cylinder_positions=[0, 0.09, 0.18, 0.27])
     >>> s = lanchester_shafts(e, order=2)
@@ -589,7 +589,7 @@ def balance_residuals(engine, *, omega, orders=(1, 2, 4, 6, 8), balance_factor=N
 
     Examples
     --------
-    >>> from predict.engine import Engine
+    >>> from crankbench.predict.engine import Engine
     >>> e = Engine(crank_angles_deg=[0, 180, 180, 0], crank_radius=0.04, rod_length=0.14,
     ...            reciprocating_mass=0.5, cylinder_positions=[0, 0.09, 0.18, 0.27])
     >>> res = balance_residuals(e, omega=600.0, orders=(2, 4), shaft_orders=(2,))

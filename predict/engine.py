@@ -5,7 +5,7 @@ and radial engines (master and articulated rods), 2- or 4-stroke, with arbitrary
 and firing order.  Everything downstream (forces, torque, balance, torsional excitation,
 synthetic records) asks the engine for the exact motion of each piston.
 
-Angle convention (engine frame, seen from the front, DESIGN.md): the shaft angle θ and the
+Angle convention (engine frame, seen from the front, docs/DESIGN.md): the shaft angle θ and the
 cylinder-axis (bank) angles β are measured from the vertical in the direction of rotation; throw
 i sits αᵢ ahead of throw 1, so cylinder i is at TDC when θ + αᵢ = βᵢ and its own crank angle
 from TDC is ψᵢ = θ + αᵢ − βᵢ.  In-plane vectors are written as complex numbers

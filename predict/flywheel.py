@@ -233,8 +233,8 @@ def turning_moment(engine, *, omega, pressure=None, points_per_cycle=None, load_
 
     Examples
     --------
-    >>> from predict.engine import Engine
-    >>> from predict.pressure import synthetic_pressure
+    >>> from crankbench.predict.engine import Engine
+    >>> from crankbench.predict.pressure import synthetic_pressure
     >>> e = Engine(crank_angles_deg=[0], crank_radius=0.032, rod_length=0.105,
     ...            reciprocating_mass=0.42, bore=0.088, compression_ratio=8.5)
     >>> tm = turning_moment(e, omega=377.0, pressure=synthetic_pressure(e, imep=1.0e6))

@@ -82,8 +82,8 @@ def gas_force(engine, crank_angle, pressure, *, crankcase_pressure=CRANKCASE_PRE
 
     Examples
     --------
-    >>> from predict.engine import Engine
-    >>> from predict.pressure import PressureTrace
+    >>> from crankbench.predict.engine import Engine
+    >>> from crankbench.predict.pressure import PressureTrace
     >>> e = Engine(crank_angles_deg=[0], crank_radius=0.05, rod_length=0.2,
     ...            reciprocating_mass=1.0, bore=0.1)
     >>> tr = PressureTrace.from_measured([0, 1, 2, 3], [5e6, 2e6, 1e5, 1e5])
@@ -115,7 +115,7 @@ def inertia_force(engine, theta, *, omega):
 
     Examples
     --------
-    >>> from predict.engine import Engine
+    >>> from crankbench.predict.engine import Engine
     >>> e = Engine(crank_angles_deg=[0], crank_radius=0.05, rod_length=0.2,
     ...            reciprocating_mass=2.0)
     >>> float(inertia_force(e, [0.0], omega=100.0)[0, 0])  # m r ω² (1 + λ)
@@ -217,7 +217,7 @@ def crank_forces(engine, crank_angle, *, omega, pressure=None, cylinder=1,
 
     Examples
     --------
-    >>> from predict.engine import Engine
+    >>> from crankbench.predict.engine import Engine
     >>> e = Engine(crank_angles_deg=[0], crank_radius=0.05, rod_length=0.2,
     ...            reciprocating_mass=2.0)
     >>> f = crank_forces(e, np.pi / 2, omega=100.0)
@@ -290,7 +290,7 @@ def cylinder_torque(engine, theta, *, omega, pressure=None, cylinder=1,
 
     Examples
     --------
-    >>> from predict.engine import Engine
+    >>> from crankbench.predict.engine import Engine
     >>> e = Engine(crank_angles_deg=[0], crank_radius=0.05, rod_length=0.2,
     ...            reciprocating_mass=2.0)
     >>> round(float(cylinder_torque(e, np.pi / 2, omega=100.0)), 6)  # m r²ω²·λ/√(1−λ²)
@@ -343,7 +343,7 @@ def engine_torque(engine, theta, *, omega, pressure=None,
 
     Examples
     --------
-    >>> from predict.engine import Engine
+    >>> from crankbench.predict.engine import Engine
     >>> e = Engine(crank_angles_deg=[0, 180], crank_radius=0.05, rod_length=0.2,
     ...            reciprocating_mass=2.0, firing_order=[1, 2])
     >>> round(float(engine_torque(e, np.pi / 4, omega=100.0)), 4)
@@ -394,7 +394,7 @@ def torque_harmonics(engine, *, omega, pressure=None, cylinder=1, max_order=24,
 
     Examples
     --------
-    >>> from predict.engine import Engine
+    >>> from crankbench.predict.engine import Engine
     >>> e = Engine(crank_angles_deg=[0], crank_radius=0.05, rod_length=0.2,
     ...            reciprocating_mass=2.0, cycle=2)
     >>> h = torque_harmonics(e, omega=100.0, max_order=3)

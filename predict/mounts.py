@@ -517,8 +517,8 @@ def excitation_from_unbalance(unbalance, order):
 
     Examples
     --------
-    >>> from predict.engine import Engine
-    >>> from predict.balance import unbalance
+    >>> from crankbench.predict.engine import Engine
+    >>> from crankbench.predict.balance import unbalance
     >>> e = Engine(crank_angles_deg=[0], crank_radius=0.05, rod_length=0.2,
     ...            reciprocating_mass=2.0)
     >>> ex = excitation_from_unbalance(unbalance(e, omega=100.0, orders=(1,)), 1)

@@ -128,7 +128,7 @@ class PressureTrace:
 
         Examples
         --------
-        >>> from predict.engine import Engine
+        >>> from crankbench.predict.engine import Engine
         >>> e = Engine(crank_angles_deg=[0], crank_radius=0.05, rod_length=0.2,
         ...            reciprocating_mass=1.0, bore=0.1, compression_ratio=11.0)
         >>> ang = np.arange(720) * 4 * np.pi / 720
@@ -239,7 +239,7 @@ def synthetic_pressure(engine, *, peak_pressure=None, imep=None, heat_release=No
 
     Examples
     --------
-    >>> from predict.engine import Engine
+    >>> from crankbench.predict.engine import Engine
     >>> e = Engine(crank_angles_deg=[0], crank_radius=0.045, rod_length=0.15,
     ...            reciprocating_mass=0.6, bore=0.085, compression_ratio=10.0)
     >>> tr = synthetic_pressure(e, peak_pressure=6e6)
@@ -421,7 +421,7 @@ def combustion_from_table(table) -> dict:
 
     Examples
     --------
-    >>> from predict._toml import Table
+    >>> from crankbench.predict._toml import Table
     >>> combustion_from_table(Table({"imep": 1.2e6, "wiebe_m": 2}, source="x.toml",
     ...                             prefix="engine.combustion"))
     {'imep': 1200000.0, 'wiebe_m': 2.0}

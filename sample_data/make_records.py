@@ -30,8 +30,8 @@ ROOT = Path(__file__).resolve().parents[1]
 if str(ROOT) not in sys.path:  # allow running from a fresh clone without install
     sys.path.insert(0, str(ROOT))
 
-from measure import io  # noqa: E402
-from measure.record import make_record  # noqa: E402
+from crankbench.measure import io  # noqa: E402
+from crankbench.measure.record import make_record  # noqa: E402
 
 SEED = 20260115
 FS_ACC = 10_000.0          # Hz

@@ -1,6 +1,8 @@
 """Shared test configuration: non-interactive matplotlib, sample-data paths."""
 
+import importlib.abc
 import os
+import sys
 from pathlib import Path
 
 import matplotlib
@@ -17,6 +19,28 @@ settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "ci"))
 
 ROOT = Path(__file__).resolve().parents[1]
 SAMPLE_DATA = ROOT / "sample_data"
+
+# Commands run in a subprocess import the same checkout as the tests (a second working tree of
+# an editable install included): crankbench/__init__.py maps the sibling folders in.
+os.environ["PYTHONPATH"] = os.pathsep.join(
+    p for p in (str(ROOT), os.environ.get("PYTHONPATH", "")) if p)
+
+
+class _NoBareTopLevel(importlib.abc.MetaPathFinder):
+    """Refuse ``import measure`` / ``analysis`` / ``predict``: only ``crankbench.*`` is installed,
+    so code that still imports a bare name would break next to an unrelated package of that name
+    (the repository root is on ``sys.path`` under pytest, which would hide the mistake)."""
+
+    NAMES = {"measure", "analysis", "predict"}
+
+    def find_spec(self, fullname, path=None, target=None):
+        if fullname.split(".")[0] in self.NAMES:
+            raise ModuleNotFoundError(f"bare top-level import {fullname!r}: use "
+                                      f"'crankbench.{fullname}' (one installed namespace)")
+        return None
+
+
+sys.meta_path.insert(0, _NoBareTopLevel())
 
 
 @pytest.fixture

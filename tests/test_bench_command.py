@@ -6,15 +6,15 @@ import types
 
 import pytest
 
-import analysis.bench as bench
-from analysis.bench import Row, median_time
-from analysis.cli import main
+import crankbench.analysis.bench as bench
+from crankbench.analysis.bench import Row, median_time
+from crankbench.analysis.cli import main
 
 
 def _fake_suite(monkeypatch, name, rows):
-    module = types.ModuleType(f"analysis.bench.suite_{name}")
+    module = types.ModuleType(f"crankbench.analysis.bench.suite_{name}")
     module.run = lambda quick: rows
-    monkeypatch.setitem(sys.modules, f"analysis.bench.suite_{name}", module)
+    monkeypatch.setitem(sys.modules, f"crankbench.analysis.bench.suite_{name}", module)
     monkeypatch.setattr(bench, "suites", lambda: [name])
 
 
@@ -51,7 +51,7 @@ def test_median_time_reports_per_call_time():
 
 
 def test_verbosity_flags_work_before_and_after_the_command(capsys):
-    from analysis.cli import build_parser
+    from crankbench.analysis.cli import build_parser
 
     parser = build_parser()
     assert parser.parse_args(["-q", "bench", "--list"]).quiet is True
@@ -69,8 +69,8 @@ def test_warnings_reach_the_cli_user_as_one_log_line(tmp_path):
 
     import numpy as np
 
-    from measure.io import write
-    from measure.record import make_record
+    from crankbench.measure.io import write
+    from crankbench.measure.record import make_record
 
     fs, n = 2000.0, 8000
     t = np.arange(n) / fs
@@ -81,7 +81,7 @@ def test_warnings_reach_the_cli_user_as_one_log_line(tmp_path):
                                      units="rad/s", quantity="rotational_speed")})
     path = tmp_path / "clip.h5"
     write(rec, path)
-    done = subprocess.run([sys.executable, "-m", "analysis.cli", "analyse", str(path),
+    done = subprocess.run([sys.executable, "-m", "crankbench", "analyse", str(path),
                            "--channel", "acc", "--orders", "2", "--json"],
                           capture_output=True, text=True, timeout=120)
     assert done.returncode == 0, done.stderr

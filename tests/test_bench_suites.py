@@ -10,9 +10,9 @@ import math
 import numpy as np
 import pytest
 
-import analysis.bench as bench
-from analysis.bench import Row
-from analysis.bench.suite_fidelity import paired_ratio, pareto_distance
+import crankbench.analysis.bench as bench
+from crankbench.analysis.bench import Row
+from crankbench.analysis.bench.suite_fidelity import paired_ratio, pareto_distance
 
 SUITES = bench.suites()
 
@@ -25,7 +25,7 @@ def test_every_expected_suite_is_registered():
 
 @pytest.mark.parametrize("name", SUITES)
 def test_suite_module_contract(name):
-    module = importlib.import_module(f"analysis.bench.suite_{name}")
+    module = importlib.import_module(f"crankbench.analysis.bench.suite_{name}")
     doc = inspect.getdoc(module)
     assert doc and len(doc.split()) >= 8, f"suite_{name} needs a docstring saying what it measures"
     assert callable(getattr(module, "run", None)), f"suite_{name} has no run(quick) callable"
@@ -63,7 +63,7 @@ def test_paired_ratio_sees_a_twofold_cost():
 def test_fidelity_suite_quick_rows():
     # (its < 20 s quick budget is measured by ``crankbench bench --quick``, not asserted here:
     # wall time on a shared CI machine is not a correctness property)
-    rows = importlib.import_module("analysis.bench.suite_fidelity").run(quick=True)
+    rows = importlib.import_module("crankbench.analysis.bench.suite_fidelity").run(quick=True)
     assert rows and all(isinstance(r, Row) and r.suite == "fidelity" for r in rows)
     auto = [r for r in rows if " auto → " in r.setting]
     dist = [r for r in rows if r.setting.startswith("pareto distance")]
@@ -87,6 +87,6 @@ def test_fidelity_suite_quick_rows():
 def test_fidelity_suite_examples_run():
     import doctest
 
-    module = importlib.import_module("analysis.bench.suite_fidelity")
+    module = importlib.import_module("crankbench.analysis.bench.suite_fidelity")
     result = doctest.testmod(module, optionflags=doctest.NORMALIZE_WHITESPACE)
     assert result.attempted > 0 and result.failed == 0

@@ -3,11 +3,11 @@
 import numpy as np
 import pytest
 
-from measure._atomic import atomic_path
-from predict._toml import load_toml
-from predict._validate import (check_finite_array, check_int, check_option, check_positive,
+from crankbench.measure._atomic import atomic_path
+from crankbench.predict._toml import load_toml
+from crankbench.predict._validate import (check_finite_array, check_int, check_option, check_positive,
                                check_range, require)
-from predict.errors import CrankbenchError, MissingDependencyError, ModelError
+from crankbench.predict.errors import CrankbenchError, MissingDependencyError, ModelError
 
 
 def test_check_positive_names_argument():

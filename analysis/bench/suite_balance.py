@@ -32,7 +32,7 @@ def _engines_dir() -> Path:
 
 
 def _fft_route(engine, omega, orders, npts):
-    from predict.balance import shaking_forces
+    from crankbench.predict.balance import shaking_forces
 
     th = 2 * np.pi * np.arange(npts) / npts
     ds = shaking_forces(engine, th, omega=omega)
@@ -43,8 +43,8 @@ def _fft_route(engine, omega, orders, npts):
 
 
 def run(quick: bool) -> list[Row]:
-    from predict.balance import unbalance
-    from predict.engine import Engine
+    from crankbench.predict.balance import unbalance
+    from crankbench.predict.engine import Engine
 
     rows: list[Row] = []
     orders = tuple(range(1, 9))

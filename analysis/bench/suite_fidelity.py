@@ -168,7 +168,7 @@ def _distance_row(method, tol, auto, manual, label, bound, quick):
 
 
 def _kinematics_rows(quick: bool) -> list[Row]:
-    from predict import kinematics as kin
+    from crankbench.predict import kinematics as kin
 
     rows: list[Row] = []
     timer = _timer(quick)
@@ -224,7 +224,7 @@ def _kinematics_rows(quick: bool) -> list[Row]:
 
 
 def _stodola_rows(quick: bool) -> list[Row]:
-    from predict.lateral.approx import MassShaft, lumped_exact, stodola
+    from crankbench.predict.lateral.approx import MassShaft, lumped_exact, stodola
 
     rows: list[Row] = []
     timer = _timer(quick)
@@ -266,7 +266,7 @@ def _stodola_rows(quick: bool) -> list[Row]:
 
 
 def _coastdown_rows(quick: bool) -> list[Row]:
-    from measure.synth.profile import RPM, exponential_coastdown, from_table
+    from crankbench.measure.synth.profile import RPM, exponential_coastdown, from_table
 
     rows: list[Row] = []
     timer = _timer(quick)

@@ -35,7 +35,7 @@ SLOW_QUICK = {**SLOW, ".mf4": 10}
 
 
 def _record(n: int):
-    from measure.record import make_record
+    from crankbench.measure.record import make_record
 
     x = np.random.default_rng(0).standard_normal(n, dtype=np.float32)
     return make_record({"acc": dict(data=x, sample_rate=FS, units="m/s^2",
@@ -43,8 +43,8 @@ def _record(n: int):
 
 
 def run(quick: bool) -> list[Row]:
-    from measure import io
-    from measure.readers import module_for
+    from crankbench.measure import io
+    from crankbench.measure.readers import module_for
 
     n_full = 5_000_000 if quick else 50_000_000
     repeats = 3 if quick else 5

@@ -27,7 +27,7 @@ SUITE = "kinematics"
 def run(quick: bool) -> list[Row]:
     import mpmath as mp
 
-    from predict import kinematics as kin
+    from crankbench.predict import kinematics as kin
 
     rows: list[Row] = []
     n_eval = 20_000 if quick else 100_000

@@ -43,8 +43,8 @@ _E, _RHO = 2.11e11, 7810.0
 
 
 def _approx_rows(quick: bool) -> list[Row]:
-    from predict.lateral.approx import MassShaft, dunkerley, lumped_exact, rayleigh, stodola
-    from predict.lateral.fe import Bearing, Disk, Material, Rotor, ShaftSection
+    from crankbench.predict.lateral.approx import MassShaft, dunkerley, lumped_exact, rayleigh, stodola
+    from crankbench.predict.lateral.fe import Bearing, Disk, Material, Rotor, ShaftSection
 
     rows = []
     cases = []
@@ -96,7 +96,7 @@ def _approx_rows(quick: bool) -> list[Row]:
 
 
 def _fe_rows(quick: bool) -> list[Row]:
-    from predict.lateral.fe import Bearing, Material, Rotor, ShaftSection
+    from crankbench.predict.lateral.fe import Bearing, Material, Rotor, ShaftSection
 
     mat = Material(_E, _RHO, poisson_ratio=0.3)
     rows = []
@@ -185,7 +185,7 @@ def _ross_rows(quick: bool) -> list[Row]:
     except Exception as exc:  # noqa: BLE001 - optional, any import failure means skip
         logging.getLogger("crankbench").warning("lateral bench: ross not available (%s)", exc)
         return []
-    from predict.lateral.fe import Bearing, Disk, Material, Rotor, ShaftSection
+    from crankbench.predict.lateral.fe import Bearing, Disk, Material, Rotor, ShaftSection
 
     steel = rs.Material(name="crankbench_steel", rho=7810.0, E=211e9, G_s=81.2e9)
     ours_mat = Material(211e9, 7810.0, shear_modulus=81.2e9)

@@ -45,13 +45,13 @@ def _root() -> Path:
 
 
 def _synth_rows(quick: bool) -> list[Row]:
-    from measure.synth import Scene, synthesize
-    from measure.synth.profile import ramp
-    from measure.synth.scene import LoadSpec, SensorSpec
-    from measure.synth.vibrograph import MountChannels
-    from predict.engine import Engine
-    from predict.mounts import MountedEngine
-    from predict.torsion.excitation import engine_excitation
+    from crankbench.measure.synth import Scene, synthesize
+    from crankbench.measure.synth.profile import ramp
+    from crankbench.measure.synth.scene import LoadSpec, SensorSpec
+    from crankbench.measure.synth.vibrograph import MountChannels
+    from crankbench.predict.engine import Engine
+    from crankbench.predict.mounts import MountedEngine
+    from crankbench.predict.torsion.excitation import engine_excitation
 
     engine_file = _root() / "sample_data/engines/i4.toml"
     engine = Engine.from_toml(engine_file)
@@ -133,7 +133,7 @@ def _synth_rows(quick: bool) -> list[Row]:
 
 
 def _tacho_rows(quick: bool) -> list[Row]:
-    from measure.tacho import detect_edges, speed_from_pulses
+    from crankbench.measure.tacho import detect_edges, speed_from_pulses
 
     fs, duration, n0, n1 = 20_000.0, 10.0, 600.0, 3000.0
     t = np.arange(int(fs * duration)) / fs
@@ -166,7 +166,7 @@ def _tacho_rows(quick: bool) -> list[Row]:
 
 
 def _floor_rows(quick: bool) -> list[Row]:
-    from measure.torsiograph import angular_vibration, error_floor
+    from crankbench.measure.torsiograph import angular_vibration, error_floor
 
     rng = np.random.default_rng(3)
     n, revs = 60, (150 if quick else 400)

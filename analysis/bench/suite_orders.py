@@ -50,7 +50,7 @@ def sdof_sweep(rate_rpm_s: float, *, natural_frequency: float = 100.0, q_factor:
     """
     from scipy.integrate import solve_ivp
 
-    from analysis.resample import shaft_angle
+    from crankbench.analysis.resample import shaft_angle
 
     wn = 2 * np.pi * natural_frequency
     c, wn2 = wn / q_factor, wn * wn
@@ -105,7 +105,7 @@ METHODS = (
 
 
 def _method_track(case, method, kwargs):
-    from analysis.orders import band_amplitude, order_map, order_track
+    from crankbench.analysis.orders import band_amplitude, order_map, order_track
 
     x, fs, rpm, o = case["x"], case["fs"], case["rpm"], case["order"]
     if method == "map":
@@ -165,7 +165,7 @@ def resonance_crossing_table(rates=(100.0, 400.0, 1000.0), *, methods=METHODS, t
 
 
 def _runup(duration=20.0, fs=20_000.0, seed=5, noise=0.1):
-    from analysis.resample import shaft_angle
+    from crankbench.analysis.resample import shaft_angle
 
     t = np.arange(int(duration * fs)) / fs
     rpm = 1000 + 2000 * t / duration
@@ -202,8 +202,8 @@ def _naive_stft_track(x, fs, rpm, orders, nperseg=4096):
 def run(quick: bool) -> list[Row]:
     from scipy import fft
 
-    from analysis.orders import order_map, order_track
-    from analysis.resample import angle_resample, shaft_angle
+    from crankbench.analysis.orders import order_map, order_track
+    from crankbench.analysis.resample import angle_resample, shaft_angle
 
     rows: list[Row] = []
     duration = 20.0                      # the issue's run-up; cheap enough for --quick too

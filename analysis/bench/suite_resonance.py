@@ -48,7 +48,7 @@ def swept_track(rate_rpm_s, *, fn=20.0, zeta=0.03, order=6.0, rpm0=100.0, rpm1=3
 
 
 def _raw_peak(track):
-    from analysis.resonance import _parabolic
+    from crankbench.analysis.resonance import _parabolic
 
     a = track["amplitude"].values[0]
     r = track["rpm"].values
@@ -58,7 +58,7 @@ def _raw_peak(track):
 
 
 def run(quick: bool) -> list:
-    from analysis.resonance import find_resonances
+    from crankbench.analysis.resonance import find_resonances
 
     cases = [(10.0, 0.03), (100.0, 0.05)] if quick else \
         [(1.0, 0.02), (10.0, 0.02), (30.0, 0.03), (100.0, 0.05), (-100.0, 0.03), (100.0, 0.02)]

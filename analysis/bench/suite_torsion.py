@@ -107,7 +107,7 @@ def _sterf_row(n, j, k, ref, t_ours):
 
 
 def _frequency_rows(quick: bool) -> list[Row]:
-    from predict.torsion import chain
+    from crankbench.predict.torsion import chain
 
     ot = _opentorsion()
     rows = []
@@ -172,7 +172,7 @@ def _frequency_rows(quick: bool) -> list[Row]:
 def _tree_rows(quick: bool) -> list[Row]:
     import mpmath
 
-    from predict.torsion import TorsionalSystem
+    from crankbench.predict.torsion import TorsionalSystem
 
     rng = np.random.default_rng(11)
     n = 30 if quick else 60
@@ -203,8 +203,8 @@ def _tree_rows(quick: bool) -> list[Row]:
 
 
 def _forced_rows(quick: bool) -> list[Row]:
-    from predict.torsion import chain
-    from predict.torsion.forced import cylinder_forcing, harmonic_solve
+    from crankbench.predict.torsion import chain
+    from crankbench.predict.torsion.forced import cylinder_forcing, harmonic_solve
 
     rng = np.random.default_rng(0)
     n = 20

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import logging
 
-from analysis.pipeline import LoadCase, load_from_record_file
+from crankbench.analysis.pipeline import LoadCase, load_from_record_file
 
 __all__ = ["add_common_arguments", "options_from_args", "progress_bar"]
 

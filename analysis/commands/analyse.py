@@ -87,16 +87,16 @@ def run(args) -> int:
 
     import numpy as np
 
-    import measure
-    from analysis._output import print_json, print_table
-    from analysis.orders import campbell_map, order_map, order_track
-    from analysis.speedref import speed_reference
-    from predict._validate import suggest
-    from predict.errors import ConfigError, RecordError
+    from crankbench import measure
+    from crankbench.analysis._output import print_json, print_table
+    from crankbench.analysis.orders import campbell_map, order_map, order_track
+    from crankbench.analysis.speedref import speed_reference
+    from crankbench.predict._validate import suggest
+    from crankbench.predict.errors import ConfigError, RecordError
 
     targets = []
     if args.plot:
-        from measure._atomic import check_overwrite
+        from crankbench.measure._atomic import check_overwrite
 
         out_dir = Path(args.plot)
         if out_dir.exists() and not out_dir.is_dir():
@@ -128,7 +128,7 @@ def run(args) -> int:
         kwargs.update(bandwidth_hz=args.bandwidth_hz, bandwidth_orders=args.bandwidth_orders,
                       filter_order=args.filter_order)
     if streaming:
-        from analysis.stream import order_track_stream
+        from crankbench.analysis.stream import order_track_stream
 
         rpm = None
         tracks = order_track_stream(record, args.channel, speed_channel=args.speed_channel,
@@ -162,18 +162,18 @@ def run(args) -> int:
         matplotlib.use("Agg")
         import matplotlib.pyplot as plt
 
-        from measure._atomic import atomic_path
-        from analysis.plots import plot_campbell, plot_order_map, plot_order_tracks
+        from crankbench.measure._atomic import atomic_path
+        from crankbench.analysis.plots import plot_campbell, plot_order_map, plot_order_tracks
 
         fs = float(channel.attrs["sample_rate"])
         if streaming:
-            from analysis.stream import order_map_stream
+            from crankbench.analysis.stream import order_map_stream
 
             omap = order_map_stream(record, args.channel, speed_channel=args.speed_channel,
                                     samples_per_rev=args.samples_per_rev,
                                     revolutions=args.revolutions, amplitude=args.amplitude)
             # the Campbell map needs the channel in memory: low-passed and decimated, streamed
-            from analysis.stream import decimate_stream
+            from crankbench.analysis.stream import decimate_stream
 
             top = max(args.orders) * float(tracks["rpm"].max()) / 60.0 * 1.5
             channel, rpm = decimate_stream(record, args.channel, max_frequency=min(top, fs / 3),

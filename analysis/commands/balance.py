@@ -86,8 +86,8 @@ def configure(parser) -> None:
 
 
 def _toml_run(path: Path) -> list[dict]:
-    from predict._toml import load_toml
-    from predict.errors import RecordError
+    from crankbench.predict._toml import load_toml
+    from crankbench.predict.errors import RecordError
 
     doc = load_toml(path, error=RecordError)
     r = doc.table("run", {})
@@ -112,7 +112,7 @@ def _toml_run(path: Path) -> list[dict]:
 def _csv_runs(path: Path) -> list[dict]:
     import pandas as pd
 
-    from predict.errors import RecordError
+    from crankbench.predict.errors import RecordError
 
     try:
         frame = pd.read_csv(path, comment="#", skipinitialspace=True)
@@ -150,7 +150,7 @@ def _csv_runs(path: Path) -> list[dict]:
 def read_runs(paths) -> list[dict]:
     """Read run files into dicts: name, source, speed_rpm, trials [(plane, kg, deg)],
     meas [(plane, amplitude, phase_deg)]."""
-    from predict.errors import RecordError
+    from crankbench.predict.errors import RecordError
 
     runs = []
     for p in map(Path, paths):
@@ -177,7 +177,7 @@ def parse_trial(text: str) -> tuple[str, int, float, float]:
     >>> parse_trial("2:1:0.010@30")
     ('2', 1, 0.01, 30.0)
     """
-    from predict.errors import ConfigError
+    from crankbench.predict.errors import ConfigError
 
     try:
         run_id, plane, rest = text.rsplit(":", 2)
@@ -206,8 +206,8 @@ def read_record_runs(paths, channels, trials=(), *, speed_channel=None, steady_f
     """
     import pandas as pd
 
-    from measure import read
-    from predict.errors import ConfigError, RecordError
+    from crankbench.measure import read
+    from crankbench.predict.errors import ConfigError, RecordError
 
     from ..balancing import first_order_phasors
 
@@ -261,9 +261,9 @@ def run(args) -> int:
     import numpy as np
     import pandas as pd
 
-    from analysis._output import print_json, print_table
-    from predict.errors import ConfigError, RecordError
-    from predict.rotor_balance import BalanceWarning, grade_check, influence_balance, phasor
+    from crankbench.analysis._output import print_json, print_table
+    from crankbench.predict.errors import ConfigError, RecordError
+    from crankbench.predict.rotor_balance import BalanceWarning, grade_check, influence_balance, phasor
 
     phasors = None
     if getattr(args, "channel", None):

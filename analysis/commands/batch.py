@@ -17,7 +17,7 @@ HELP = "run compare on many records in parallel (dask) into one summary table"
 
 
 def configure(parser) -> None:
-    from analysis.commands._pipeline_cli import add_common_arguments
+    from crankbench.analysis.commands._pipeline_cli import add_common_arguments
 
     parser.add_argument("pattern", metavar="PATTERN", nargs="+",
                         help="record files or glob patterns (quote them: 'runs/*.h5')")
@@ -65,7 +65,7 @@ def cache_key(record_path, model_sha, options) -> str:
     import hashlib
     import json
 
-    from analysis.report import file_sha256
+    from crankbench.analysis.report import file_sha256
 
     h = hashlib.sha256()
     h.update(file_sha256(record_path).encode())
@@ -86,8 +86,8 @@ def process_one(record_path, model_path, options, cache_file=None, report_dir=No
     import time
     from pathlib import Path
 
-    from analysis.pipeline import LoadCase, analyse, load_from_record_file
-    from measure._atomic import atomic_path
+    from crankbench.analysis.pipeline import LoadCase, analyse, load_from_record_file
+    from crankbench.measure._atomic import atomic_path
 
     log = logging.getLogger("crankbench")
     t0 = time.perf_counter()
@@ -102,7 +102,7 @@ def process_one(record_path, model_path, options, cache_file=None, report_dir=No
         row.update(result.summary())
         row["record"] = str(record_path)
         if report_dir is not None:
-            from analysis.report.build import build_report
+            from crankbench.analysis.report.build import build_report
 
             out = Path(report_dir) / (Path(record_path).stem + ".html")
             build_report(result, record_path=record_path, model_path=model_path).save(
@@ -117,7 +117,7 @@ def process_one(record_path, model_path, options, cache_file=None, report_dir=No
     if cache_file is not None:
         cache_file = Path(cache_file)
         cache_file.parent.mkdir(parents=True, exist_ok=True)
-        from analysis._output import to_jsonable
+        from crankbench.analysis._output import to_jsonable
 
         with atomic_path(cache_file, overwrite=True) as tmp:
             tmp.write_text(json.dumps(to_jsonable(row), indent=1), encoding="utf-8")
@@ -129,7 +129,7 @@ def _compute(tasks, *, scheduler, workers, progress):
     import dask
 
     if scheduler:
-        from predict._validate import require
+        from crankbench.predict._validate import require
 
         distributed = require("distributed", extra="distributed",
                               feature="crankbench batch --scheduler")
@@ -164,11 +164,11 @@ def run(args) -> int:
     import pandas as pd
     from tqdm import tqdm
 
-    from analysis._output import print_json, print_table, to_jsonable
-    from analysis.commands._pipeline_cli import options_from_args
-    from analysis.report import file_sha256
-    from measure._atomic import atomic_path, check_overwrite
-    from predict.errors import ConfigError
+    from crankbench.analysis._output import print_json, print_table, to_jsonable
+    from crankbench.analysis.commands._pipeline_cli import options_from_args
+    from crankbench.analysis.report import file_sha256
+    from crankbench.measure._atomic import atomic_path, check_overwrite
+    from crankbench.predict.errors import ConfigError
 
     log = logging.getLogger("crankbench")
     out = Path(args.output)

@@ -32,10 +32,10 @@ def configure(parser) -> None:
 def run(args) -> int:
     import time
 
-    from analysis._output import print_json, print_table
-    from analysis.bench import run_suites, suites
-    from predict._validate import check_option
-    from predict.errors import ConfigError
+    from crankbench.analysis._output import print_json, print_table
+    from crankbench.analysis.bench import run_suites, suites
+    from crankbench.predict._validate import check_option
+    from crankbench.predict.errors import ConfigError
 
     available = suites()
     if args.list:
@@ -92,10 +92,10 @@ def write_outputs(frame, directory, *, overwrite: bool = False) -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from analysis._output import to_jsonable
-    from measure._atomic import atomic_path
+    from crankbench.analysis._output import to_jsonable
+    from crankbench.measure._atomic import atomic_path
 
-    from measure._atomic import check_overwrite
+    from crankbench.measure._atomic import check_overwrite
 
     out = Path(directory)
     targets = [out / "bench.csv", out / "bench.json",

@@ -13,7 +13,7 @@ HELP = "compare a record's resonances with a shaft-line model's critical speeds"
 
 
 def configure(parser) -> None:
-    from analysis.commands._pipeline_cli import add_common_arguments
+    from crankbench.analysis.commands._pipeline_cli import add_common_arguments
 
     parser.add_argument("record", metavar="RECORD", help="record file (any supported format)")
     parser.add_argument("model", metavar="MODEL.toml", help="shaft-line model (TOML)")
@@ -27,9 +27,9 @@ def configure(parser) -> None:
 def run(args) -> int:
     import logging
 
-    from analysis._output import print_json, print_table
-    from analysis.commands._pipeline_cli import options_from_args, progress_bar
-    from analysis.pipeline import analyse
+    from crankbench.analysis._output import print_json, print_table
+    from crankbench.analysis.commands._pipeline_cli import options_from_args, progress_bar
+    from crankbench.analysis.pipeline import analyse
 
     log = logging.getLogger("crankbench")
     bar, progress = progress_bar(desc="compare", disable=args.json or

@@ -16,16 +16,21 @@ MODEL = "shaftlines/marine_6l.toml"
 
 
 def sample_data_dir():
-    """The repository's ``sample_data`` folder (next to the packages)."""
+    """The ``sample_data`` folder: inside the installed package (wheel: models and scenes), or
+    the repository's top-level folder (source checkout, editable install)."""
     from pathlib import Path
 
-    here = Path(__file__).resolve().parents[2] / "sample_data"
-    if not here.is_dir():
-        from predict.errors import ConfigError
+    import crankbench
 
-        raise ConfigError(f"sample data not found at {here}; run the demo from a source "
-                          "checkout (pip install -e .)")
-    return here
+    candidates = [Path(crankbench.__file__).resolve().parent / "sample_data",
+                  Path(__file__).resolve().parents[2] / "sample_data"]
+    for here in candidates:
+        if (here / SCENE).is_file():
+            return here
+    from crankbench.predict.errors import ConfigError
+
+    raise ConfigError(f"the demo's scene {SCENE} is in none of {', '.join(map(str, candidates))}; "
+                      "reinstall crankbench (pip install -e . from a clone)")
 
 
 def configure(parser) -> None:
@@ -42,13 +47,13 @@ def run(args) -> int:
     import time
     from pathlib import Path
 
-    from analysis._output import print_json
-    from analysis.commands.report import write_outputs
-    from analysis.commands._pipeline_cli import progress_bar
-    from analysis.pipeline import LoadCase, analyse
-    from measure._atomic import check_overwrite
-    from measure.io import write
-    from measure.synth import Scene, synthesize
+    from crankbench.analysis._output import print_json
+    from crankbench.analysis.commands.report import write_outputs
+    from crankbench.analysis.commands._pipeline_cli import progress_bar
+    from crankbench.analysis.pipeline import LoadCase, analyse
+    from crankbench.measure._atomic import check_overwrite
+    from crankbench.measure.io import write
+    from crankbench.measure.synth import Scene, synthesize
 
     log = logging.getLogger("crankbench")
     t0 = time.perf_counter()
@@ -68,7 +73,7 @@ def run(args) -> int:
         write(run_.record, record_path, truth=run_.truth, overwrite=args.overwrite)
         load = LoadCase.from_any(scene.load, scene.engine)
         record = run_.record.assign_attrs(source=record_path.name)
-        from analysis.report import file_sha256
+        from crankbench.analysis.report import file_sha256
 
         record = record.assign_attrs(sha256=file_sha256(record_path))
         result = analyse(record, data / MODEL, load=load, progress=progress)

@@ -26,7 +26,7 @@ def summary(record) -> dict:
     Examples
     --------
     >>> import numpy as np
-    >>> from measure.record import make_record
+    >>> from crankbench.measure.record import make_record
     >>> rec = make_record({"acc": dict(data=np.zeros(200), sample_rate=100.0, units="g")},
     ...                   start_time="2026-01-01T00:00:00+00:00")
     >>> s = summary(rec)
@@ -35,7 +35,7 @@ def summary(record) -> dict:
     """
     import numpy as np
 
-    from measure.record import list_channels
+    from crankbench.measure.record import list_channels
 
     table = list_channels(record)
     extra = []
@@ -57,8 +57,8 @@ def summary(record) -> dict:
 def run(args) -> int:
     import pandas as pd
 
-    from analysis._output import print_json, print_table
-    from measure import io
+    from crankbench.analysis._output import print_json, print_table
+    from crankbench.measure import io
 
     record = io.open(args.file, channels=args.channels)
     info = summary(record)

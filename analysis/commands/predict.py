@@ -15,15 +15,15 @@ PREDICTIONS = ("balance", "torsion", "lateral", "flywheel")
 
 
 def configure(parser) -> None:
-    from analysis.cli import verbosity_parent
+    from crankbench.analysis.cli import verbosity_parent
 
     common = verbosity_parent()
     sub = parser.add_subparsers(dest="prediction", metavar="WHAT", required=True)
     for what in PREDICTIONS:
         try:
-            module = importlib.import_module(f"analysis.commands.predict_{what}")
+            module = importlib.import_module(f"crankbench.analysis.commands.predict_{what}")
         except ModuleNotFoundError as exc:
-            if exc.name == f"analysis.commands.predict_{what}":
+            if exc.name == f"crankbench.analysis.commands.predict_{what}":
                 continue
             raise
         p = sub.add_parser(what, help=module.HELP, description=module.HELP, parents=[common])

@@ -28,10 +28,10 @@ def configure(parser) -> None:
 def run(args) -> int:
     import numpy as np
 
-    from analysis._output import print_json, print_table
-    from predict.balance import balance_residuals
-    from predict.engine import Engine
-    from predict.errors import ConfigError
+    from crankbench.analysis._output import print_json, print_table
+    from crankbench.predict.balance import balance_residuals
+    from crankbench.predict.engine import Engine
+    from crankbench.predict.errors import ConfigError
 
     engine = Engine.from_toml(args.model)
     rpm = args.speed_rpm or engine.rated_speed_rpm
@@ -74,8 +74,8 @@ def _mounts(path, engine, omega, res):
     import numpy as np
     import pandas as pd
 
-    from predict.balance import unbalance
-    from predict.mounts import MountedEngine, excitation_from_unbalance
+    from crankbench.predict.balance import unbalance
+    from crankbench.predict.mounts import MountedEngine, excitation_from_unbalance
 
     with open(path, "rb") as fh:
         if "mounts" not in tomllib.load(fh):

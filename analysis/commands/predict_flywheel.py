@@ -29,11 +29,11 @@ def configure(parser) -> None:
 def run(args) -> int:
     import numpy as np
 
-    from analysis._output import print_json, print_table
-    from predict.engine import Engine
-    from predict.errors import ConfigError
-    from predict.flywheel import design_flywheel, turning_moment
-    from predict.pressure import synthetic_pressure
+    from crankbench.analysis._output import print_json, print_table
+    from crankbench.predict.engine import Engine
+    from crankbench.predict.errors import ConfigError
+    from crankbench.predict.flywheel import design_flywheel, turning_moment
+    from crankbench.predict.pressure import synthetic_pressure
 
     if args.speed_rpm <= 0:
         raise ConfigError(f"--speed-rpm={args.speed_rpm!r} must be > 0")

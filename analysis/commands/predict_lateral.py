@@ -24,9 +24,9 @@ def configure(parser) -> None:
 def run(args) -> int:
     import numpy as np
 
-    from analysis._output import print_json, print_table
-    from predict.errors import ConfigError
-    from predict.lateral.toml import load_rotor
+    from crankbench.analysis._output import print_json, print_table
+    from crankbench.predict.errors import ConfigError
+    from crankbench.predict.lateral.toml import load_rotor
 
     model = load_rotor(args.model)
     rotor = model.rotor

@@ -29,10 +29,10 @@ def run(args) -> int:
     import numpy as np
     import pandas as pd
 
-    from analysis._output import print_json, print_table
-    from predict.torsion import from_toml
-    from predict.torsion.resonance import resonance_amplitudes
-    from predict.torsion.stress import check_stress
+    from crankbench.analysis._output import print_json, print_table
+    from crankbench.predict.torsion import from_toml
+    from crankbench.predict.torsion.resonance import resonance_amplitudes
+    from crankbench.predict.torsion.stress import check_stress
 
     system = from_toml(args.model)
     rng = args.speed_range or system.operating.get("speed_range_rpm")
@@ -40,7 +40,7 @@ def run(args) -> int:
         rated = getattr(system.engine, "rated_speed_rpm", None)
         rng = (0.25 * rated, 1.1 * rated) if rated else None
     if rng is None:
-        from predict.errors import ConfigError
+        from crankbench.predict.errors import ConfigError
 
         raise ConfigError(f"{args.model}: no [shaftline] speed_range_rpm and no engine "
                           "rated_speed_rpm; give --speed-range LOW HIGH (rpm)")

@@ -12,7 +12,7 @@ HELP = "write the test report (HTML, optionally PDF) of a record against a shaft
 
 
 def configure(parser) -> None:
-    from analysis.commands._pipeline_cli import add_common_arguments
+    from crankbench.analysis.commands._pipeline_cli import add_common_arguments
 
     parser.add_argument("record", metavar="RECORD", help="record file (any supported format)")
     parser.add_argument("model", metavar="MODEL.toml", help="shaft-line model (TOML)")
@@ -31,7 +31,7 @@ def configure(parser) -> None:
 
 def add_bench_appendix(rep, rows) -> None:
     """Append the bench table (one table and one speed-against-error plot per suite)."""
-    from analysis.commands.bench import plot_suite, rows_to_frame
+    from crankbench.analysis.commands.bench import plot_suite, rows_to_frame
 
     frame = rows_to_frame(rows)
     section = "Appendix: speed against error"
@@ -59,8 +59,8 @@ def write_outputs(result, output, *, pdf, overwrite, title=None, parameters=None
     """
     from pathlib import Path
 
-    from measure._atomic import check_overwrite
-    from analysis.report.build import build_report
+    from crankbench.measure._atomic import check_overwrite
+    from crankbench.analysis.report.build import build_report
 
     output = Path(output)
     targets = [output]
@@ -79,15 +79,15 @@ def run(args) -> int:
     import logging
     from pathlib import Path
 
-    from analysis._output import print_json
-    from analysis.commands._pipeline_cli import options_from_args, progress_bar
-    from analysis.pipeline import analyse
-    from measure._atomic import check_overwrite
+    from crankbench.analysis._output import print_json
+    from crankbench.analysis.commands._pipeline_cli import options_from_args, progress_bar
+    from crankbench.analysis.pipeline import analyse
+    from crankbench.measure._atomic import check_overwrite
 
     log = logging.getLogger("crankbench")
     out = Path(args.output)
     if out.suffix.lower() not in (".html", ".htm", ".pdf"):
-        from predict.errors import ConfigError
+        from crankbench.predict.errors import ConfigError
 
         raise ConfigError(f"-o {args.output!r} must end in .html or .pdf")
     check_overwrite(out, args.overwrite, option="--overwrite")
@@ -104,7 +104,7 @@ def run(args) -> int:
               "tolerance": args.tolerance, "machine class": args.machine_class}
     bench_rows = None
     if args.bench:
-        from analysis.bench import run_suites
+        from crankbench.analysis.bench import run_suites
 
         log.info("report: running the quick bench suites for the appendix ...")
         bench_rows = run_suites(quick=True, progress=lambda n: log.info("bench: suite %s", n))

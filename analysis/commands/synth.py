@@ -26,7 +26,7 @@ def configure(parser) -> None:
 def run(args) -> int:
     from pathlib import Path
 
-    from measure._atomic import check_overwrite
+    from crankbench.measure._atomic import check_overwrite
 
     out = Path(args.output)
     check_overwrite(out, args.overwrite, option="--overwrite")   # before any heavy work
@@ -36,9 +36,9 @@ def run(args) -> int:
     import numpy as np
     import pandas as pd
 
-    from analysis._output import print_json, print_table
-    from measure.io import write
-    from measure.synth import synthesize
+    from crankbench.analysis._output import print_json, print_table
+    from crankbench.measure.io import write
+    from crankbench.measure.synth import synthesize
 
     result = synthesize(args.scene, method=args.method)
     keeps_truth = out.suffix.lower() in (".h5", ".hdf5", ".nc")

@@ -144,7 +144,7 @@ def build_report(result, *, title=None, parameters=None, record_path=None, model
 
     Examples
     --------
-    >>> from analysis.pipeline import analyse                    # doctest: +SKIP
+    >>> from crankbench.analysis.pipeline import analyse                    # doctest: +SKIP
     >>> rep = build_report(analyse("run.h5", "shaftline.toml"))  # doctest: +SKIP
     >>> rep.save("report.html")                                  # doctest: +SKIP
     """

@@ -13,8 +13,8 @@ import logging
 import textwrap
 from pathlib import Path
 
-from predict._validate import check_option, require
-from predict.errors import ConfigError
+from crankbench.predict._validate import check_option, require
+from crankbench.predict.errors import ConfigError
 
 __all__ = ["write_pdf", "ENGINES"]
 

@@ -18,8 +18,8 @@ import platform
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from predict._validate import check_int, check_option
-from predict.errors import ConfigError
+from crankbench.predict._validate import check_int, check_option
+from crankbench.predict.errors import ConfigError
 
 __all__ = ["Report", "file_sha256", "crankbench_version"]
 
@@ -333,7 +333,7 @@ class Report:
         """The report as one self-contained HTML document."""
         from jinja2 import Environment, PackageLoader, select_autoescape
 
-        env = Environment(loader=PackageLoader("analysis.report", "templates"),
+        env = Environment(loader=PackageLoader("crankbench.analysis.report", "templates"),
                           autoescape=select_autoescape(["html", "j2"]))
         template = env.get_template("report.html.j2")
         verdict = None
@@ -360,7 +360,7 @@ class Report:
         -------
         Path
         """
-        from measure._atomic import atomic_path
+        from crankbench.measure._atomic import atomic_path
 
         path = Path(path)
         suffix = path.suffix.lower()

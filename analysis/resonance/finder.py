@@ -7,8 +7,8 @@ from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
-from predict._validate import check_int, check_option, check_positive, check_range
-from predict.errors import AnalysisError
+from crankbench.predict._validate import check_int, check_option, check_positive, check_range
+from crankbench.predict.errors import AnalysisError
 
 from .sdof import (RESPONSES, _UNIT_RESPONSE, _crossing, _modal_fit, _parabolic,
                    half_power_damping)
@@ -389,7 +389,7 @@ def find_resonances(track, *, orders=None, response=None, min_snr=5.0, min_promi
     Examples
     --------
     >>> import numpy as np, xarray as xr
-    >>> from analysis.resonance import sdof_response
+    >>> from crankbench.analysis.resonance import sdof_response
     >>> rpm = np.linspace(300, 900, 3001)
     >>> f = 6 * rpm / 60                        # order 6 excitation, Hz
     >>> h = sdof_response(f, natural_frequency=60.0, damping_ratio=0.03)

@@ -11,8 +11,8 @@ import logging
 
 import numpy as np
 
-from predict._validate import check_option, check_positive, check_range
-from predict.errors import AnalysisError
+from crankbench.predict._validate import check_option, check_positive, check_range
+from crankbench.predict.errors import AnalysisError
 
 from .sdof import RESPONSES, _background, _modal_fit, _peak_and_half_power, half_power_damping
 

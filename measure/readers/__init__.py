@@ -19,8 +19,8 @@ from __future__ import annotations
 
 import importlib
 
-from predict._validate import suggest
-from predict.errors import RecordError
+from crankbench.predict._validate import suggest
+from crankbench.predict.errors import RecordError
 
 __all__ = ["EXTENSIONS", "FORMAT_MODULES", "module_for", "format_of_magic"]
 

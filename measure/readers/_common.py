@@ -8,7 +8,7 @@ import numpy as np
 import pandas as pd
 import xarray as xr
 
-from predict.errors import RecordError
+from crankbench.predict.errors import RecordError
 
 from ..record import is_pulse_dim, time_coordinate
 from ..units import QUANTITIES, SI_UNITS, sensitivity_to_si, to_si_owned
@@ -176,7 +176,7 @@ def select(names: list[str], channels, *, file: str) -> list[str]:
     """Names to load: all, or ``channels`` checked against ``names`` (did-you-mean)."""
     if channels is None:
         return list(names)
-    from predict._validate import suggest
+    from crankbench.predict._validate import suggest
 
     wanted = [channels] if isinstance(channels, str) else list(channels)
     for c in wanted:

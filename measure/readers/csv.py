@@ -29,7 +29,7 @@ import numpy as np
 import pandas as pd
 import xarray as xr
 
-from predict.errors import RecordError
+from crankbench.predict.errors import RecordError
 
 from ..record import is_pulse_dim
 from ._common import (

@@ -23,7 +23,7 @@ import json
 import numpy as np
 import xarray as xr
 
-from predict.errors import RecordError
+from crankbench.predict.errors import RecordError
 
 from ..record import is_pulse_dim, time_coordinate
 from ._common import build_dataset, clean_attrs, dims_of, regular_start, select, si_channel

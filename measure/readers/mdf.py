@@ -26,7 +26,7 @@ import xml.etree.ElementTree as ET
 import numpy as np
 import xarray as xr
 
-from predict.errors import RecordError
+from crankbench.predict.errors import RecordError
 
 from ..record import is_pulse_dim
 from ._common import (

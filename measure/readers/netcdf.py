@@ -13,7 +13,7 @@ import numpy as np
 import pandas as pd
 import xarray as xr
 
-from predict.errors import RecordError
+from crankbench.predict.errors import RecordError
 
 from ..record import is_pulse_dim
 from ._common import clean_attrs, select, si_channel

@@ -44,7 +44,7 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
-from predict.errors import RecordError
+from crankbench.predict.errors import RecordError
 
 from ..record import RecordWarning, is_pulse_dim, time_coordinate
 from ._common import (

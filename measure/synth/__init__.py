@@ -10,7 +10,7 @@ torsional response), :mod:`.vibrograph` (mount channels), :mod:`.pulses` (tacho/
 trains), :mod:`.imperfections`, :mod:`.run` (``synthesize``). Names are loaded on first use.
 """
 
-from predict._lazy import lazy_names
+from crankbench.predict._lazy import lazy_names
 
 
 _LAZY = {

@@ -12,8 +12,8 @@ from dataclasses import asdict, dataclass, replace
 
 import numpy as np
 
-from predict._validate import check_nonnegative, check_range
-from predict.errors import ConfigError
+from crankbench.predict._validate import check_nonnegative, check_range
+from crankbench.predict.errors import ConfigError
 
 __all__ = ["Imperfections", "tooth_angles", "add_noise_and_drift", "degrade_edges"]
 

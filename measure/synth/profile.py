@@ -13,8 +13,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from predict._validate import check_finite_array, check_positive, check_range
-from predict.errors import ConfigError
+from crankbench.predict._validate import check_finite_array, check_positive, check_range
+from crankbench.predict.errors import ConfigError
 
 __all__ = ["SpeedProfile", "steady", "ramp", "exponential_coastdown", "from_table"]
 

@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from predict.errors import ConfigError
+from crankbench.predict.errors import ConfigError
 
 from .imperfections import degrade_edges, tooth_angles
 
@@ -63,8 +63,8 @@ def wheel_edges(profile, *, start_angle, ratio, grid_time, vibration, vibration_
 
     Examples
     --------
-    >>> from measure.synth.profile import steady
-    >>> from measure.synth.imperfections import Imperfections
+    >>> from crankbench.measure.synth.profile import steady
+    >>> from crankbench.measure.synth.imperfections import Imperfections
     >>> edges, _ = wheel_edges(steady(600.0, duration=1.0), start_angle=0.0, ratio=1.0,
     ...                        grid_time=np.linspace(0, 1, 11), vibration=None,
     ...                        vibration_velocity=None, pulses_per_rev=4, missing_teeth=0,
@@ -125,8 +125,8 @@ def analogue_pickup(edges, *, time, pulses_per_rev, missing_teeth, profile, ampl
 
     Examples
     --------
-    >>> from measure.synth.profile import steady
-    >>> from measure.tacho import detect_edges
+    >>> from crankbench.measure.synth.profile import steady
+    >>> from crankbench.measure.tacho import detect_edges
     >>> edges = np.arange(1, 40) * 0.025
     >>> t = np.arange(20_000) / 20_000.0
     >>> v = analogue_pickup(edges, time=t, pulses_per_rev=4, missing_teeth=0,

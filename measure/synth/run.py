@@ -30,8 +30,8 @@ from pathlib import Path
 
 import numpy as np
 
-from predict._validate import check_option
-from predict.errors import ConfigError
+from crankbench.predict._validate import check_option
+from crankbench.predict.errors import ConfigError
 
 from .imperfections import add_noise_and_drift as _add_noise_and_drift
 from .pulses import analogue_pickup, wheel_edges
@@ -76,7 +76,7 @@ class SyntheticRun:
 
     def write(self, path, *, overwrite=False):
         """Write record and truth (HDF5 group ``truth``) atomically (:func:`measure.io.write`)."""
-        from measure.io import write
+        from crankbench.measure.io import write
 
         write(self.record, path, truth=self.truth, overwrite=overwrite)
 
@@ -289,7 +289,7 @@ def synthesize(scene, *, method="split", integration_rate=None):
     # keep the scene's sensor order
     channels = {s.name: channels[s.name] for s in scene.sensors if s.name in channels}
 
-    from measure.record import make_record
+    from crankbench.measure.record import make_record
 
     record = make_record(channels, attrs={
         "source": f"synthetic: {Path(scene.source).name}",
@@ -313,7 +313,7 @@ def _instrument(spec, quantity):
     """The seismic instrument of a sensor (None if it has none)."""
     if "instrument_frequency" not in spec.params:
         return None
-    from measure.instruments import SeismicInstrument
+    from crankbench.measure.instruments import SeismicInstrument
 
     return SeismicInstrument(spec.params["instrument_frequency"],
                              spec.params["instrument_damping"], _INSTRUMENT_KIND[quantity])
@@ -329,7 +329,7 @@ def _read_out(data, time, imperfections, rng, spec=None, quantity=None):
 
 
 def _excitation(scene, orders):
-    from predict.torsion.excitation import engine_excitation
+    from crankbench.predict.torsion.excitation import engine_excitation
 
     try:
         return engine_excitation(scene.engine, imep=scene.load.imep, orders=orders)
@@ -384,7 +384,7 @@ def _mount_channels(scene, sensors, excitation, orders, psi0, t_truth, rpm_truth
             points.append(s.params["point"])
         else:
             if s.params["mount"] not in names:
-                from predict._validate import suggest
+                from crankbench.predict._validate import suggest
 
                 raise ConfigError(f"sensor {s.name!r}: mount={s.params['mount']!r} is not a mount "
                                   f"of the model{suggest(s.params['mount'], names)}; mounts: "
@@ -472,7 +472,7 @@ def _instrument_attrs(spec):
 
 
 def _pressure_channel(scene, s, psi0, rng):
-    from predict.pressure import synthetic_pressure
+    from crankbench.predict.pressure import synthetic_pressure
 
     engine = scene.engine
     c = s.params["cylinder"]

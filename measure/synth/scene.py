@@ -55,8 +55,8 @@ from pathlib import Path
 
 import numpy as np
 
-from predict._toml import Table, load_toml
-from predict.errors import ConfigError
+from crankbench.predict._toml import Table, load_toml
+from crankbench.predict.errors import ConfigError
 
 from .imperfections import Imperfections
 from .profile import SpeedProfile, exponential_coastdown, from_table, ramp, steady
@@ -199,7 +199,7 @@ class Scene:
             for s in self.sensors:
                 node = s.params.get("node")
                 if node is not None and node not in nodes:
-                    from predict._validate import suggest
+                    from crankbench.predict._validate import suggest
 
                     raise ConfigError(f"scene {self.name!r}: sensor {s.name!r} node={node!r} is "
                                       f"not a shaft-line node{suggest(node, nodes)}; nodes: "
@@ -231,13 +231,13 @@ class Scene:
         if st is None:
             raise ConfigError(f"{path}: has no [scene] table")
         engine_path = _model_path(path, st, "engine", required=True)
-        from predict.engine import Engine
+        from crankbench.predict.engine import Engine
 
         engine = Engine.from_toml(engine_path)
         shaftline = None
         shaft_path = _model_path(path, st, "shaftline", required=False)
         if shaft_path is not None:
-            from predict.torsion import from_toml as torsion_from_toml
+            from crankbench.predict.torsion import from_toml as torsion_from_toml
 
             shaftline = torsion_from_toml(shaft_path)
         mounts = None
@@ -245,7 +245,7 @@ class Scene:
         if mounts_path is None and "mounts" in load_toml(engine_path).data:
             mounts_path = engine_path
         if mounts_path is not None:
-            from predict.mounts import MountedEngine
+            from crankbench.predict.mounts import MountedEngine
 
             mounts = MountedEngine.from_toml(mounts_path)
         name = st.string("name", path.stem)

@@ -48,7 +48,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from predict.errors import ConfigError, ModelError
+from crankbench.predict.errors import ConfigError, ModelError
 
 __all__ = ["ModalModel", "equivalent_viscous_system", "order_forcing"]
 
@@ -96,7 +96,7 @@ def equivalent_viscous_system(system):
 
     Examples
     --------
-    >>> from predict.torsion import chain
+    >>> from crankbench.predict.torsion import chain
     >>> s = chain([1.0, 1.0], [1e4]).replace(edge_loss_factor=[0.1])
     >>> v = equivalent_viscous_system(s)
     >>> round(float(v.edge_damping[0]), 4)           # 0.1 * 1e4 / sqrt(2e4)
@@ -126,15 +126,15 @@ def order_forcing(system, excitation, orders, *, misfire=None):
     Examples
     --------
     >>> from pathlib import Path
-    >>> from predict.torsion import from_toml
-    >>> from predict.torsion.excitation import engine_excitation
+    >>> from crankbench.predict.torsion import from_toml
+    >>> from crankbench.predict.torsion.excitation import engine_excitation
     >>> root = Path(__file__).resolve().parents[2]
     >>> s = from_toml(root / "sample_data/shaftlines/marine_6l.toml")
     >>> gas, inertia = order_forcing(s, engine_excitation(s, imep=2e6, orders=[3.0]), [3.0])
     >>> gas.shape, bool(np.allclose(np.abs(gas[0, 2:8]), np.abs(gas[0, 2])))
     ((1, 13), True)
     """
-    from predict.torsion.forced import cylinder_forcing
+    from crankbench.predict.torsion.forced import cylinder_forcing
 
     orders = np.asarray(orders, float)
     g = excitation.harmonics(np.array([0.0]), orders, misfire=misfire)[0]      # (n_o, z)
@@ -195,7 +195,7 @@ class ModalModel:
 
         Examples
         --------
-        >>> from predict.torsion import TorsionalSystem
+        >>> from crankbench.predict.torsion import TorsionalSystem
         >>> s = TorsionalSystem([2.0], [(-1, 0)], [2.0 * (2 * np.pi * 20) ** 2],
         ...                     node_damping=[2 * 0.02 * 2.0 * 2 * np.pi * 20])
         >>> fn, zeta = ModalModel.from_system(s).natural_frequencies()
@@ -278,7 +278,7 @@ class ModalModel:
     def node_index(self, name):
         """Index of a node by name (error lists the names)."""
         if name not in self.node_names:
-            from predict._validate import suggest
+            from crankbench.predict._validate import suggest
 
             raise ConfigError(f"shaft-line node {name!r} does not exist"
                               f"{suggest(name, self.node_names)}; nodes: "

@@ -31,7 +31,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from predict.errors import ConfigError
+from crankbench.predict.errors import ConfigError
 
 __all__ = ["MountChannels"]
 
@@ -75,8 +75,8 @@ class MountChannels:
     Examples
     --------
     >>> from pathlib import Path
-    >>> from predict.engine import Engine
-    >>> from predict.mounts import MountedEngine
+    >>> from crankbench.predict.engine import Engine
+    >>> from crankbench.predict.mounts import MountedEngine
     >>> f = Path(__file__).resolve().parents[2] / "sample_data/engines/i4.toml"
     >>> mc = MountChannels(MountedEngine.from_toml(f), Engine.from_toml(f), None, [1.0, 2.0],
     ...                    [[0.2, 0.05, 0.1]], [314.159])
@@ -86,8 +86,8 @@ class MountChannels:
     """
 
     def __init__(self, mounted, engine, excitation, orders, points, speed_grid):
-        from predict.balance import unbalance
-        from predict.mounts import excitation_from_unbalance
+        from crankbench.predict.balance import unbalance
+        from crankbench.predict.mounts import excitation_from_unbalance
 
         self.orders = np.asarray(orders, float)
         self.points = np.atleast_2d(np.asarray(points, float))

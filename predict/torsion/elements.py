@@ -119,7 +119,7 @@ def crank_throw_inertia(engine, cylinder: int, throw_inertia: float = 0.0) -> fl
 
     Examples
     --------
-    >>> from predict.engine import Engine
+    >>> from crankbench.predict.engine import Engine
     >>> e = Engine(crank_angles_deg=[0], crank_radius=0.1, rod_length=0.4,
     ...            reciprocating_mass=10.0, rotating_mass=5.0)
     >>> print(round(crank_throw_inertia(e, 1, 1.0), 6))

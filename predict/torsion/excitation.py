@@ -64,7 +64,7 @@ def tangential_torque(engine, psi, *, omega, pressure, crankcase_pressure=1.0e5)
     Examples
     --------
     >>> import numpy as np
-    >>> from predict.engine import Engine
+    >>> from crankbench.predict.engine import Engine
     >>> e = Engine(crank_angles_deg=[0], crank_radius=0.05, rod_length=0.2,
     ...            reciprocating_mass=0.0, bore=0.1)
     >>> t = tangential_torque(e, [np.pi / 2], omega=100.0, pressure=[2e5])
@@ -229,7 +229,7 @@ def engine_excitation(system_or_engine, *, imep=None, pressure=None, orders=None
 
     Examples
     --------
-    >>> from predict.engine import Engine
+    >>> from crankbench.predict.engine import Engine
     >>> e = Engine(crank_angles_deg=[0, 180, 180, 0], crank_radius=0.045, rod_length=0.15,
     ...            reciprocating_mass=0.6, bore=0.085, compression_ratio=10.0,
     ...            firing_order=[1, 3, 4, 2])

@@ -368,7 +368,7 @@ def forced_response(system, speed_rpm, *, torque=None, orders=None, misfire=None
     Examples
     --------
     >>> import numpy as np
-    >>> from predict.torsion import chain
+    >>> from crankbench.predict.torsion import chain
     >>> s = chain([1.0, 1.0], [1e4]).replace(cylinder_nodes=[0], firing_angles_deg=[0.0],
     ...                                      edge_damping=[2.0])
     >>> r = s.forced_response([500.0], torque=[100.0], orders=[1.0])

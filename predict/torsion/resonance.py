@@ -69,7 +69,7 @@ def resonance_amplitudes(system, *, torque=None, orders=None, speed_range_rpm=No
     Examples
     --------
     >>> import numpy as np
-    >>> from predict.torsion import chain
+    >>> from crankbench.predict.torsion import chain
     >>> s = chain([1.0, 1.0], [1e4]).replace(
     ...     cylinder_nodes=[0], firing_angles_deg=[0.0], edge_damping=[1.0])
     >>> t = resonance_amplitudes(s, torque=lambda q, w: 10.0, orders=[2.0])

@@ -96,7 +96,7 @@ class TorsionalSystem:
 
     Examples
     --------
-    >>> from predict.torsion import TorsionalSystem
+    >>> from crankbench.predict.torsion import TorsionalSystem
     >>> s = TorsionalSystem([1.0, 2.0], [(0, 1)], [1e4])
     >>> print(round(float(s.natural_frequencies()[1]), 4))
     19.4924
@@ -471,7 +471,7 @@ class TorsionalSystem:
 
         Examples
         --------
-        >>> from predict.torsion import chain
+        >>> from crankbench.predict.torsion import chain
         >>> print(chain([1.0, 1.0, 1.0], [1e4, 1e4]).natural_frequencies().round(3))
         [ 0.    15.915 27.566]
         """
@@ -487,7 +487,7 @@ class TorsionalSystem:
 
         Examples
         --------
-        >>> from predict.torsion import chain
+        >>> from crankbench.predict.torsion import chain
         >>> m = chain([1.0, 1.0], [1e4]).mode_shapes()
         >>> print(m.relative()[:, 1].round(3))
         [ 1. -1.]
@@ -556,7 +556,7 @@ class TorsionalSystem:
 
         Examples
         --------
-        >>> from predict.torsion import chain
+        >>> from crankbench.predict.torsion import chain
         >>> s = chain([1.0, 1.0], [(2 * 3.141592653589793 * 50) ** 2 / 2])
         >>> print(s.critical_speeds([1, 2], (0, 5000))[["mode", "order", "speed_rpm"]])
            mode  order  speed_rpm
@@ -650,7 +650,7 @@ class TorsionalSystem:
 
         Examples
         --------
-        >>> from predict.torsion import chain
+        >>> from crankbench.predict.torsion import chain
         >>> s = chain([1.0, 1.0], [1e4])
         >>> t = s.holzer_table(s.natural_frequencies()[1])
         >>> print(abs(t.attrs["residual_torque"]) < 1e-9)
@@ -723,7 +723,7 @@ def chain(inertias, stiffnesses, *, names=None) -> TorsionalSystem:
 
     Examples
     --------
-    >>> from predict.torsion import chain
+    >>> from crankbench.predict.torsion import chain
     >>> print(chain([2.0], [800.0]).natural_frequencies("rad/s"))
     [20.]
     """

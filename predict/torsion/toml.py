@@ -94,7 +94,7 @@ def from_toml(path):
     Examples
     --------
     >>> from pathlib import Path
-    >>> import predict.torsion as pt
+    >>> import crankbench.predict.torsion as pt
     >>> p = Path(__file__).resolve().parents[2] / "sample_data/shaftlines/two_rotor.toml"
     >>> s = pt.from_toml(p)
     >>> print(s.natural_frequencies().round(3))

@@ -22,8 +22,8 @@ from pathlib import Path
 
 import numpy as np
 
-from predict.lateral.toml import load_rotor
-from predict.rotor_balance import influence_balance
+from crankbench.predict.lateral.toml import load_rotor
+from crankbench.predict.rotor_balance import influence_balance
 
 HERE = Path(__file__).resolve().parent
 RADIUS = 0.14
@@ -45,8 +45,8 @@ DURATION = 6.0
 
 def write_record(name, v_um, start_angle, seed):
     """Record of x(t) = Re(X e^{i(Ωt + start)}) + noise with a 1/rev tacho at rotor angle 0."""
-    from measure import write
-    from measure.record import make_record
+    from crankbench.measure import write
+    from crankbench.measure.record import make_record
 
     rng = np.random.default_rng(seed)
     t = np.arange(int(DURATION * FS)) / FS

@@ -5,14 +5,14 @@ import json
 import numpy as np
 import pytest
 
-from analysis.cli import main
-from analysis.resample import shaft_angle
+from crankbench.analysis.cli import main
+from crankbench.analysis.resample import shaft_angle
 
 
 @pytest.fixture
 def record_path(tmp_path):
-    measure_io = pytest.importorskip("measure.io")
-    from measure.record import make_record
+    measure_io = pytest.importorskip("crankbench.measure.io")
+    from crankbench.measure.record import make_record
 
     fs = 5000.0
     t = np.arange(int(6 * fs)) / fs

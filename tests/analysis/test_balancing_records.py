@@ -15,9 +15,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from analysis.cli import main
-from measure import write
-from measure.record import make_record
+from crankbench.analysis.cli import main
+from crankbench.measure import write
+from crankbench.measure.record import make_record
 
 ROOT = Path(__file__).resolve().parents[2]
 RADIUS = 0.14
@@ -33,7 +33,7 @@ DURATION = 5.0
 
 @pytest.fixture(scope="module")
 def responses():
-    from predict.lateral.toml import load_rotor
+    from crankbench.predict.lateral.toml import load_rotor
 
     rotor = load_rotor(ROOT / "sample_data" / "rotors" / "two_disk.toml").rotor
 
@@ -165,7 +165,7 @@ def test_run_up_excluded_from_average():
     """A run-up 1800 -> 2400 rpm in the first 2 s (response ∝ speed², unbalance force) is left
     out: only blocks at the steady speed are averaged; the tacho edges follow the varying speed.
     """
-    from analysis.balancing import first_order_phasors
+    from crankbench.analysis.balancing import first_order_phasors
 
     t = np.arange(int(8 * FS)) / FS
     rpm = 1800 + 600 * np.minimum(t / 2.0, 1.0)

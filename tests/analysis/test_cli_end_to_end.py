@@ -10,7 +10,7 @@ from pathlib import Path
 
 import pytest
 
-from analysis.cli import main
+from crankbench.analysis.cli import main
 
 ROOT = Path(__file__).resolve().parents[2]
 MODEL = ROOT / "sample_data/shaftlines/marine_6l.toml"
@@ -40,7 +40,7 @@ def test_demo_runs_the_chain_in_under_a_minute(demo_dir):
                     "Mode shapes (model)", "Matched critical speeds", "Limit checks",
                     "Analysis settings", "Provenance"):
         assert heading in text, heading
-    from analysis.report import file_sha256
+    from crankbench.analysis.report import file_sha256
 
     assert file_sha256(record) in text  # provenance hashes the record written
 
@@ -85,8 +85,8 @@ def test_report_html_and_pdf(demo_dir, tmp_path, capsys):
 
 
 def test_compare_bad_channel_is_one_line_error(tmp_path, capsys):
-    from measure.record import make_record
-    from measure.io import write
+    from crankbench.measure.record import make_record
+    from crankbench.measure.io import write
     import numpy as np
 
     rec = make_record({"tv_free_end": dict(data=np.zeros(100), sample_rate=100.0, units="rad",

@@ -9,8 +9,8 @@ import pandas as pd
 import pytest
 import xarray as xr
 
-from analysis.compare import compare_balance, match_criticals
-from predict.errors import AnalysisError
+from crankbench.analysis.compare import compare_balance, match_criticals
+from crankbench.predict.errors import AnalysisError
 
 
 def _pred(rows):
@@ -78,7 +78,7 @@ def test_natural_frequency_collected_across_orders():
 
 
 def _system(stiffness_scale=1.0):
-    from predict.torsion import chain
+    from crankbench.predict.torsion import chain
 
     inertias = [8.0, 8.0, 8.0, 8.0, 8.0, 8.0, 60.0, 25.0]
     k = np.array([4e7, 4e7, 4e7, 4e7, 4e7, 3e7, 2e6])
@@ -165,7 +165,7 @@ def test_weak_criticals_are_listed_not_judged():
 def test_no_measured_resonance_leaves_criticals_unmatched():
     """A record that crosses no critical gives an empty resonance table: the comparison
     lists the criticals as not found instead of failing."""
-    from analysis.resonance import ResonanceTable
+    from crankbench.analysis.resonance import ResonanceTable
 
     empty = ResonanceTable(())
     assert empty.to_frame()["speed_rpm"].dtype == float

@@ -7,9 +7,9 @@ amplitudes it was built with; the masked results must cover the dropout.
 import numpy as np
 import pytest
 
-from analysis import order_track
-from analysis.resample import shaft_angle
-from measure.record import RecordWarning
+from crankbench.analysis import order_track
+from crankbench.analysis.resample import shaft_angle
+from crankbench.measure.record import RecordWarning
 
 
 @pytest.mark.parametrize("method", ["cot", "vkf"])
@@ -33,7 +33,7 @@ def test_dropout_is_masked_with_warning_and_the_rest_is_exact(method):
 
 
 def test_all_nan_channel_is_still_an_error():
-    from predict.errors import AnalysisError
+    from crankbench.predict.errors import AnalysisError
 
     with pytest.raises(AnalysisError, match=r"x contains 4000 NaN/inf value\(s\), first at index 0"):
         order_track(np.full(4000, np.nan), fs=4000.0, rpm=1500.0, orders=[2])

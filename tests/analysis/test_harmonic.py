@@ -5,8 +5,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from analysis.harmonic import harmonics, ordinate_schedule, runge12
-from predict.errors import AnalysisError
+from crankbench.analysis.harmonic import harmonics, ordinate_schedule, runge12
+from crankbench.predict.errors import AnalysisError
 
 
 @settings(max_examples=40, deadline=None)

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from analysis.limits import (
+from crankbench.analysis.limits import (
     ISO_10816_1_CLASSES,
     ZoneBoundaries,
     check_residual_unbalance,
@@ -12,8 +12,8 @@ from analysis.limits import (
     vibration_severity,
     zone_boundaries,
 )
-from predict.errors import AnalysisError
-from predict.torsion.stress import StressLimits
+from crankbench.predict.errors import AnalysisError
+from crankbench.predict.torsion.stress import StressLimits
 
 
 def test_iso_10816_1_table_b1_values():

@@ -4,9 +4,9 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from analysis.orders import band_amplitude, campbell_map, order_map, order_spectrum, order_track
-from analysis.resample import angle_resample, shaft_angle
-from predict.errors import AnalysisError
+from crankbench.analysis.orders import band_amplitude, campbell_map, order_map, order_spectrum, order_track
+from crankbench.analysis.resample import angle_resample, shaft_angle
+from crankbench.predict.errors import AnalysisError
 
 
 def _runup(fs, duration, rpm0, rpm1):
@@ -171,10 +171,10 @@ def test_sample_record_against_its_synthesis_truth(sample_data, kwargs):
     path = sample_data / "records" / "i4_runup.h5"
     if not path.exists():
         pytest.skip("sample record not generated")
-    import measure
-    from measure.io import read_truth
+    from crankbench import measure
+    from crankbench.measure.io import read_truth
 
-    from analysis.speedref import speed_reference
+    from crankbench.analysis.speedref import speed_reference
 
     rec = measure.read(path)
     truth = read_truth(path)

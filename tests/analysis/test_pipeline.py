@@ -12,8 +12,8 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from analysis.pipeline import LoadCase, analyse, torsional_channel
-from predict.errors import ConfigError, RecordError
+from crankbench.analysis.pipeline import LoadCase, analyse, torsional_channel
+from crankbench.predict.errors import ConfigError, RecordError
 
 ROOT = Path(__file__).resolve().parents[2]
 SCENE = ROOT / "sample_data/scenes/marine_6l_runup.toml"
@@ -22,7 +22,7 @@ MODEL = ROOT / "sample_data/shaftlines/marine_6l.toml"
 
 @pytest.fixture(scope="module")
 def marine():
-    from measure.synth import Scene, synthesize
+    from crankbench.measure.synth import Scene, synthesize
 
     scene = Scene.from_toml(SCENE)
     run = synthesize(scene)
@@ -130,7 +130,7 @@ def test_balance_residuals_at_the_mounts_i4():
     """I4 run-up: the second-order free force through the mount model against the
     synthetic mount accelerometers (truth: the same quasi-steady mount response plus noise);
     order 1 is balanced by design and listed with its measured residual only."""
-    from measure.synth import Scene, synthesize
+    from crankbench.measure.synth import Scene, synthesize
 
     scene = Scene.from_toml(ROOT / "sample_data/scenes/i4_runup.toml")
     run = synthesize(scene)
@@ -151,7 +151,7 @@ def test_fast_sweep_100_rpm_per_s(tmp_path):
     within 0.5 % (speed) and 5 % (steady-state amplitude, after the sweep correction; the raw
     peaks are up to 18 % low); mode 2 (weak at the free end, identified with the residual
     terms) within the same figures (measured: −0.09 % and +4.2 %)."""
-    from measure.synth import Scene, synthesize
+    from crankbench.measure.synth import Scene, synthesize
 
     text = SCENE.read_text().replace("duration = 40.0", "duration = 5.6")
     text = text.replace('"../', f'"{SCENE.parent.parent.as_posix()}/')

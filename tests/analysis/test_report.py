@@ -11,10 +11,10 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from analysis.limits import check_residual_unbalance, check_vibration_severity
-from analysis.report import Report, file_sha256
-from analysis.report.pdf import write_pdf
-from predict.errors import ConfigError
+from crankbench.analysis.limits import check_residual_unbalance, check_vibration_severity
+from crankbench.analysis.report import Report, file_sha256
+from crankbench.analysis.report.pdf import write_pdf
+from crankbench.predict.errors import ConfigError
 
 
 def _report(tmp_path):

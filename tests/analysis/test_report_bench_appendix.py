@@ -2,9 +2,9 @@
 
 import re
 
-from analysis.bench import Row
-from analysis.commands.report import add_bench_appendix
-from analysis.report import Report
+from crankbench.analysis.bench import Row
+from crankbench.analysis.commands.report import add_bench_appendix
+from crankbench.analysis.report import Report
 
 
 def test_bench_appendix_has_a_table_and_a_plot_per_suite_and_states_failures(tmp_path):

@@ -16,8 +16,8 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from analysis.limits import check_vibration_severity
-from analysis.report import Report
+from crankbench.analysis.limits import check_vibration_severity
+from crankbench.analysis.report import Report
 
 CHROMIUM = next((p for p in ("/usr/bin/chromium", shutil.which("chromium"),
                              shutil.which("chromium-browser"), shutil.which("google-chrome"))

@@ -11,13 +11,13 @@ import pytest
 import xarray as xr
 from scipy import optimize, signal
 
-from analysis.resonance import (
+from crankbench.analysis.resonance import (
     find_resonances,
     half_power_damping,
     sdof_response,
     sweep_peak_loss,
 )
-from predict.errors import AnalysisError
+from crankbench.predict.errors import AnalysisError
 
 P = {"displacement": 0, "velocity": 1, "acceleration": 2}
 

@@ -14,8 +14,8 @@ import numpy as np
 import pytest
 import xarray as xr
 
-import analysis.resonance.finder as finder
-from analysis.resonance import find_resonances
+import crankbench.analysis.resonance.finder as finder
+from crankbench.analysis.resonance import find_resonances
 
 FN, ZETA, ORDER = 27.0, 0.058, 3.0
 

@@ -8,7 +8,7 @@ table (100, 400, 1000 rpm/s) is in the bench suite ``orders``; this is the fast 
 import numpy as np
 import pytest
 
-from analysis.bench.suite_orders import resonance_crossing_table, sdof_sweep
+from crankbench.analysis.bench.suite_orders import resonance_crossing_table, sdof_sweep
 
 
 @pytest.fixture(scope="module")

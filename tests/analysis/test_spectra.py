@@ -6,9 +6,9 @@ import xarray as xr
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from analysis.resample import shaft_angle
-from analysis.spectra import differentiate, integrate, spectrum, synchronous_average
-from predict.errors import AnalysisError
+from crankbench.analysis.resample import shaft_angle
+from crankbench.analysis.spectra import differentiate, integrate, spectrum, synchronous_average
+from crankbench.predict.errors import AnalysisError
 
 
 @settings(max_examples=25, deadline=None)

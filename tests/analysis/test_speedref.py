@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from analysis.speedref import find_speed_channel, speed_reference
-from predict.errors import AnalysisError, RecordError
+from crankbench.analysis.speedref import find_speed_channel, speed_reference
+from crankbench.predict.errors import AnalysisError, RecordError
 
 
 def _record_with_pulses(ppr=60, missing=0, fs=5000.0, duration=4.0):

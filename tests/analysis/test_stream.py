@@ -10,13 +10,13 @@ phases of a run-up whose shaft angle is integrated from the record start.
 import numpy as np
 import pytest
 
-import measure
-from analysis.orders import order_map, order_track
-from analysis.resample import shaft_angle
-from analysis.speedref import speed_reference
-from analysis.stream import order_map_stream, order_track_stream
-from measure.record import make_record
-from predict.errors import AnalysisError, RecordError
+from crankbench import measure
+from crankbench.analysis.orders import order_map, order_track
+from crankbench.analysis.resample import shaft_angle
+from crankbench.analysis.speedref import speed_reference
+from crankbench.analysis.stream import order_map_stream, order_track_stream
+from crankbench.measure.record import make_record
+from crankbench.predict.errors import AnalysisError, RecordError
 
 FS = 2000.0
 
@@ -110,8 +110,8 @@ def test_analyse_command_streams_large_files(runup, monkeypatch, capsys, tmp_pat
     in-memory path (threshold lowered so the small test record streams), and writes the plots."""
     import json
 
-    from analysis.cli import main
-    from analysis.commands import analyse
+    from crankbench.analysis.cli import main
+    from crankbench.analysis.commands import analyse
 
     path = runup[0]
     args = ["analyse", str(path), "--channel", "acc", "--orders", "0.5,2", "--revolutions", "8",

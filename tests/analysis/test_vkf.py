@@ -3,10 +3,10 @@
 import numpy as np
 import pytest
 
-from analysis.orders import order_track
-from analysis.resample import shaft_angle
-from analysis.vkf import enbw_hz, vkf_weight, vold_kalman
-from predict.errors import AnalysisError
+from crankbench.analysis.orders import order_track
+from crankbench.analysis.resample import shaft_angle
+from crankbench.analysis.vkf import enbw_hz, vkf_weight, vold_kalman
+from crankbench.predict.errors import AnalysisError
 
 
 @pytest.mark.parametrize("filter_order", [1, 2])

@@ -28,8 +28,8 @@ ROOT = Path(__file__).resolve().parents[2]
 if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
 
-from measure import io  # noqa: E402
-from measure.record import make_record  # noqa: E402
+from crankbench.measure import io  # noqa: E402
+from crankbench.measure.record import make_record  # noqa: E402
 
 OUT = Path(__file__).resolve().parent / "bad" / "records"
 FS = 1000.0

@@ -9,7 +9,7 @@ import mpmath as mp
 import numpy as np
 import pytest
 
-from predict import kinematics as kin
+from crankbench.predict import kinematics as kin
 
 LAM = 0.45
 R = 0.09

@@ -8,8 +8,8 @@ import mpmath
 import numpy as np
 import pytest
 
-from predict.errors import ModelError
-from predict.mounts import Mount, MountedEngine
+from crankbench.predict.errors import ModelError
+from crankbench.predict.mounts import Mount, MountedEngine
 
 MASS, INERTIA, CG = 800.0, [40.0, 90.0, 90.0], [0.5, 0.0, 0.0]
 

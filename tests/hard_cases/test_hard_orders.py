@@ -15,10 +15,10 @@ Already covered elsewhere (not repeated):
 import numpy as np
 import pytest
 
-from analysis.orders import order_track
-from analysis.resample import shaft_angle
-from measure.tacho import speed_from_pulses
-from predict.errors import AnalysisError
+from crankbench.analysis.orders import order_track
+from crankbench.analysis.resample import shaft_angle
+from crankbench.measure.tacho import speed_from_pulses
+from crankbench.predict.errors import AnalysisError
 
 TWO_PI = 2 * np.pi
 
@@ -91,7 +91,7 @@ def test_order_crossing_a_fixed_frequency_component_at_1000_rpm_per_s():
     alone = order_track(x, fs=fs, rpm=both[0], orders=[2], method="vkf", bandwidth_hz=2.0)
     near = np.abs(alone.rpm.values - 1500.0) < 60
     assert np.abs(alone.amplitude.values[0][near] - 1.0).max() > 0.1
-    from analysis.vkf import vold_kalman
+    from crankbench.analysis.vkf import vold_kalman
 
     res = vold_kalman(x, fs=fs, rpm=both, orders=[2, 1], bandwidth_hz=2.0)
     sel = ((res.time > 0.3) & (res.time < 2.1)).values

@@ -10,7 +10,7 @@ dropouts plus two spurious pulses (``tests/measure/test_tacho.py``), light rando
 import numpy as np
 import pytest
 
-from measure.tacho import angle_from_pulses, count_pitches, speed_from_pulses
+from crankbench.measure.tacho import angle_from_pulses, count_pitches, speed_from_pulses
 
 TWO_PI = 2 * np.pi
 W0, ALPHA = 100.0, 20 * TWO_PI    # 955 rpm, +1200 rpm/s

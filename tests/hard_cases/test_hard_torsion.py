@@ -20,7 +20,7 @@ import mpmath
 import numpy as np
 import pytest
 
-from predict.torsion import ShaftLine, TorsionalSystem, chain
+from crankbench.predict.torsion import ShaftLine, TorsionalSystem, chain
 
 
 def mp_frequencies(inertias, edges, stiffnesses, dps=60):

@@ -14,10 +14,10 @@ Sources (seeds in /work/shared/seeds):
 import numpy as np
 import pytest
 
-from predict import kinematics as kin
-from predict.balance import counterweights
-from predict.engine import Engine
-from predict.masses import Rod, rod_inertia_from_pendulum, throw_rotating_mass
+from crankbench.predict import kinematics as kin
+from crankbench.predict.balance import counterweights
+from crankbench.predict.engine import Engine
+from crankbench.predict.masses import Rod, rod_inertia_from_pendulum, throw_rotating_mass
 
 G_FT = 32.2                      # ft/s², the value used in [Liang 1948]
 OMEGA_4000 = 4000 * 2 * np.pi / 60

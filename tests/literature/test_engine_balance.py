@@ -20,8 +20,8 @@ import mpmath as mp
 import numpy as np
 import pytest
 
-from predict.balance import counterweights, unbalance
-from predict.engine import ArticulatedRod, Engine
+from crankbench.predict.balance import counterweights, unbalance
+from crankbench.predict.engine import ArticulatedRod, Engine
 
 R, L, M, MR = 0.043, 0.145, 0.55, 0.45
 W = 6000 * np.pi / 30
@@ -101,7 +101,7 @@ def test_zhao_i6_free_of_orders_1_2_4():
     assert np.all(ds["force"].sel(order=[1, 2, 4]).values < 1e-12 * C)
     assert np.all(ds["moment"].values < 1e-12 * C * S)
     # the 6th order adds up: 6 m_j R ω² a₆
-    from predict.kinematics import series_coefficients
+    from crankbench.predict.kinematics import series_coefficients
 
     a6 = series_coefficients(R / L, 6)[6]
     assert float(ds["force"].sel(order=6)) == pytest.approx(6 * C * abs(a6), rel=1e-12)
@@ -146,7 +146,7 @@ def test_liang_radial_primary_force_constant_and_half_mass_counterweight():
     assert float(ds["force_forward"].sel(order=1)) == pytest.approx(5 * c / 2, rel=1e-13)
     assert float(ds["force_backward"].sel(order=1)) < 1e-12 * c
     th = np.linspace(0, 2 * np.pi, 721)
-    from predict.balance import shaking_forces
+    from crankbench.predict.balance import shaking_forces
 
     sf = shaking_forces(e, th, omega=w)
     # the first-order part of the time signal has constant magnitude

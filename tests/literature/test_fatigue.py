@@ -9,7 +9,7 @@ the worked shaft example (S.A.E. 1055 shaft transmitting a torque varying betwee
 import numpy as np
 import pytest
 
-from predict.fatigue import (EnduranceDiagram, StressPoint, endurance_limit, max_stress_at_ratio,
+from crankbench.predict.fatigue import (EnduranceDiagram, StressPoint, endurance_limit, max_stress_at_ratio,
                              rainflow, shear_strength)
 
 PSI = 6894.757293168  # Pa

@@ -15,7 +15,7 @@ Sources:
 import numpy as np
 import pytest
 
-from predict.flywheel import TurningMoment, flywheel_inertia
+from crankbench.predict.flywheel import TurningMoment, flywheel_inertia
 
 
 def _diagram(delta_e, omega, order=2):

@@ -11,7 +11,7 @@ import mpmath
 import numpy as np
 import pytest
 
-from analysis.harmonic import harmonics
+from crankbench.analysis.harmonic import harmonics
 
 P = 0.3
 
@@ -58,7 +58,7 @@ def test_12_ordinate_schedule_on_the_book_example_shows_its_aliasing():
     """Runge's 12-ordinate schedule on the same curve: a₂ agrees with the 24-ordinate value
     to the size of a₁₀ (aliased onto 2), while a₄ picks up a₈ (8 aliases onto 12 − 8 = 4) —
     the stated error of an n-ordinate analysis."""
-    from analysis.harmonic import runge12
+    from crankbench.analysis.harmonic import runge12
 
     theta = 2 * np.pi * np.arange(12) / 12
     h12 = runge12(normalised_piston_acceleration(theta))

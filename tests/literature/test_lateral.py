@@ -6,10 +6,10 @@ Each test names its source; tolerances are the printed precision of that source.
 import numpy as np
 import pytest
 
-from predict.lateral.approx import MassShaft, dunkerley, lumped_exact, rayleigh
-from predict.lateral.beams import beam_natural_frequencies
-from predict.lateral.fe import Bearing, Disk, Material, Rotor, ShaftSection
-from predict.rotor_balance import influence_balance, permissible_unbalance
+from crankbench.predict.lateral.approx import MassShaft, dunkerley, lumped_exact, rayleigh
+from crankbench.predict.lateral.beams import beam_natural_frequencies
+from crankbench.predict.lateral.fe import Bearing, Disk, Material, Rotor, ShaftSection
+from crankbench.predict.rotor_balance import influence_balance, permissible_unbalance
 
 G = 9.80665
 

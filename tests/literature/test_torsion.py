@@ -20,9 +20,9 @@ Sources (seeds in /work/shared/seeds):
 import numpy as np
 import pytest
 
-from predict.torsion import TorsionalSystem, chain
-from predict.torsion.elements import ShaftLine, shaft_stiffness, stepped_shaft
-from predict.torsion.resonance import resonance_amplitudes
+from crankbench.predict.torsion import TorsionalSystem, chain
+from crankbench.predict.torsion.elements import ShaftLine, shaft_stiffness, stepped_shaft
+from crankbench.predict.torsion.resonance import resonance_amplitudes
 
 
 def test_two_rotor_system():

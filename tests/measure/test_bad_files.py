@@ -14,9 +14,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from measure import io
-from measure.record import RecordWarning
-from predict.errors import RecordError
+from crankbench.measure import io
+from crankbench.measure.record import RecordWarning
+from crankbench.predict.errors import RecordError
 
 CORPUS = Path(__file__).resolve().parents[1] / "corpus" / "bad" / "records"
 

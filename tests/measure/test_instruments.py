@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
-from measure.instruments import (SeismicInstrument, accelerometer, torsiograph,
+from crankbench.measure.instruments import (SeismicInstrument, accelerometer, torsiograph,
                                  velocity_pickup, vibrograph)
 
 

@@ -7,8 +7,8 @@ sample rates, dims (mixed clocks never resampled), pulse attrs, start time and r
 import numpy as np
 import pytest
 
-from measure import io
-from measure.record import make_record
+from crankbench.measure import io
+from crankbench.measure.record import make_record
 
 #: extension -> (relative precision of samples, relative precision of times)
 FORMATS = {

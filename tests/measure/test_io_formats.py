@@ -12,9 +12,9 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from measure import io
-from measure.record import RecordWarning, make_record
-from predict.errors import RecordError
+from crankbench.measure import io
+from crankbench.measure.record import RecordWarning, make_record
+from crankbench.predict.errors import RecordError
 
 G0 = 9.80665
 RPM = 2 * math.pi / 60

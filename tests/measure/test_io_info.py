@@ -6,7 +6,7 @@ from pathlib import Path
 
 import pytest
 
-from analysis.cli import main
+from crankbench.analysis.cli import main
 
 RECORDS = Path(__file__).resolve().parents[2] / "sample_data" / "records"
 

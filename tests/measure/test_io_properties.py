@@ -12,9 +12,9 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from measure import io
-from measure.record import RecordWarning, make_record
-from predict.errors import RecordError
+from crankbench.measure import io
+from crankbench.measure.record import RecordWarning, make_record
+from crankbench.predict.errors import RecordError
 
 SETTINGS = dict(max_examples=50, deadline=None,
                 suppress_health_check=[HealthCheck.function_scoped_fixture,

@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from measure import io
+from crankbench.measure import io
 
 FORMATS = (".h5", ".csv", ".mf4", ".tdms", ".uff", ".wav")
 

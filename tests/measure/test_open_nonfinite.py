@@ -3,9 +3,9 @@
 import numpy as np
 import pytest
 
-from measure.io import iter_blocks, open as open_record, write
-from measure.record import make_record
-from predict.errors import RecordError
+from crankbench.measure.io import iter_blocks, open as open_record, write
+from crankbench.measure.record import make_record
+from crankbench.predict.errors import RecordError
 
 
 @pytest.mark.parametrize("ext", [".h5", ".wav", ".tdms"])

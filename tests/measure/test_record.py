@@ -4,9 +4,9 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from measure.record import channel_time, clipped_spans, list_channels, make_record, \
+from crankbench.measure.record import channel_time, clipped_spans, list_channels, make_record, \
     nonfinite_spans, validate
-from predict.errors import RecordError
+from crankbench.predict.errors import RecordError
 
 
 def _rec(**over):

@@ -18,15 +18,15 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from measure.synth import Scene, synthesize
-from measure.synth.imperfections import Imperfections
-from measure.synth.profile import steady
-from measure.synth.scene import LoadSpec, SensorSpec
-from measure.tacho import speed_from_pulses
-from measure.torsiograph import angular_vibration
-from predict.engine import Engine
-from predict.mounts import MountedEngine
-from predict.torsion import from_toml
+from crankbench.measure.synth import Scene, synthesize
+from crankbench.measure.synth.imperfections import Imperfections
+from crankbench.measure.synth.profile import steady
+from crankbench.measure.synth.scene import LoadSpec, SensorSpec
+from crankbench.measure.tacho import speed_from_pulses
+from crankbench.measure.torsiograph import angular_vibration
+from crankbench.predict.engine import Engine
+from crankbench.predict.mounts import MountedEngine
+from crankbench.predict.torsion import from_toml
 
 ROOT = Path(__file__).resolve().parents[2]
 TWO_PI = 2 * np.pi
@@ -82,7 +82,7 @@ def test_tacho_speed_of_steady_run(steady_run):
 def test_analogue_pickup_edges_match_pulse_train(steady_run):
     """Edges detected on the synthesized 60-2 pick-up voltage (50 kHz) coincide with the
     pulse-time channel of the same wheel within 1e-7 s, and the gap synchronises the angle."""
-    from measure.tacho import angle_from_pulses, detect_edges
+    from crankbench.measure.tacho import angle_from_pulses, detect_edges
 
     v = steady_run.record["tacho_v"]
     assert v.attrs["quantity"] == "voltage" and v.attrs["missing_teeth"] == 2
@@ -155,8 +155,8 @@ def test_mount_channel_equals_shaking_force_route(steady_run):
     of predict.balance.shaking_forces (with the same cylinder pressure) over one cycle, FFT per
     order, through MountedEngine.response at the sensor's mount: equals the truth and the
     channel (orders above 1 % of the largest) within 0.5 %."""
-    from predict.balance import shaking_forces
-    from predict.pressure import synthetic_pressure
+    from crankbench.predict.balance import shaking_forces
+    from crankbench.predict.pressure import synthetic_pressure
 
     engine = steady_run.scene.engine
     mounted = steady_run.scene.mounts
@@ -196,7 +196,7 @@ def test_mount_channel_equals_shaking_force_route(steady_run):
 
 
 def test_record_and_truth_round_trip(tmp_path, steady_run):
-    from measure.io import read, read_truth
+    from crankbench.measure.io import read, read_truth
 
     path = tmp_path / "run.h5"
     steady_run.write(path)
@@ -218,7 +218,7 @@ def test_marine_runup_truth_recovered_by_order_tracking(marine_run):
     run-up (14 rpm/s, slow for these resonances), speed from the 60-2 tacho: order amplitudes
     within 1 % of the truth wherever they exceed 30 % of their maximum, and the resonance peak
     of order 6 (mode 3) within 5 rpm of the truth's."""
-    analysis = pytest.importorskip("analysis")
+    analysis = pytest.importorskip("crankbench.analysis")
     rec, truth = marine_run.record, marine_run.truth
     sp = speed_from_pulses(rec["tacho"].values, pulses_per_rev=60, missing_teeth=2)
     for ch in ("tv_flywheel", "tv_free_end"):
@@ -260,7 +260,7 @@ def test_marine_truth_contents(marine_run):
 
 
 def test_cli_synth_writes_and_refuses_overwrite(tmp_path, capsys):
-    from analysis.cli import main
+    from crankbench.analysis.cli import main
 
     scene = tmp_path / "scene.toml"
     scene.write_text(f"""
@@ -301,7 +301,7 @@ def test_seismic_torsiograph_reading_and_correction():
     """A seismic torsiograph (f_n = 4 Hz, zeta = 0.6) on the pulley: the channel's order-2
     amplitude is the truth times |H| of the instrument at 100 Hz, and correcting the channel with
     measure.instruments recovers the truth within 1 % away from the record ends."""
-    from measure.instruments import torsiograph
+    from crankbench.measure.instruments import torsiograph
 
     engine = Engine.from_toml(ROOT / "sample_data/engines/i4.toml")
     sensor = SensorSpec("tv", "torsiograph", {"node": "pulley hub", "quantity": "angle",

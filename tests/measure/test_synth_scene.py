@@ -6,10 +6,10 @@ import numpy as np
 import pytest
 from scipy.integrate import quad
 
-from measure.synth import Scene
-from measure.synth.imperfections import Imperfections, degrade_edges, tooth_angles
-from measure.synth.profile import exponential_coastdown, from_table, ramp, steady
-from predict.errors import ConfigError
+from crankbench.measure.synth import Scene
+from crankbench.measure.synth.imperfections import Imperfections, degrade_edges, tooth_angles
+from crankbench.measure.synth.profile import exponential_coastdown, from_table, ramp, steady
+from crankbench.predict.errors import ConfigError
 
 ROOT = Path(__file__).resolve().parents[2]
 SCENES = ROOT / "sample_data/scenes"

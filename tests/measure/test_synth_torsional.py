@@ -15,10 +15,10 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
-from measure.synth.profile import ramp, steady
-from measure.synth.torsional import ModalModel, equivalent_viscous_system, order_forcing
-from predict.torsion import TorsionalSystem, from_toml
-from predict.torsion.excitation import engine_excitation
+from crankbench.measure.synth.profile import ramp, steady
+from crankbench.measure.synth.torsional import ModalModel, equivalent_viscous_system, order_forcing
+from crankbench.predict.torsion import TorsionalSystem, from_toml
+from crankbench.predict.torsion.excitation import engine_excitation
 
 ROOT = Path(__file__).resolve().parents[2]
 TWO_PI = 2 * np.pi

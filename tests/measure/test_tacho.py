@@ -3,9 +3,9 @@
 import numpy as np
 import pytest
 
-from measure.tacho import (angle_from_pulses, count_pitches, detect_edges,
+from crankbench.measure.tacho import (angle_from_pulses, count_pitches, detect_edges,
                            speed_from_pulses)
-from predict.errors import AnalysisError
+from crankbench.predict.errors import AnalysisError
 
 TWO_PI = 2 * np.pi
 

@@ -8,9 +8,9 @@ erroneous, angle) is passed when ``x + phi(x)`` reaches it (solved by fixed-poin
 import numpy as np
 import pytest
 
-from measure.torsiograph import (angular_vibration, butt_joint_calibration, calibrate_teeth,
+from crankbench.measure.torsiograph import (angular_vibration, butt_joint_calibration, calibrate_teeth,
                                  error_floor, instantaneous_speed)
-from predict.errors import AnalysisError
+from crankbench.predict.errors import AnalysisError
 
 TWO_PI = 2 * np.pi
 ORDERS = {1.5: (0.10, 0.4), 3.0: (0.25, -1.1), 4.5: (0.05, 2.0)}  # deg peak, phase rad
@@ -219,9 +219,9 @@ def test_results_tabulate_and_plot():
     import matplotlib
     from matplotlib.figure import Figure
 
-    from measure.instruments import vibrograph
-    from measure.synth.profile import ramp
-    from measure.tacho import angle_from_pulses, count_pitches, speed_from_pulses
+    from crankbench.measure.instruments import vibrograph
+    from crankbench.measure.synth.profile import ramp
+    from crankbench.measure.tacho import angle_from_pulses, count_pitches, speed_from_pulses
 
     matplotlib.use("Agg")
 

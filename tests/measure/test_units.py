@@ -7,8 +7,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from measure.units import SI_UNITS, known_units, sensitivity_to_si, to_si
-from predict.errors import RecordError
+from crankbench.measure.units import SI_UNITS, known_units, sensitivity_to_si, to_si
+from crankbench.predict.errors import RecordError
 
 # Independent definitions: 1 g = 9.80665 m/s^2 (3rd CGPM 1901); 1 in = 25.4 mm (1959
 # international yard and pound); 1 lbf = 4.4482216152605 N; 1 bar = 1e5 Pa.

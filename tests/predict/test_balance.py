@@ -6,10 +6,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from predict import balance as bal
-from predict.engine import ArticulatedRod, Engine
-from predict.errors import ModelError
-from predict.kinematics import series_coefficients
+from crankbench.predict import balance as bal
+from crankbench.predict.engine import ArticulatedRod, Engine
+from crankbench.predict.errors import ModelError
+from crankbench.predict.kinematics import series_coefficients
 
 
 @pytest.fixture(autouse=True)
@@ -201,7 +201,7 @@ def test_sample_engines_second_route(name):
 def test_predict_balance_cli(capsys):
     import json
 
-    from analysis.cli import main
+    from crankbench.analysis.cli import main
 
     assert main(["predict", "balance", str(ENGINES_DIR / "i4.toml"), "--json",
                  "--speed-rpm", "3000", "--shafts", "2"]) == 0

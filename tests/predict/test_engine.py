@@ -4,9 +4,9 @@ articulated rods against an independent construction, TOML loading and its error
 import numpy as np
 import pytest
 
-from predict import kinematics as kin
-from predict.engine import ArticulatedRod, Engine
-from predict.errors import ModelError
+from crankbench.predict import kinematics as kin
+from crankbench.predict.engine import ArticulatedRod, Engine
+from crankbench.predict.errors import ModelError
 
 
 @pytest.fixture(autouse=True)

@@ -6,8 +6,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.optimize import brentq
 
-from predict.errors import ModelError
-from predict.fatigue import (CRITERIA, EnduranceDiagram, StressPoint, assess, endurance_limit,
+from crankbench.predict.errors import ModelError
+from crankbench.predict.fatigue import (CRITERIA, EnduranceDiagram, StressPoint, assess, endurance_limit,
                              first_cycle_yield, rainflow, safety_factor, torsional_stress)
 
 SU, SE, SY = 700e6, 300e6, 500e6

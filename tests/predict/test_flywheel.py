@@ -8,11 +8,11 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
-from predict import flywheel as fw
-from predict.engine import Engine
-from predict.errors import ModelError
-from predict.forces import engine_torque
-from predict.pressure import synthetic_pressure
+from crankbench.predict import flywheel as fw
+from crankbench.predict.engine import Engine
+from crankbench.predict.errors import ModelError
+from crankbench.predict.forces import engine_torque
+from crankbench.predict.pressure import synthetic_pressure
 
 
 @pytest.fixture(autouse=True)
@@ -112,7 +112,7 @@ def test_flywheel_sizing_round_trip_and_stresses():
 
 
 def test_predict_flywheel_cli_json(capsys):
-    from analysis.cli import main
+    from crankbench.analysis.cli import main
 
     rc = main(["predict", "flywheel", str(ENGINES_DIR / "i4.toml"), "--speed-rpm", "2000",
                "--json", "--inertia", "0.2"])

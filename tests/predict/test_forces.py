@@ -4,11 +4,11 @@ inertia torque against the kinetic-energy derivative, force-triangle identities,
 import numpy as np
 import pytest
 
-from predict import forces
-from predict import kinematics as kin
-from predict.engine import Engine
-from predict.errors import ModelError
-from predict.pressure import PressureTrace, synthetic_pressure
+from crankbench.predict import forces
+from crankbench.predict import kinematics as kin
+from crankbench.predict.engine import Engine
+from crankbench.predict.errors import ModelError
+from crankbench.predict.pressure import PressureTrace, synthetic_pressure
 
 
 @pytest.fixture(autouse=True)
@@ -157,7 +157,7 @@ def test_two_stroke_mean_torque_and_trace():
 
 def test_rod_residual_couple_torque_is_minus_derivative_of_its_kinetic_energy():
     """With the residual-couple inertia ΔJ the extra torque is −d/dθ(½ ΔJ φ̇²) (energy)."""
-    from predict.masses import Rod
+    from crankbench.predict.masses import Rod
 
     rod = Rod(mass=0.6, length=0.145, cg_from_big_end=0.04, inertia_cg=0.0021)
     dj = rod.two_point().inertia_error

@@ -7,8 +7,8 @@ import mpmath as mp
 import numpy as np
 import pytest
 
-from predict import kinematics as kin
-from predict.errors import ModelError
+from crankbench.predict import kinematics as kin
+from crankbench.predict.errors import ModelError
 
 
 @pytest.fixture(autouse=True)

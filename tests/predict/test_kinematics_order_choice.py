@@ -4,7 +4,7 @@ Second route: a brute-force search calling truncation_bound order by order."""
 
 import pytest
 
-from predict.kinematics import order_for_tolerance, truncation_bound
+from crankbench.predict.kinematics import order_for_tolerance, truncation_bound
 
 
 @pytest.mark.parametrize("lam", [0.05, 0.25, 0.45])

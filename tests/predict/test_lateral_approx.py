@@ -3,10 +3,10 @@
 import numpy as np
 import pytest
 
-from predict.errors import AnalysisError, ModelError
-from predict.lateral.approx import (MassShaft, dunkerley, dunkerley_combine, lumped_exact,
+from crankbench.predict.errors import AnalysisError, ModelError
+from crankbench.predict.lateral.approx import (MassShaft, dunkerley, dunkerley_combine, lumped_exact,
                                     rayleigh, stodola)
-from predict.lateral.fe import Bearing, Disk, Material, Rotor, ShaftSection
+from crankbench.predict.lateral.fe import Bearing, Disk, Material, Rotor, ShaftSection
 
 
 def test_two_equal_masses_at_third_points_closed_form():

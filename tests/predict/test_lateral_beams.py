@@ -4,8 +4,8 @@ import mpmath
 import numpy as np
 import pytest
 
-from predict.errors import ModelError
-from predict.lateral.beams import (beam_natural_frequencies, disk_on_shaft_frequency,
+from crankbench.predict.errors import ModelError
+from crankbench.predict.lateral.beams import (beam_natural_frequencies, disk_on_shaft_frequency,
                                    influence_coefficient, point_stiffness)
 
 BEAM = dict(length=1.3, youngs_modulus=2.0e11, area_moment=4.0e-7)

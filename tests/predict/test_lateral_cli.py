@@ -5,8 +5,8 @@ import json
 import numpy as np
 import pytest
 
-from analysis.cli import main
-from predict.lateral.toml import load_rotor
+from crankbench.analysis.cli import main
+from crankbench.predict.lateral.toml import load_rotor
 
 
 def test_predict_lateral_json_matches_closed_form(sample_data, capsys):

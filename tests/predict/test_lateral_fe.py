@@ -3,8 +3,8 @@
 import numpy as np
 import pytest
 
-from predict.errors import ModelError
-from predict.lateral.fe import Bearing, Disk, Material, Rotor, ShaftSection
+from crankbench.predict.errors import ModelError
+from crankbench.predict.lateral.fe import Bearing, Disk, Material, Rotor, ShaftSection
 
 STEEL = Material(2.1e11, 7850.0, poisson_ratio=0.3)
 RIGID = np.inf

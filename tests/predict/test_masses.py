@@ -4,9 +4,9 @@ own inertia moments computed from the kinematics, pendulum round trip, crank-thr
 import numpy as np
 import pytest
 
-from predict import kinematics as kin
-from predict.errors import ModelError
-from predict.masses import Rod, rod_inertia_from_pendulum, throw_rotating_mass
+from crankbench.predict import kinematics as kin
+from crankbench.predict.errors import ModelError
+from crankbench.predict.masses import Rod, rod_inertia_from_pendulum, throw_rotating_mass
 
 
 @pytest.fixture(autouse=True)

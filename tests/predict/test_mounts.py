@@ -4,10 +4,10 @@ dynamic equilibrium of the transmitted forces, TOML loading."""
 import numpy as np
 import pytest
 
-from predict.balance import unbalance
-from predict.engine import Engine
-from predict.errors import ModelError
-from predict.mounts import Mount, MountedEngine, excitation_from_unbalance
+from crankbench.predict.balance import unbalance
+from crankbench.predict.engine import Engine
+from crankbench.predict.errors import ModelError
+from crankbench.predict.mounts import Mount, MountedEngine, excitation_from_unbalance
 
 
 @pytest.fixture(autouse=True)

@@ -5,9 +5,9 @@ import warnings
 import numpy as np
 import pytest
 
-from predict.errors import ModelError
-from predict.lateral.fe import Bearing, Disk, Material, Rotor, ShaftSection
-from predict.rotor_balance import (BalanceWarning, grade_check, influence_balance,
+from crankbench.predict.errors import ModelError
+from crankbench.predict.lateral.fe import Bearing, Disk, Material, Rotor, ShaftSection
+from crankbench.predict.rotor_balance import (BalanceWarning, grade_check, influence_balance,
                                    permissible_unbalance, phasor, single_plane, two_plane)
 
 

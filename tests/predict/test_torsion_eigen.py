@@ -5,8 +5,8 @@ import mpmath
 import numpy as np
 import pytest
 
-from predict.errors import ModelError
-from predict.torsion import TorsionalSystem, chain
+from crankbench.predict.errors import ModelError
+from crankbench.predict.torsion import TorsionalSystem, chain
 
 
 def mp_frequencies(inertias, edges, stiffnesses, dps=50):

@@ -3,14 +3,14 @@
 import numpy as np
 import pytest
 
-from predict.engine import Engine
-from predict.errors import ModelError
-from predict.torsion import TorsionalSystem, chain
-from predict.torsion import dampers
-from predict.torsion.elements import ShaftLine
-from predict.torsion.excitation import engine_excitation, tangential_torque
-from predict.torsion.forced import _superpose, cylinder_forcing, harmonic_solve
-from predict.torsion.resonance import resonance_amplitudes
+from crankbench.predict.engine import Engine
+from crankbench.predict.errors import ModelError
+from crankbench.predict.torsion import TorsionalSystem, chain
+from crankbench.predict.torsion import dampers
+from crankbench.predict.torsion.elements import ShaftLine
+from crankbench.predict.torsion.excitation import engine_excitation, tangential_torque
+from crankbench.predict.torsion.forced import _superpose, cylinder_forcing, harmonic_solve
+from crankbench.predict.torsion.resonance import resonance_amplitudes
 
 FIRING_6 = [0, 480, 240, 600, 120, 360]
 
@@ -105,7 +105,7 @@ def test_energy_balance_within_few_percent_for_light_damping():
 
 def test_tangential_torque_mean_equals_indicated_work():
     """T₀ = W_i / (4π) for a 4-stroke; the inertia torque has zero mean."""
-    from predict.pressure import synthetic_pressure
+    from crankbench.predict.pressure import synthetic_pressure
 
     e = Engine(crank_angles_deg=[0], crank_radius=0.06, rod_length=0.22,
                reciprocating_mass=1.5, bore=0.11, compression_ratio=16.0)
@@ -257,7 +257,7 @@ def test_response_outputs(tmp_path):
 def test_excitation_from_coefficient_table_round_trip():
     """A coefficient table made from the synthetic model reproduces its |G_q| at a table IMEP
     and interpolates linearly between rows."""
-    from predict.torsion.excitation import (excitation_from_coefficients,
+    from crankbench.predict.torsion.excitation import (excitation_from_coefficients,
                                             harmonic_coefficient_table)
 
     e = Engine(crank_angles_deg=[0, 180, 180, 0], crank_radius=0.045, rod_length=0.15,

@@ -8,7 +8,7 @@ import mpmath
 import numpy as np
 import pytest
 
-from predict.torsion import chain
+from crankbench.predict.torsion import chain
 
 
 def _mp_shapes(j, k, grounded):

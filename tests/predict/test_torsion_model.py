@@ -7,12 +7,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from predict.engine import Engine
-from predict.errors import ModelError
-from predict.torsion import from_toml
-from predict.torsion.elements import (ShaftLine, crank_throw_inertia, shaft_stiffness,
+from crankbench.predict.engine import Engine
+from crankbench.predict.errors import ModelError
+from crankbench.predict.torsion import from_toml
+from crankbench.predict.torsion.elements import (ShaftLine, crank_throw_inertia, shaft_stiffness,
                                       stepped_shaft)
-from predict.torsion.stress import StressLimits, check_stress
+from crankbench.predict.torsion.stress import StressLimits, check_stress
 
 ROOT = Path(__file__).resolve().parents[2]
 SHAFTLINES = ROOT / "sample_data" / "shaftlines"
@@ -206,7 +206,7 @@ def test_stress_limits_barred_ranges(models):
 
 
 def test_cli_json(models, capsys):
-    from analysis.cli import main
+    from crankbench.analysis.cli import main
 
     rc = main(["predict", "torsion", str(models / "marine_6l.toml"), "--json",
                "--speeds", "60"])

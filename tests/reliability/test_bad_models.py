@@ -14,8 +14,8 @@ from pathlib import Path
 
 import pytest
 
-from analysis.cli import main as cli_main
-from predict.errors import CrankbenchError, ModelError
+from crankbench.analysis.cli import main as cli_main
+from crankbench.predict.errors import CrankbenchError, ModelError
 
 CORPUS = Path(__file__).resolve().parents[1] / "corpus"
 
@@ -36,18 +36,18 @@ gen = _load_generator()
 
 def _loader(kind):
     if kind == "engine":
-        from predict.engine import Engine
+        from crankbench.predict.engine import Engine
 
         return Engine.from_toml
     if kind == "shaftline":
-        from predict.torsion import from_toml
+        from crankbench.predict.torsion import from_toml
 
         return from_toml
     if kind == "scene":
-        from measure.synth.scene import Scene
+        from crankbench.measure.synth.scene import Scene
 
         return Scene.from_toml
-    from predict.lateral import load_rotor
+    from crankbench.predict.lateral import load_rotor
 
     return load_rotor
 

@@ -19,12 +19,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from analysis.orders import campbell_map, order_map, order_spectrum, order_track
-from measure import io as mio
-from measure.record import RecordWarning, make_record
-from measure.tacho import angle_from_pulses, count_pitches, detect_edges, speed_from_pulses
-from measure.torsiograph import angular_vibration
-from predict.errors import AnalysisError, CrankbenchError, RecordError
+from crankbench.analysis.orders import campbell_map, order_map, order_spectrum, order_track
+from crankbench.measure import io as mio
+from crankbench.measure.record import RecordWarning, make_record
+from crankbench.measure.tacho import angle_from_pulses, count_pitches, detect_edges, speed_from_pulses
+from crankbench.measure.torsiograph import angular_vibration
+from crankbench.predict.errors import AnalysisError, CrankbenchError, RecordError
 
 CORPUS = Path(__file__).resolve().parents[1] / "corpus"
 
@@ -274,8 +274,8 @@ def test_clipped_channel_order_amplitude_is_wrong_without_flag():
 def test_record_without_resonances_is_compared_not_crashed():
     import pandas as pd
 
-    from analysis.compare import match_criticals
-    from analysis.resonance import Resonance
+    from crankbench.analysis.compare import match_criticals
+    from crankbench.analysis.resonance import Resonance
 
     measured = pd.DataFrame([], columns=list(Resonance.__dataclass_fields__))  # = empty table
     predicted = pd.DataFrame({"mode": [1], "order": [2.0], "speed_rpm": [3000.0]})
@@ -301,7 +301,7 @@ def _bench_file(tmp_path, case, name):
 
 
 def test_cli_analyse_of_dropout_record_names_file_channel_and_span(tmp_path, capsys):
-    from analysis.cli import main as cli_main
+    from crankbench.analysis.cli import main as cli_main
 
     path, _ = _bench_file(tmp_path, "channel_dropout_nan", "drop.h5")
     assert cli_main(["analyse", str(path), "--channel", "acc", "--orders", "2"]) == 2
@@ -313,7 +313,7 @@ def test_cli_analyse_of_dropout_record_names_file_channel_and_span(tmp_path, cap
 
 def test_cli_analyse_of_clipped_record_warns_and_still_analyses(tmp_path, capsys):
     """Usable in part: the analysis runs, and the user is told which spans are clipped."""
-    from analysis.cli import main as cli_main
+    from crankbench.analysis.cli import main as cli_main
 
     path, _ = _bench_file(tmp_path, "channel_clipped", "clip.h5")
     with pytest.warns(RecordWarning, match=r"clip\.h5: channel 'acc' looks clipped.*"

@@ -23,7 +23,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from predict.errors import ConfigError, CrankbenchError, ModelError
+from crankbench.predict.errors import ConfigError, CrankbenchError, ModelError
 
 CORPUS = Path(__file__).resolve().parents[1] / "corpus"
 FUZZ = settings(max_examples=30, deadline=None, derandomize=True,
@@ -146,18 +146,18 @@ def mutated(draw, kind):
 
 def _load(kind, path):
     if kind == "engine":
-        from predict.engine import Engine
+        from crankbench.predict.engine import Engine
 
         return Engine.from_toml(path)
     if kind == "shaftline":
-        from predict.torsion import from_toml
+        from crankbench.predict.torsion import from_toml
 
         return from_toml(path)
     if kind == "scene":
-        from measure.synth.scene import Scene
+        from crankbench.measure.synth.scene import Scene
 
         return Scene.from_toml(path)
-    from predict.lateral import load_rotor
+    from crankbench.predict.lateral import load_rotor
 
     return load_rotor(path)
 

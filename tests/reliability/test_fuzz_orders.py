@@ -15,11 +15,11 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from analysis.orders import campbell_map, order_map, order_spectrum, order_track
-from analysis.resample import angle_resample, shaft_angle
-from analysis.vkf import vold_kalman
+from crankbench.analysis.orders import campbell_map, order_map, order_spectrum, order_track
+from crankbench.analysis.resample import angle_resample, shaft_angle
+from crankbench.analysis.vkf import vold_kalman
 from hang_guard import time_limit
-from predict.errors import CrankbenchError
+from crankbench.predict.errors import CrankbenchError
 
 FUZZ = settings(max_examples=15, deadline=None, derandomize=True,
                 suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large,

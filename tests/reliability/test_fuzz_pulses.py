@@ -17,10 +17,10 @@ from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 from hypothesis.extra import numpy as hnp
 
-from measure.tacho import angle_from_pulses, count_pitches, speed_from_pulses
-from measure.torsiograph import angular_vibration
+from crankbench.measure.tacho import angle_from_pulses, count_pitches, speed_from_pulses
+from crankbench.measure.torsiograph import angular_vibration
 from hang_guard import time_limit
-from predict.errors import CrankbenchError
+from crankbench.predict.errors import CrankbenchError
 
 FUZZ = settings(max_examples=40, deadline=None, derandomize=True,
                 suppress_health_check=[HealthCheck.too_slow, HealthCheck.filter_too_much])

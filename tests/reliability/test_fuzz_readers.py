@@ -14,10 +14,10 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from measure import io as mio
-from measure.record import make_record, validate
+from crankbench.measure import io as mio
+from crankbench.measure.record import make_record, validate
 from hang_guard import time_limit
-from predict.errors import CrankbenchError
+from crankbench.predict.errors import CrankbenchError
 
 FORMATS = [".h5", ".nc", ".csv", ".tdms", ".mf4", ".wav", ".uff"]
 FUZZ = settings(max_examples=10, deadline=None, derandomize=True,

@@ -25,9 +25,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from analysis.cli import main as cli_main
-from measure import io as mio
-from measure.record import make_record
+from crankbench.analysis.cli import main as cli_main
+from crankbench.measure import io as mio
+from crankbench.measure.record import make_record
 
 ROOT = Path(__file__).resolve().parents[2]
 FORMATS = [".h5", ".nc", ".csv", ".tdms", ".mf4", ".wav", ".uff"]
@@ -113,7 +113,7 @@ def test_model_loaders_leave_model_unchanged(kind, rel, tmp_path, capsys):
     path = folder / rel
     before = fingerprint(folder)
     if kind == "shaftline":
-        from predict.torsion import from_toml
+        from crankbench.predict.torsion import from_toml
 
         try:
             from_toml(path)
@@ -126,7 +126,7 @@ def test_model_loaders_leave_model_unchanged(kind, rel, tmp_path, capsys):
         assert cli_main(["predict", "torsion", str(path), "--no-forced", "--speed-range",
                          "100", "3000"]) == 0
     else:
-        from predict.lateral import load_rotor
+        from crankbench.predict.lateral import load_rotor
 
         load_rotor(path)
     capsys.readouterr()
@@ -136,8 +136,8 @@ def test_model_loaders_leave_model_unchanged(kind, rel, tmp_path, capsys):
 _STRACE_SCRIPT = textwrap.dedent("""
     import sys
     from pathlib import Path
-    from measure import io as mio
-    from analysis.cli import main
+    from crankbench.measure import io as mio
+    from crankbench.analysis.cli import main
     folder = Path(sys.argv[1])
     for p in sorted(folder.iterdir()):
         if p.suffix in mio.EXTENSIONS:
@@ -201,7 +201,7 @@ def test_wav_sidecar_is_not_overwritten_either(tmp_path):
 @pytest.mark.parametrize("existing", [False, True], ids=["new", "replace"])
 def test_failed_write_leaves_previous_file_and_no_temporary(failure, existing, tmp_path,
                                                             monkeypatch):
-    from measure.readers import module_for
+    from crankbench.measure.readers import module_for
 
     path = tmp_path / "out.h5"
     if existing:
@@ -221,14 +221,14 @@ def test_failed_write_leaves_previous_file_and_no_temporary(failure, existing, t
 
 
 def _fake_rows(names, quick, progress=None):
-    from analysis.bench import Row
+    from crankbench.analysis.bench import Row
 
     return [Row(suite="fake", method="m", setting="s", error=0.0, error_kind="abs",
                 reference="closed form", time_s=1e-3, bound=1.0)]
 
 
 def test_bench_refuses_to_overwrite_its_outputs(tmp_path, monkeypatch, capsys):
-    import analysis.bench as bench_pkg
+    import crankbench.analysis.bench as bench_pkg
 
     monkeypatch.setattr(bench_pkg, "run_suites", _fake_rows)
     monkeypatch.setattr(bench_pkg, "suites", lambda: ["fake"])
@@ -247,7 +247,7 @@ def test_bench_refuses_to_overwrite_its_outputs(tmp_path, monkeypatch, capsys):
 
 def test_bench_refusal_writes_nothing_when_only_a_later_output_exists(tmp_path, monkeypatch,
                                                                       capsys):
-    import analysis.bench as bench_pkg
+    import crankbench.analysis.bench as bench_pkg
 
     monkeypatch.setattr(bench_pkg, "run_suites", _fake_rows)
     monkeypatch.setattr(bench_pkg, "suites", lambda: ["fake"])
@@ -326,7 +326,7 @@ def test_cli_refuses_existing_output_before_any_work(command, existing, inputs, 
     if not (ROOT / "analysis" / "commands" / f"{name}.py").exists():
         pytest.skip(f"crankbench {name} not present")
     if name == "bench":            # keep the test fast should bench ever run before checking
-        import analysis.bench as bench_pkg
+        import crankbench.analysis.bench as bench_pkg
 
         monkeypatch.setattr(bench_pkg, "run_suites", _fake_rows)
     out = tmp_path / "out"
