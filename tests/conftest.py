@@ -20,8 +20,11 @@ settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "ci"))
 ROOT = Path(__file__).resolve().parents[1]
 SAMPLE_DATA = ROOT / "sample_data"
 
-# Commands run in a subprocess import the same checkout as the tests (a second working tree of
-# an editable install included): crankbench/__init__.py maps the sibling folders in.
+# The tests import this checkout, whichever one the editable install points at (a second
+# working tree included), and so do the commands they run in a subprocess:
+# crankbench/__init__.py maps the sibling folders in.
+if str(ROOT) not in sys.path[:1]:
+    sys.path.insert(0, str(ROOT))
 os.environ["PYTHONPATH"] = os.pathsep.join(
     p for p in (str(ROOT), os.environ.get("PYTHONPATH", "")) if p)
 
