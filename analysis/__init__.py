@@ -31,6 +31,7 @@ _LAZY = {
     "compare_balance": "compare",
     "analyse": "pipeline",
     "Report": "report",
+    "Verdict": "verdict",
 }
 
 __getattr__, __dir__, __all__ = lazy_names(__name__, _LAZY)
