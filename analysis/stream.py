@@ -97,6 +97,7 @@ class SpanSpeed:
             self._rpm = np.asarray(speed_rpm,
                                    float) if not np.isscalar(speed_rpm) else float(speed_rpm)
         self._t_in, self._omega = t_in, omega
+        self.angle = None            # optional angle(a, b) -> shaft angle (rad) of the span
 
     def __call__(self, a: int, b: int) -> np.ndarray:
         if self._rpm is not None:
@@ -186,147 +187,113 @@ def _channel(record, channel):
 # ---------------------------------------------------------------------------- COT stream
 
 
-def _chunk_plan(speed: SpanSpeed, chunk: int):
-    """Chunk bounds of ``resample._chunk_bounds`` computed span by span, and the rpm range
-    (cached on ``speed``: one pass over the speed per chunk size)."""
+def _chunk_plan(speed: SpanSpeed, chunk: int, samples_per_rev: int = 64,
+                interpolation: str = "auto"):
+    """The resampling plan of :func:`analysis.resample.plan_chunks`, computed span by span
+    (cached on ``speed``: one pass over the speed per setting)."""
+    from .resample import plan_chunks
+
     cache = speed.__dict__.setdefault("_plans", {})
+    key = (chunk, samples_per_rev, interpolation)
+    if key not in cache:
+        cache[key] = plan_chunks(speed, n=speed.n, fs=speed.fs, samples_per_rev=samples_per_rev,
+                                 interpolation=interpolation, chunk=chunk)
+    return cache[key]
+
+
+def _speed_top(speed: SpanSpeed, chunk: int) -> float:
+    """Highest speed of the record (rpm), one pass over the speed (cached)."""
+    cache = speed.__dict__.setdefault("_top", {})
     if chunk not in cache:
-        cache[chunk] = _plan(speed, chunk)
+        cache[chunk] = max(float(speed(a, min(speed.n, a + chunk)).max())
+                           for a in range(0, speed.n, chunk))
     return cache[chunk]
 
 
-def _plan(speed: SpanSpeed, chunk: int):
-    n = speed.n
-    n_chunks = max(1, int(math.ceil(n / chunk)))
-    pending = [int(v) for v in np.round(np.linspace(0, n, n_chunks + 1))]
-    out = [pending[0]]
-    lo, hi = np.inf, -np.inf
-    ranges = []
-    for b0 in pending[1:]:
-        a0 = out[-1]
-        sp = speed(a0, b0)
-        lo, hi = min(lo, float(sp.min())), max(hi, float(sp.max()))
-        if sp.min() <= 0:
-            raise AnalysisError(f"rpm must be > 0 throughout; found {float(sp.min()):.6g} rpm "
-                                f"between samples {a0} and {b0}")
-        a = a0
-        stack = [b0]
-        while stack:
-            b = stack[-1]
-            seg = sp[a - a0:b - a0]
-            if seg.max() <= 2.0 * seg.min() or b - a <= 256:
-                out.append(b)
-                ranges.append((float(seg.min()), float(seg.max())))
-                stack.pop()
-                a = b
-            else:
-                stack.append((a + b) // 2)
-    return np.asarray(out, np.int64), ranges, lo, hi
+class _AngleCarry:
+    """The shaft angle of consecutive spans: integrated speed carried across spans (the same
+    sequential sum as :func:`analysis.resample.shaft_angle` of the whole record), or the
+    encoder angle evaluated per span."""
+
+    def __init__(self, speed: SpanSpeed):
+        self.speed = speed
+        self.pos, self.phi = 0, 0.0          # the angle at sample `pos`
+
+    def __call__(self, a: int, b: int) -> np.ndarray:
+        """Angle (rad) of samples a..b-1, a >= the previous call's a."""
+        from .resample import integrate_angle
+
+        if self.speed.angle is not None:
+            return self.speed.angle(a, b)
+        if a < self.pos:
+            raise AnalysisError(f"internal: angle asked from sample {a}, already past {self.pos}")
+        phi = integrate_angle(self.speed(self.pos, b), self.speed.fs, self.phi)[a - self.pos:]
+        return phi
+
+    def advance(self, to: int, phi_span: np.ndarray, span_start: int) -> None:
+        """Carry the angle to sample ``to`` (inside the span just computed)."""
+        if self.speed.angle is None:
+            self.phi, self.pos = float(phi_span[to - span_start]), to
 
 
 def _angle_samples(read, speed: SpanSpeed, *, samples_per_rev, interpolation, chunk,
                    segment, label):
-    """Yield ``(values, t_rel, rpm, angle)`` arrays of consecutive angle samples, exactly as
-    :func:`analysis.resample.angle_resample` computes them, one group of chunks at a time."""
-    from scipy import signal
+    """Yield ``(values, t_rel, rpm, angle)`` arrays of consecutive angle samples, computed by
+    :func:`analysis.resample.resample_span` (the in-memory engine) one group of chunks at a
+    time."""
+    from .resample import angle_range, resample_span
 
-    from .resample import _SINC_HALF, _antialias_taps, _interp
-
-    n, fs = speed.n, speed.fs
-    bounds, ranges, _, rmax = _chunk_plan(speed, chunk)
-    per_rev = 60.0 * fs / rmax
-    if per_rev < 2.0:
-        raise AnalysisError(f"rpm up to {rmax:.6g} at fs = {fs:.6g} Hz leaves {per_rev:.3g} time "
-                            "samples per revolution (at least 2 needed)")
-    taps = [_antialias_taps(samples_per_rev, r0, r1, fs, n) for r0, r1 in ranges]
-    half = [0 if h is None else h.shape[0] // 2 for h in taps]
-    margin = _SINC_HALF + 2
-    u_first, u_last = half[0] + margin, n - 1 - half[-1] - margin
-    if u_last <= u_first:
+    n = speed.n
+    plan = _chunk_plan(speed, chunk, samples_per_rev, interpolation)
+    first, last_u = plan.usable()
+    if last_u <= first:
         raise AnalysisError(f"{label}: record of {n} samples is shorter than the anti-alias "
-                            f"filter ({2 * max(half) + 1} taps)")
-    dphi = _TWO_PI / samples_per_rev
-    # first pass: shaft angle at u_first and u_last (sequential sum, as shaft_angle does)
-    phi_carry = 0.0          # phi at sample `pos`
-    pos = 0
-    phi_at = {}
-    targets = sorted({u_first, u_last})
+                            f"filter ({2 * max(plan.filter_half) + 1} samples)")
+    # first pass: the shaft angle at the first and last usable samples
+    carry = _AngleCarry(speed)
     step = max(chunk, 1 << 16)
-    while pos < n - 1 and len(phi_at) < len(targets):
+    phi_at = {}
+    pos = 0
+    while len(phi_at) < 2 and pos < n:
         b = min(n, pos + step + 1)
-        omega = speed(pos, b) * (_TWO_PI / 60.0)
-        inc = 0.5 * (omega[1:] + omega[:-1]) / fs
-        phi = np.cumsum(np.concatenate(([phi_carry], inc)))
-        for u in targets:
+        phi = carry(pos, b)
+        for u in (first, last_u):
             if pos <= u < b:
                 phi_at[u] = float(phi[u - pos])
-        phi_carry, pos = float(phi[-1]), b - 1
-    j0 = int(np.ceil(phi_at[u_first] / dphi))
-    j1 = int(np.floor(phi_at[u_last] / dphi))
+        carry.advance(b - 1, phi, pos)
+        pos = b - 1
+        if b == n:
+            break
+    j0, j1 = angle_range(plan, phi_at[first], phi_at[last_u])
     if j1 - j0 < 3:
         raise AnalysisError(f"{label}: the record covers too few revolutions")
-    # second pass: chunk groups
+    # second pass: groups of chunks of about `segment` samples
     groups, cur, size = [], [], 0
-    for k in range(len(taps)):
+    for k in range(plan.chunks):
         cur.append(k)
-        size += int(bounds[k + 1] - bounds[k])
+        size += int(plan.bounds[k + 1] - plan.bounds[k])
         if size >= segment:
             groups.append(cur)
             cur, size = [], 0
     if cur:
         groups.append(cur)
-    windows = []
-    for g in groups:
-        s0, s1 = int(bounds[g[0]]), int(bounds[g[-1] + 1])
-        hmax = max(half[k] for k in g)
-        windows.append((max(0, s0 - hmax - margin), min(n, s1 + hmax + margin)))
-    phi_carry, pos = 0.0, 0     # phi at sample pos (pos advances with the groups)
+    windows = [(plan.window(g[0])[0], plan.window(g[-1])[1]) for g in groups]
+    carry = _AngleCarry(speed)
     next_j = j0
     for gi, g in enumerate(groups):
-        s1 = int(bounds[g[-1] + 1])
         ra, rb = windows[gi]
-        values = read(ra, rb)
-        # shaft angle over [pos .. rb) (pos <= ra): continue the sequential sum
-        omega = speed(pos, rb) * (_TWO_PI / 60.0)
-        inc = 0.5 * (omega[1:] + omega[:-1]) / fs
-        phi = np.cumsum(np.concatenate(([phi_carry], inc)))[ra - pos:]
-        sp = omega[ra - pos:] * (60.0 / _TWO_PI)
-        t = np.arange(ra, rb) / fs
-        # angle samples whose time falls in [s0, s1) (the last group takes all up to j1)
-        last = g[-1] == len(taps) - 1
-        top = j1 if last else min(j1, int(np.floor(phi[-1] / dphi)))
-        js = np.arange(next_j, top + 1)
-        grid = js * dphi
-        t_out = np.interp(grid, phi, t)
-        u_out = t_out * fs
+        last = g[-1] == plan.chunks - 1
+        phi = carry(ra, rb)
+        out, t_out, rpm_out, grid = resample_span(plan, g, read(ra, rb), ra, phi,
+                                                  speed(ra, rb), next_j, j1, last=last)
+        if grid.shape[0]:
+            next_j = int(round(grid[-1] / (_TWO_PI / samples_per_rev))) + 1
         if not last:
-            keep = int(np.searchsorted(u_out, s1, side="left"))
-            js, grid, t_out, u_out = js[:keep], grid[:keep], t_out[:keep], u_out[:keep]
-        out = np.empty(grid.shape[0])
-        for k in g:
-            start, stop = int(bounds[k]), int(bounds[k + 1])
-            lo = int(np.searchsorted(u_out, start, side="left"))
-            hi = (int(np.searchsorted(u_out, stop, side="left")) if stop < n
-                  else grid.shape[0])
-            if hi <= lo:
-                continue
-            a, b = max(0, start - half[k] - margin), min(n, stop + half[k] + margin)
-            if taps[k] is None:
-                seg, offset = values[a - ra:b - ra], a
-            else:
-                seg = signal.oaconvolve(values[a - ra:b - ra], taps[k], mode="valid")
-                offset = a + half[k]
-            out[lo:hi] = _interp(seg, u_out[lo:hi] - offset, interpolation)
-        rpm_out = np.interp(t_out, t, sp)
-        if js.shape[0]:
-            next_j = int(js[-1]) + 1
-        # carry the shaft angle to the start of the next group's read window
-        if not last:
-            nxt_ra = windows[gi + 1][0]
-            if not ra <= nxt_ra < rb:
+            nxt = windows[gi + 1][0]
+            if not ra <= nxt < rb:
                 raise AnalysisError(f"{label}: internal: segment windows do not overlap "
-                                    f"({ra}..{rb} then {nxt_ra}); raise segment_seconds")
-            phi_carry, pos = float(phi[nxt_ra - ra]), nxt_ra
+                                    f"({ra}..{rb} then {nxt}); raise segment_seconds")
+            carry.advance(nxt, phi, ra)
         yield out, t_out, rpm_out, grid
 
 
@@ -375,7 +342,7 @@ def _cot_blocks(record, channel, *, orders, speed_rpm, speed_channel, samples_pe
     chunk = check_int(chunk, "chunk", minimum=1024, error=AnalysisError)
     speed = _speed_for(record, channel, var, speed_rpm=speed_rpm, speed_channel=speed_channel)
     if orders is not None:          # before any work: the top order below the Nyquist frequency
-        top = float(np.max(orders)) * _chunk_plan(speed, chunk)[3] / 60.0
+        top = float(np.max(orders)) * _speed_top(speed, chunk) / 60.0
         if top >= 0.5 * speed.fs:
             raise AnalysisError(f"order {np.max(orders):g} reaches {top:.6g} Hz, above the "
                                 f"Nyquist frequency {0.5 * speed.fs:.6g} Hz of {label}")
