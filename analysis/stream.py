@@ -323,21 +323,11 @@ class _Framer:
         return out
 
 
-def _cot_blocks(record, channel, *, orders, speed_rpm, speed_channel, samples_per_rev, revolutions,
-                overlap, window, interpolation, segment_seconds, chunk, per_frames):
-    """Run the streamed angle resampling and call ``per_frames(frames, phi0, t, r)``."""
-    from .orders import get_window
-
+def _prepare(record, channel, *, speed_rpm, speed_channel, chunk, trend, segment_seconds,
+             orders=None):
+    """Channel, speed, detrending reader and segment length of a streamed analysis."""
     var = _channel(record, channel)
     label = str(channel)
-    samples_per_rev = check_int(samples_per_rev, "samples_per_rev", minimum=4,
-                                error=AnalysisError)
-    revolutions = check_int(revolutions, "revolutions", minimum=1, error=AnalysisError)
-    overlap = check_range(overlap, "overlap", 0.0, 1.0, inclusive=(True, False),
-                          error=AnalysisError)
-    from .resample import INTERPOLATIONS
-
-    check_option(interpolation, "interpolation", INTERPOLATIONS, error=AnalysisError)
     segment_seconds = check_positive(segment_seconds, "segment_seconds", error=AnalysisError)
     chunk = check_int(chunk, "chunk", minimum=1024, error=AnalysisError)
     speed = _speed_for(record, channel, var, speed_rpm=speed_rpm, speed_channel=speed_channel)
@@ -347,40 +337,89 @@ def _cot_blocks(record, channel, *, orders, speed_rpm, speed_channel, samples_pe
             raise AnalysisError(f"order {np.max(orders):g} reaches {top:.6g} Hz, above the "
                                 f"Nyquist frequency {0.5 * speed.fs:.6g} Hz of {label}")
     segment = max(chunk, int(round(segment_seconds * speed.fs)))
+    reader = _detrending_reader(var, speed, chunk, trend, segment)
+    return var, label, speed, segment, reader
+
+
+def _detrending_reader(var, speed, chunk, trend, segment):
+    """The channel reader with its trend removed (:class:`analysis.trend.SpanTrend`)."""
+    from .trend import SpanTrend
+
+    raw = _reader(var)
+    n = speed.n
+    # shaft angle at the record's ends and the lowest speed: one pass over the speed
+    carry = _AngleCarry(speed)
+    low = np.inf
+    first = last = None
+    step = max(chunk, 1 << 16)
+    pos = 0
+    while True:
+        b = min(n, pos + step + 1)
+        phi = carry(pos, b)
+        low = min(low, float(speed(pos, b).min()))
+        if first is None:
+            first = float(phi[0])
+        if b == n:
+            last = float(phi[-1])
+            break
+        carry.advance(b - 1, phi, pos)
+        pos = b - 1
+    span = SpanTrend(raw, speed, lambda: _AngleCarry(speed), n=n, fs=speed.fs,
+                     ends=(first, last), low_rpm=low, kind=trend)
+    span.fit(segment)
+    return span
+
+
+def _blocks(speed, reader, *, label, samples_per_rev, revolutions, overlap, interpolation,
+            chunk, segment, per_frames):
+    """Run the streamed angle resampling and call ``per_frames(frames, phi0, t, r, span)``."""
+    samples_per_rev = check_int(samples_per_rev, "samples_per_rev", minimum=4,
+                                error=AnalysisError)
+    revolutions = check_int(revolutions, "revolutions", minimum=1, error=AnalysisError)
+    overlap = check_range(overlap, "overlap", 0.0, 1.0, inclusive=(True, False),
+                          error=AnalysisError)
+    from .resample import INTERPOLATIONS
+
+    check_option(interpolation, "interpolation", INTERPOLATIONS, error=AnalysisError)
     length = samples_per_rev * revolutions
     hop = max(1, int(round(length * (1.0 - overlap))))
-    w = get_window(window, length)
     framer = _Framer(length, hop)
     n_blocks = 0
-    for arrays in _angle_samples(_reader(var), speed, samples_per_rev=samples_per_rev,
+    for arrays in _angle_samples(reader, speed, samples_per_rev=samples_per_rev,
                                  interpolation=interpolation, chunk=chunk, segment=segment,
                                  label=label):
         got = framer.push(arrays)
         if got is None:
             continue
         _, local, (y, t, r, ang) = got
-        centre = local + length / 2.0 - 0.5
         idx = np.arange(y.shape[0])
-        tc = np.interp(centre, idx, t) + speed.t0
-        rc = np.interp(centre, idx, r)
+        tc = np.interp(local + length / 2.0 - 0.5, idx, t) + speed.t0
+        rc = np.interp(local + length / 2.0 - 0.5, idx, r)
+        dur = np.interp(local + length - 1.0, idx, t) - t[local]
         for i in range(0, local.shape[0], 256):
             sl = local[i:i + 256]
             frames = y[sl[:, None] + np.arange(length)[None, :]]
-            per_frames(frames, ang[sl], tc[i:i + 256], rc[i:i + 256])
+            per_frames(frames, ang[sl], tc[i:i + 256], rc[i:i + 256], dur[i:i + 256])
         n_blocks += local.shape[0]
     if n_blocks == 0:
         raise AnalysisError(f"{label}: the record covers fewer revolutions than one block of "
                             f"revolutions={revolutions}; lower revolutions")
-    return var, speed, w, length
+
+
+def _coarse_speed(speed: SpanSpeed, points: int = 20000) -> np.ndarray:
+    """The speed at about ``points`` samples spread over the record (sweep-rate estimate)."""
+    step = max(1, speed.n // points)
+    return np.concatenate([speed(a, min(speed.n, a + 1)) for a in range(0, speed.n, step)]), \
+        speed.fs / step
 
 
 @renamed(rpm="speed_rpm")
 def order_track_stream(record, channel: str, *, orders, speed_rpm=None, speed_channel=None,
                        segment_seconds: float = 20.0, amplitude: str = "peak",
-                       method: str = "cot", samples_per_rev: int = 64, revolutions: int = 16,
-                       overlap: float = 0.5, window="hann", interpolation: str = "cubic",
+                       method: str = "auto", samples_per_rev=None, revolutions=None,
+                       overlap: float = 0.5, window="hann", interpolation: str = "auto",
                        chunk: int = 1 << 18, bandwidth_hz=None, bandwidth_orders=None,
-                       filter_order: int = 2, vkf_overlap: float = 8.0):
+                       filter_order: int = 2, vkf_overlap: float = 8.0, trend: str = "auto"):
     """:func:`analysis.order_track` of a (lazy) Record channel, segment by segment.
 
     Parameters
@@ -390,7 +429,7 @@ def order_track_stream(record, channel: str, *, orders, speed_rpm=None, speed_ch
     channel : str
         Channel to analyse (needs ``sample_rate``).
     orders : sequence of float
-        Orders to track.
+        Orders to track, each once.
     speed_rpm : float or array_like, optional
         Speed per sample (rpm) or a constant; default: from ``speed_channel`` (a
         ``rotational_speed`` channel on its own clock, or a pulse train), found in the record
@@ -399,9 +438,13 @@ def order_track_stream(record, channel: str, *, orders, speed_rpm=None, speed_ch
         Name of the speed source.
     segment_seconds : float
         Length of record read at a time, s (memory ≈ a few × ``segment_seconds · fs`` × 8 B).
-    amplitude, method, samples_per_rev, revolutions, overlap, window, interpolation, chunk
+    amplitude, samples_per_rev, revolutions, overlap, window, interpolation, chunk, trend
         As in :func:`analysis.order_track` / :func:`analysis.resample.angle_resample`
         (``chunk`` must equal the in-memory one for identical results; default the same).
+    method : {'auto', 'cot', 'vkf'}
+        'auto' is COT with the block length chosen from the sweep rate and the order spacing
+        (:func:`analysis.orders.cot_settings`): the adaptive Vold–Kalman default of the
+        in-memory tracker needs the whole record.
     bandwidth_hz, bandwidth_orders, filter_order
         VKF parameters (:func:`analysis.vkf.vold_kalman`).
     vkf_overlap : float
@@ -423,69 +466,60 @@ def order_track_stream(record, channel: str, *, orders, speed_rpm=None, speed_ch
     >>> fs = 2000.0
     >>> t = np.arange(int(6 * fs)) / fs
     >>> rpm = 1200.0 + 60.0 * t
-    >>> rec = make_record({"acc": dict(data=0.5 * np.cos(2 * shaft_angle(rpm, fs)),
+    >>> rec = make_record({"acc": dict(data=0.5 * np.cos(2 * shaft_angle(rpm, fs)) + 3.0,
     ...                                sample_rate=fs, units="m/s^2")})
     >>> res = order_track_stream(rec.chunk({"time": 3000}), "acc", orders=[2], speed_rpm=rpm,
     ...                          revolutions=8, segment_seconds=1.0, chunk=2048)
-    >>> round(float(res.amplitude.mean()), 4)
-    0.5
+    >>> round(float(res.amplitude.mean()), 4), round(float(res["mean"].mean()), 4)
+    (0.5, 3.0)
     """
-    from .orders import _METHODS, _check_orders, _track_dataset, amplitude_factor
+    from .orders import (_METHODS, BlockFit, _check_orders, _cot_dataset, amplitude_factor,
+                         cot_settings)
 
     method = check_option(method, "method", _METHODS, error=AnalysisError)
     factor = amplitude_factor(amplitude)
     orders = _check_orders(orders)
-    if method == "vkf":
-        return _vkf_stream(record, channel, orders=orders, speed_rpm=speed_rpm,
-                           speed_channel=speed_channel,
-                           segment_seconds=segment_seconds, amplitude=amplitude,
-                           bandwidth_hz=bandwidth_hz, bandwidth_orders=bandwidth_orders,
-                           filter_order=filter_order, vkf_overlap=vkf_overlap)
-    spr = check_int(samples_per_rev, "samples_per_rev", minimum=4, error=AnalysisError)
+    var, label, speed, segment, reader = _prepare(
+        record, channel, speed_rpm=speed_rpm, speed_channel=speed_channel, chunk=chunk,
+        trend=trend, segment_seconds=segment_seconds, orders=orders)
+    if method == "vkf" or (method == "auto" and (bandwidth_hz is not None
+                                                 or bandwidth_orders is not None)):
+        return _vkf_stream(var, label, speed, reader, orders=orders, segment=segment,
+                           amplitude=amplitude, bandwidth_hz=bandwidth_hz,
+                           bandwidth_orders=bandwidth_orders, filter_order=filter_order,
+                           vkf_overlap=vkf_overlap, trend_info=reader.info)
+    coarse, coarse_fs = _coarse_speed(speed)
+    revolutions, spr = cot_settings(coarse, coarse_fs, orders, revolutions=revolutions,
+                                    samples_per_rev=samples_per_rev)
     if orders.max() > spr / 4 + 1e-12:
         raise AnalysisError(f"order {orders.max():g} exceeds samples_per_rev/4 = {spr / 4:g} "
                             f"(the anti-alias pass band); use samples_per_rev >= "
                             f"{int(np.ceil(4 * orders.max()))}")
-    from scipy import fft
+    fitter = BlockFit(orders, spr, revolutions, window)
+    fitter.check_spacing()
+    parts = {"coef": [], "mean": [], "floor": [], "t": [], "r": [], "span": []}
 
-    from .orders import _scale_spectrum, get_window
+    def per_frames(frames, phi0, t, r, span):
+        coef, mean, floor = fitter.fit(frames, phi0)
+        for key, value in zip(("coef", "mean", "floor", "t", "r", "span"),
+                              (coef, mean, floor, t, r, span)):
+            parts[key].append(value)
 
-    length = spr * int(revolutions)
-    w = get_window(window, length)
-    local = _TWO_PI * np.arange(length) / spr
-    kernel = (w[:, None] * np.exp(-1j * np.outer(local, orders))) * (2.0 / w.sum())
-    band = slice(1, min(length // 2, int(spr / 4.0 * int(revolutions))) + 1)
-    parts = {"coef": [], "floor": [], "t": [], "r": []}
-
-    def per_frames(frames, phi0, t, r):
-        c = (frames @ kernel) * np.exp(-1j * np.outer(phi0, orders))
-        power = _scale_spectrum(fft.rfft(frames * w, axis=1), w, "power", 1.0)[:, band]
-        parts["coef"].append(c)
-        parts["floor"].append(np.median(power, axis=1) / np.log(2.0))
-        parts["t"].append(t)
-        parts["r"].append(r)
-
-    var, speed, w, length = _cot_blocks(
-        record, channel, orders=orders, speed_rpm=speed_rpm, speed_channel=speed_channel,
-        samples_per_rev=spr, revolutions=revolutions, overlap=overlap, window=window,
-        interpolation=interpolation, segment_seconds=segment_seconds, chunk=chunk,
-        per_frames=per_frames)
-    coef = np.concatenate(parts["coef"])
-    floor = np.concatenate(parts["floor"])
-    enbw = float(length * np.sum(w ** 2) / np.sum(w) ** 2)
-    units = str(var.attrs.get("units", ""))
-    ds = _track_dataset(np.abs(coef).T * factor, np.angle(coef).T, orders,
-                        np.concatenate(parts["t"]), np.concatenate(parts["r"]), units, channel)
-    ds["amplitude_noise"] = ("time", np.sqrt(floor * enbw) * factor,
-                             {"units": units, "long_name":
-                              "1-sigma amplitude error from the broadband noise floor"})
-    ds.attrs.update({"method": "computed order tracking (angle resampling + block DFT at order)",
-                     "amplitude_convention": amplitude, "window": str(window),
-                     "samples_per_rev": spr, "revolutions": int(revolutions),
-                     "resolution_orders": 1.0 / int(revolutions), "overlap": overlap,
-                     "interpolation": interpolation, "enbw_bins": enbw,
+    _blocks(speed, reader, label=label, samples_per_rev=spr, revolutions=revolutions,
+            overlap=overlap, interpolation=interpolation, chunk=chunk, segment=segment,
+            per_frames=per_frames)
+    cat = {k: np.concatenate(v) for k, v in parts.items()}
+    context = {"factor": factor, "units": str(var.attrs.get("units", "")), "label": label,
+               "reference": "shaft angle 0 at the first sample of the record (speed-reference "
+                            "integration)"}
+    plan = _chunk_plan(speed, chunk, spr, interpolation)
+    ds = _cot_dataset(cat["coef"], cat["mean"], cat["floor"], fitter, cat["t"], cat["r"],
+                      cat["span"], context, overlap=overlap, interpolation=plan.interpolation,
+                      plan=plan)
+    ds.attrs.update({"amplitude_convention": amplitude, "trend": reader.info["removed"],
+                     "trend_kind": reader.info["kind"],
                      "streamed_segment_seconds": float(segment_seconds)})
-    log.info("order_track_stream %s: %d blocks from %d samples", channel, coef.shape[0],
+    log.info("order_track_stream %s: %d blocks from %d samples", channel, cat["coef"].shape[0],
              speed.n)
     return ds
 
@@ -495,12 +529,12 @@ def order_map_stream(record, channel: str, *, speed_rpm=None, speed_channel=None
                      segment_seconds: float = 20.0, samples_per_rev: int = 64,
                      revolutions: int = 16, overlap: float = 0.5, window="hann",
                      amplitude: str = "peak", scaling: str = "amplitude", max_order=None,
-                     interpolation: str = "cubic", chunk: int = 1 << 18):
+                     interpolation: str = "auto", chunk: int = 1 << 18, trend: str = "auto"):
     """:func:`analysis.order_map` (time × order) of a (lazy) Record channel, segment by segment.
 
-    Parameters are those of :func:`analysis.order_map` plus ``record``, ``channel``, ``rpm``,
+    Parameters are those of :func:`analysis.order_map` plus ``record``, ``channel``,
     ``speed_channel``, ``segment_seconds`` and ``chunk`` as in :func:`order_track_stream`
-    (no ``rpm_bins``: bin the result with ``groupby_bins`` on its ``rpm`` coordinate).
+    (no ``speed_bins_rpm``: bin the result with ``groupby_bins`` on its ``rpm`` coordinate).
 
     Returns
     -------
@@ -520,9 +554,9 @@ def order_map_stream(record, channel: str, *, speed_rpm=None, speed_channel=None
     0.7
     """
     import xarray as xr
-    from scipy import fft
 
-    from .orders import _scale_spectrum, amplitude_factor, get_window
+    from .orders import amplitude_factor
+    from .ordermap import MapSpectra
 
     scaling = check_option(scaling, "scaling", ("amplitude", "power"), error=AnalysisError)
     factor = amplitude_factor(amplitude)
@@ -531,30 +565,34 @@ def order_map_stream(record, channel: str, *, speed_rpm=None, speed_channel=None
                                                              error=AnalysisError)
     if top > spr / 2 + 1e-12:
         raise AnalysisError(f"max_order {top:g} exceeds samples_per_rev/2 = {spr / 2:g}")
+    var, label, speed, segment, reader = _prepare(
+        record, channel, speed_rpm=speed_rpm, speed_channel=speed_channel, chunk=chunk,
+        trend=trend, segment_seconds=segment_seconds)
     length = spr * int(revolutions)
     n_orders = min(length // 2 + 1, int(np.floor(top * int(revolutions))) + 1)
-    w = get_window(window, length)
+    spectra = MapSpectra(length, window, scaling, factor, n_orders)
     parts = {"v": [], "t": [], "r": []}
 
-    def per_frames(frames, phi0, t, r):
-        X = fft.rfft(frames * w, axis=1)[:, :n_orders]
-        parts["v"].append(_scale_spectrum(X, w, scaling, factor))
+    def per_frames(frames, phi0, t, r, span):
+        parts["v"].append(spectra(frames))
         parts["t"].append(t)
         parts["r"].append(r)
 
-    var, _, w, length = _cot_blocks(
-        record, channel, orders=None, speed_rpm=speed_rpm, speed_channel=speed_channel,
-        samples_per_rev=spr, revolutions=revolutions, overlap=overlap, window=window,
-        interpolation=interpolation, segment_seconds=segment_seconds, chunk=chunk,
-        per_frames=per_frames)
+    _blocks(speed, reader, label=label, samples_per_rev=spr, revolutions=revolutions,
+            overlap=overlap, interpolation=interpolation, chunk=chunk, segment=segment,
+            per_frames=per_frames)
     units = str(var.attrs.get("units", ""))
     out_units = units if scaling == "amplitude" else (f"({units})^2" if units else "1")
-    attrs = {"units": out_units, "method": "order map (angle resampling + block rfft)",
+    plan = _chunk_plan(speed, chunk, spr, interpolation)
+    attrs = {"units": out_units, "method": "order map (angle resampling + block rfft, block "
+                                           "trend removed; order 0 = block mean)",
              "scaling": scaling, "amplitude_convention": amplitude if scaling == "amplitude"
              else "mean-square per bin", "window": str(window), "samples_per_rev": spr,
              "revolutions": int(revolutions), "resolution_orders": 1.0 / int(revolutions),
-             "overlap": overlap, "interpolation": interpolation,
-             "enbw_bins": float(length * np.sum(w ** 2) / np.sum(w) ** 2),
+             "overlap": overlap, "interpolation": plan.interpolation,
+             "enbw_bins": spectra.enbw, "trend": reader.info["removed"],
+             "phase_reference": "shaft angle 0 at the first sample of the record "
+                                "(speed-reference integration)",
              "streamed_segment_seconds": float(segment_seconds)}
     return xr.DataArray(np.concatenate(parts["v"]), dims=("time", "order"),
                         name=f"{channel} order map",
@@ -568,17 +606,14 @@ def order_map_stream(record, channel: str, *, speed_rpm=None, speed_channel=None
 # ---------------------------------------------------------------------------- VKF stream
 
 
-def _vkf_stream(record, channel, *, orders, speed_rpm, speed_channel, segment_seconds, amplitude,
-                bandwidth_hz, bandwidth_orders, filter_order, vkf_overlap):
+def _vkf_stream(var, label, speed, reader, *, orders, segment, amplitude, bandwidth_hz,
+                bandwidth_orders, filter_order, vkf_overlap, trend_info):
     from .orders import _track_dataset, amplitude_factor
     from .vkf import vold_kalman
 
-    var = _channel(record, channel)
-    speed = _speed_for(record, channel, var, speed_rpm=speed_rpm, speed_channel=speed_channel)
     vkf_overlap = check_positive(vkf_overlap, "vkf_overlap", error=AnalysisError)
     n, fs = speed.n, speed.fs
-    read = _reader(var)
-    seg = max(1024, int(round(segment_seconds * fs)))
+    seg = segment
     # smallest bandwidth over the record (Hz): constant, or proportional to the lowest speed
     if bandwidth_hz is not None:
         b_min = float(np.min(bandwidth_hz))
@@ -588,36 +623,42 @@ def _vkf_stream(record, channel, *, orders, speed_rpm, speed_channel, segment_se
         b_min = bo * lo / 60.0
     pad = int(math.ceil(vkf_overlap / b_min * fs))
     factor = amplitude_factor(amplitude)
-    env, times, rpms = [], [], []
-    phi_carry, pos = 0.0, 0
+    env, times, rpms, means, unc = [], [], [], [], []
+    carry = _AngleCarry(speed)
     attrs = {}
     for a in range(0, n, seg):
         b = min(n, a + seg)
         ra, rb = max(0, a - pad), min(n, b + pad)
-        sp = speed(ra, rb)
-        # shaft angle at ra from the record start (carried sequential sum)
-        if ra > pos:
-            om = speed(pos, ra + 1) * (_TWO_PI / 60.0)
-            phi_carry = float(np.cumsum(np.concatenate(([phi_carry],
-                                                        0.5 * (om[1:] + om[:-1]) / fs)))[-1])
-            pos = ra
-        res = vold_kalman(read(ra, rb), fs=fs, speed_rpm=sp, orders=orders,
-                          bandwidth_hz=bandwidth_hz,
-                          bandwidth_orders=bandwidth_orders, filter_order=filter_order)
+        phi = carry(ra, rb)
+        res = vold_kalman(reader(ra, rb), fs=fs, speed_rpm=speed(ra, rb), orders=orders,
+                          bandwidth_hz=bandwidth_hz, bandwidth_orders=bandwidth_orders,
+                          filter_order=filter_order, shaft_angle=phi)
         tr = res["time"].values + ra / fs          # s from the channel's first sample
         sel = (tr >= a / fs) & (tr < b / fs) if b < n else tr >= a / fs
-        e = res["envelope"].values[:, sel]
-        env.append(e * np.exp(-1j * orders * phi_carry)[:, None])
+        env.append(res["envelope"].values[:, sel])
         times.append(speed.t0 + tr[sel])
         rpms.append(res["rpm"].values[sel])
+        means.append(res["mean"].values[sel])
+        unc.append(res["amplitude_uncertainty"].values[:, sel])
         attrs = dict(res.attrs)
+        if b < n:
+            nxt = max(0, b - pad)
+            if nxt < ra:            # pragma: no cover - windows advance by a whole segment
+                raise AnalysisError(f"{label}: internal: VKF windows do not advance")
+            carry.advance(nxt, phi, ra)
     e = np.concatenate(env, axis=1)
+    units = str(var.attrs.get("units", ""))
     ds = _track_dataset(np.abs(e) * factor, np.angle(e), orders, np.concatenate(times),
-                        np.concatenate(rpms), str(var.attrs.get("units", "")), channel)
+                        np.concatenate(rpms), units, label)
+    ds["mean"] = ("time", np.concatenate(means), {"units": units, "long_name":
+                                                  "order 0: trend envelope (the channel's mean)"})
+    ds["amplitude_uncertainty"] = (("order", "time"), np.concatenate(unc, axis=1) * factor,
+                                   {"units": units, "long_name": "1-sigma amplitude noise and "
+                                    "estimated envelope smearing"})
     ds.attrs.update(attrs)
-    ds.attrs.update({"amplitude_convention": amplitude,
-                     "streamed_segment_seconds": float(segment_seconds),
-                     "streamed_overlap_s": pad / fs})
+    ds.attrs.update({"amplitude_convention": amplitude, "trend": trend_info["removed"],
+                     "trend_kind": trend_info["kind"],
+                     "streamed_segment_seconds": seg / fs, "streamed_overlap_s": pad / fs})
     return ds
 
 

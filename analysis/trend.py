@@ -33,7 +33,7 @@ import numpy as np
 
 from crankbench.predict.errors import AnalysisError
 
-__all__ = ["cycle_average", "remove_trend", "TREND_KINDS"]
+__all__ = ["cycle_average", "remove_trend", "SpanTrend", "TREND_KINDS"]
 
 log = logging.getLogger("crankbench")
 
@@ -43,8 +43,13 @@ TREND_KINDS = ("none", "angle ramp", "speed mean")
 _TWO_PI = 2.0 * np.pi
 
 
+#: revolutions of the successive cycle-average windows, and their total half-reach
+CYCLE_WINDOWS = (2.0, 3.0)
+CYCLE_REACH_REVOLUTIONS = 0.5 * sum(CYCLE_WINDOWS)
+
+
 def cycle_average(values: np.ndarray, phi: np.ndarray, fs: float, *,
-                  revolutions=(2.0, 3.0)) -> np.ndarray:
+                  revolutions=CYCLE_WINDOWS, ends=None) -> np.ndarray:
     """Time average of ``values`` over windows spanning whole revolutions of shaft angle.
 
     Each sample is replaced by the mean of ``values`` over the time during which the shaft
@@ -65,6 +70,11 @@ def cycle_average(values: np.ndarray, phi: np.ndarray, fs: float, *,
         Sample rate, Hz (the average is over time).
     revolutions : sequence of float
         Window lengths, revolutions, applied one after the other.
+    ends : (float, float), optional
+        Shaft angle at the record's first and last samples when ``values`` is a span of a
+        longer record (streaming): the windows shrink near the record's ends, not the span's.
+        Samples within ``CYCLE_REACH_REVOLUTIONS`` of a span end that is not a record end are
+        incomplete (read the span with that margin).
 
     Returns
     -------
@@ -81,7 +91,8 @@ def cycle_average(values: np.ndarray, phi: np.ndarray, fs: float, *,
     0.0
     """
     out = np.asarray(values, dtype=float)
-    room = np.minimum(phi - phi[0], phi[-1] - phi)          # angle to the nearer record end
+    first, last = (phi[0], phi[-1]) if ends is None else ends
+    room = np.minimum(phi - first, last - phi)              # angle to the nearer record end
     for revs in np.atleast_1d(revolutions):
         half = np.minimum(0.5 * float(revs) * _TWO_PI, room)
         cum = np.concatenate([[0.0], np.cumsum(0.5 * (out[1:] + out[:-1]))])
@@ -213,3 +224,132 @@ def _fit(y, x):
     resid = dy - s * dx
     r2 = 1.0 - float(np.dot(resid, resid)) / total if total > 0 else 0.0
     return {"scale": s, "offset": ym - s * xm, "r2": r2}
+
+
+class _Moments:
+    """Running centred sums of (x, r) over spans (Chan et al.'s pairwise update), so a fit
+    over a record read in pieces is as accurate as one over the whole array."""
+
+    def __init__(self):
+        self.n, self.mx, self.mr = 0, 0.0, 0.0
+        self.sxx = self.srr = self.sxr = 0.0
+
+    def add(self, x, r):
+        m = x.shape[0]
+        if m == 0:
+            return
+        mx, mr = float(np.mean(x)), float(np.mean(r))
+        dx, dr = x - mx, r - mr
+        sxx, srr, sxr = float(dx @ dx), float(dr @ dr), float(dx @ dr)
+        n = self.n + m
+        ddx, ddr = mx - self.mx, mr - self.mr
+        self.sxx += sxx + ddx * ddx * self.n * m / n
+        self.srr += srr + ddr * ddr * self.n * m / n
+        self.sxr += sxr + ddx * ddr * self.n * m / n
+        self.mx += ddx * m / n
+        self.mr += ddr * m / n
+        self.n = n
+
+    def fit(self):
+        """``{'scale', 'offset', 'r2', 'mean_x', 'mean_r', 'spread'}`` of ``x ≈ s r + c``."""
+        if self.n == 0 or self.srr <= 0:
+            return {"scale": 0.0, "offset": self.mx, "r2": 0.0, "mean_x": self.mx,
+                    "mean_r": self.mr, "spread": 0.0}
+        s = self.sxr / self.srr
+        res = max(self.sxx - s * self.sxr, 0.0)
+        r2 = 1.0 - res / self.sxx if self.sxx > 0 else 0.0
+        return {"scale": s, "offset": self.mx - s * self.mr, "r2": r2, "mean_x": self.mx,
+                "mean_r": self.mr, "spread": float(np.sqrt(res / self.n))}
+
+
+class SpanTrend:
+    """:func:`remove_trend` for a record read span by span (the streamed trackers).
+
+    Pass 1 (:meth:`fit`) reads the record in segments, each with a margin of
+    ``CYCLE_REACH_REVOLUTIONS`` at the lowest speed, and fits the angle-ramp and mean-speed
+    models from running centred sums; the decision rules are those of :func:`remove_trend`.
+    Afterwards the object reads detrended spans (``self(a, b)``) for the trackers.
+
+    Parameters
+    ----------
+    read : callable
+        ``read(a, b)`` → channel samples a..b-1.
+    speed : callable
+        ``speed(a, b)`` → speed (rpm) of samples a..b-1.
+    angle : callable
+        ``angle()`` → a fresh callable ``phi(a, b)`` giving the shaft angle of samples a..b-1
+        (called with non-decreasing ``a``).
+    n, fs : int, float
+        Samples and sample rate of the channel.
+    ends : (float, float)
+        Shaft angle at the first and last samples.
+    low_rpm : float
+        Lowest speed of the record (sets the margin).
+    kind : str
+        As in :func:`remove_trend`.
+    """
+
+    def __init__(self, read, speed, angle, *, n, fs, ends, low_rpm, kind="auto"):
+        if kind not in ("auto",) + TREND_KINDS:
+            raise AnalysisError(f"trend={kind!r} is not one of 'auto', "
+                                f"{', '.join(map(repr, TREND_KINDS))}")
+        self.read, self.speed, self.angle = read, speed, angle
+        self.n, self.fs, self.ends, self.kind = int(n), float(fs), ends, kind
+        self.margin = int(np.ceil(1.2 * CYCLE_REACH_REVOLUTIONS * 60.0 / low_rpm * fs)) + 2
+        self.info = {"kind": "none", "scale": 0.0, "offset": 0.0,
+                     "removed": "nothing before tracking"}
+        self._phi = None
+
+    def _refs(self, phi_fn, a, b):
+        """Cycle-averaged angle and speed (rad, rad/s) of samples a..b-1 (read with margin)."""
+        ra, rb = max(0, a - self.margin), min(self.n, b + self.margin)
+        phi = phi_fn(ra, rb)
+        omega = self.speed(ra, rb) * (_TWO_PI / 60.0)
+        theta = cycle_average(phi, phi, self.fs, ends=self.ends)[a - ra:b - ra]
+        wbar = cycle_average(omega, phi, self.fs, ends=self.ends)[a - ra:b - ra]
+        return theta, wbar
+
+    def fit(self, segment: int):
+        """Pass 1: decide the trend from the whole record, ``segment`` samples at a time."""
+        if self.kind == "none":
+            return self.info
+        phi_fn = self.angle()
+        ramp, speed = _Moments(), _Moments()
+        for a in range(0, self.n, segment):
+            b = min(self.n, a + segment)
+            x = self.read(a, b)
+            theta, wbar = self._refs(phi_fn, a, b)
+            ramp.add(x, theta)
+            speed.add(x, wbar)
+        fr, fw = ramp.fit(), speed.fit()
+        if self.kind == "angle ramp" or (self.kind == "auto" and _is_ramp(fr)):
+            self.info.update(kind="angle ramp", scale=fr["scale"], offset=fr["offset"],
+                             removed=f"shaft-angle ramp {fr['scale']:.6g}·θ̄ + "
+                                     f"{fr['offset']:.6g} (θ̄: reference angle averaged over "
+                                     "whole engine cycles)")
+        elif self.kind == "speed mean" or (self.kind == "auto" and _speed_like(fw)):
+            self.info.update(kind="speed mean", scale=fw["scale"], offset=fw["offset"],
+                             removed=f"mean speed {fw['scale']:.6g}·ω̄ + {fw['offset']:.6g} "
+                                     "(ω̄: reference speed averaged over whole engine cycles, "
+                                     "rad/s)")
+        return self.info
+
+    def __call__(self, a: int, b: int) -> np.ndarray:
+        """Detrended samples a..b-1 (calls with non-decreasing ``a``)."""
+        x = self.read(a, b)
+        if self.info["kind"] == "none":
+            return x
+        if self._phi is None or a < self._last:
+            self._phi = self.angle()
+        self._last = max(0, a - self.margin)
+        theta, wbar = self._refs(self._phi, a, b)
+        ref = theta if self.info["kind"] == "angle ramp" else wbar
+        return x - (self.info["scale"] * ref + self.info["offset"])
+
+
+def _speed_like(fit) -> bool:
+    """:func:`_carries_speed` from a moments fit."""
+    share = abs(fit["scale"]) * fit["mean_r"]
+    spread = fit["spread"]
+    return (share >= 5.0 * spread and abs(fit["mean_x"]) >= 0.2 * share
+            and (fit["r2"] >= 0.9 or share >= 50.0 * spread))
