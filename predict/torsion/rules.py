@@ -261,6 +261,9 @@ class RuleLimits:
         Rule edition named in the report.
     curves : StressLimits or None
         User-given limit curves for the sections they name (held after the rule data).
+    vibration : dict or None
+        ``[limits.vibration]``: ``standard``, ``machine_class``, ``boundaries_mm_s`` (A/B, B/C,
+        C/D, mm/s rms), ``source``.
     """
 
     application: str = "propulsion"
@@ -272,6 +275,7 @@ class RuleLimits:
     tachometer_tolerance_rpm: float = 0.0
     source: str = M68_SOURCE
     curves: object = None
+    vibration: dict | None = None
 
     def __post_init__(self):
         check_option(self.application, "application", ("propulsion", "auxiliary"),

@@ -85,6 +85,12 @@ def load_limits(table, *, engine=None):
         transient_mpa = 100
         source = "maker's document and revision"
 
+        [limits.vibration]                  # vibration severity of the engine structure
+        standard = "ISO 10816-6"            # default; or "ISO 10816-1"
+        machine_class = 5                   # the contract's class (default: from the engine)
+        # boundaries_mm_s = [11.2, 11.2, 17.8]   # own A/B, B/C, C/D boundaries, velocity rms
+        source = "contract clause ..."
+
     * user-given curves (``speed_rpm``, ``continuous_mpa``, ``transient_mpa``, ``sections``,
       ``source``), held against the sections they name.
 
@@ -145,12 +151,28 @@ def load_limits(table, *, engine=None):
         crank = MakerLimit(tuple(secs), c * 1e6, tr * 1e6,
                            source=ct.string("source", "engine maker's figure"))
         ct.check_unknown()
+    vibration = None
+    vt = table.table("vibration", None)
+    if vt is not None:
+        vibration = {"standard": vt.string("standard", "ISO 10816-6",
+                                           options=("ISO 10816-6", "ISO 10816-1")),
+                     "machine_class": vt.raw("machine_class", None),
+                     "boundaries_mm_s": vt.numbers("boundaries_mm_s", None, length=3, low=0.0,
+                                                   strict_low=True),
+                     "source": vt.string("source", "model [limits.vibration]")}
+        mc = vibration["machine_class"]
+        if mc is not None and not isinstance(mc, (int, str)):
+            vt.fail("machine_class", f"= {mc!r} must be a class name (1-7, or I-IV)")
+        b = vibration["boundaries_mm_s"]
+        if b is not None and not (b[0] <= b[1] < b[2]):
+            vt.fail("boundaries_mm_s", f"= {b.tolist()!r} must ascend (A/B, B/C, C/D, mm/s)")
+        vt.check_unknown()
     table.check_unknown()
     extra = {} if source is None else {"source": source}
     return RuleLimits(application=application, rated_speed_rpm=rated,
                       operating_range_rpm=None if op is None else (float(op[0]), float(op[1])),
                       shafting=tuple(shafting), crankshaft=crank, misfire_operation=misfire,
-                      tachometer_tolerance_rpm=tol, curves=curves, **extra)
+                      tachometer_tolerance_rpm=tol, curves=curves, vibration=vibration, **extra)
 
 
 def _complete_limits(limits, system, table):
