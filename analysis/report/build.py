@@ -217,7 +217,8 @@ def build_report(result, *, title=None, parameters=None, record_path=None, model
                                    "drawn.", section=sec)
         except Exception as exc:
             log.warning("mode-shape figure skipped: %s", exc)
-    rep.add_resonances(result.resonances, section="Measured resonances", figure=figures)
+    # the identified resonances are drawn on the order-track figure (in display units)
+    rep.add_resonances(result.resonances, section="Measured resonances", figure=False)
     lo, hi = result.speed_range_rpm
     rep.add_comparison(result.comparison, figure=figures, amplitude_units=result.units,
                        verdict=result.verdicts[0])
@@ -226,6 +227,9 @@ def build_report(result, *, title=None, parameters=None, record_path=None, model
     for channel, comp, table in getattr(result, "balance", ()):
         bsec = "Balance residuals at the mounts"
         units = table.attrs.get("units", "")
+        table = table.copy()
+        # a prediction that is zero by design is printed as 0, not as its round-off
+        table.loc[table["balanced_by_design"], "predicted_max"] = 0.0
         rep.add_table(table, title=f"{channel}: orders 1 and 2", section=bsec,
                       amplitude_units=units,
                       caption="Peak amplitudes. Predicted: free inertia forces "

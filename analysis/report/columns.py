@@ -91,8 +91,15 @@ def amplitude_display(units: str):
     return _AMPLITUDE_DISPLAY.get(str(units), (str(units), 1.0))
 
 
-def format_value(value, kind: str, *, scale: float = 1.0, column_max: float = np.inf) -> str:
-    """One cell: NaN/None → —, round-off → 0, else the digits of its kind."""
+def format_value(value, kind: str, *, scale: float = 1.0, column_max: float | None = None) -> str:
+    """One cell: NaN/None → —, round-off (below 1e-9 of ``column_max``) → 0, else the digits
+    of its kind.
+
+    Examples
+    --------
+    >>> format_value(42.0e6, "sig3", scale=1e-6), format_value(2e-14, "amp", column_max=3e-3)
+    ('42.0', '0')
+    """
     if value is None:
         return "—"
     if isinstance(value, (bool, np.bool_)):
@@ -110,7 +117,8 @@ def format_value(value, kind: str, *, scale: float = 1.0, column_max: float = np
         return "yes" if v else "no"
     if kind == "int":
         return f"{int(round(v))}"
-    if abs(v) <= ROUNDOFF * abs(column_max * scale) or abs(v) < 1e-300:
+    top = np.inf if column_max is None or not np.isfinite(column_max) else abs(column_max)
+    if (np.isfinite(top) and abs(v) <= ROUNDOFF * top * abs(scale)) or abs(v) < 1e-300:
         return "0"
     if kind == "order":
         return f"{v:g}"
@@ -167,9 +175,9 @@ def format_table(frame, *, amplitude_units: str = "", columns: dict | None = Non
         col = frame[c]
         try:
             values = np.abs(np.asarray(col, float))
-            maxima.append(float(np.nanmax(values)) if np.isfinite(values).any() else np.inf)
+            maxima.append(float(np.nanmax(values)) if np.isfinite(values).any() else None)
         except (TypeError, ValueError):
-            maxima.append(np.inf)
+            maxima.append(None)
     amp_col = next((i for i, c in enumerate(frame.columns)
                     if spec.get(str(c), ("", "", ""))[1] == "{amp}"), None)
     rows = []

@@ -346,8 +346,10 @@ class Report:
         sec = section or title
         self._section(sec).items.append(_Item("checks", title, payload={"rows": rows}))
         if figures:
+            drawn = []
             for c in checks:
-                if c.data is not None:
+                if c.data is not None and not any(c.data is d for d in drawn):
+                    drawn.append(c.data)
                     try:
                         fig = c.plot()
                     except (TypeError, ValueError, KeyError, AttributeError) as exc:
@@ -386,6 +388,7 @@ class Report:
         self.add_verdict(verdict if verdict is not None else comparison.verdict())
         table = critical_speed_table(comparison, predicted)
         classes = ["" if s else "minor" for s in table["significant"]]
+        n_minor = classes.count("minor")
         self.add_table(
             table, title="Critical speeds: predicted and measured", section=sec,
             amplitude_units=amplitude_units, row_classes=classes,
@@ -396,7 +399,10 @@ class Report:
                     f"±{100 * comparison.tolerance:g} %, amplitude ratio within "
                     f"[{1 / (1 + comparison.amplitude_tolerance):.2f}, "
                     f"{1 + comparison.amplitude_tolerance:.2f}]; only significant criticals "
-                    "are judged.")
+                    "are judged."
+                    + (f" The filter hides {n_minor} weak criticals (predicted amplitude under "
+                       "5 % of the largest); untick it in the HTML report to list them."
+                       if n_minor else ""))
         self.add_table(comparison.natural_frequencies, title="Natural frequencies by mode",
                        section=sec, caption="Measured values are confidence-weighted over "
                                             "every order that excited the mode.")

@@ -79,8 +79,6 @@ M68_CK = {
 #: upper bound of σ_B in the M68 formulas, N/mm² (M68.3/M68.4)
 TENSILE_CAP_MPA = {"carbon": 760.0, "alloy": 800.0, "propeller": 600.0}
 
-_CLAUSE_TC = "M68.5 τ_C (continuous)"
-_CLAUSE_TT = "M68.5 τ_T = 1.7 τ_C/√C_K (transient, λ ≤ 0.8)"
 _CLAUSE_BSR = "M68.5 (no barred speed range above λ = 0.8 in normal operation)"
 
 
@@ -310,12 +308,13 @@ class RuleLimits:
                     raise ModelError("[limits] rated_speed_rpm is needed for the M68 limits "
                                      "(or rated_speed_rpm in the engine model)")
                 tc, tt = r.limits(speed, self.rated_speed_rpm, diameter)
-                return tc, tt, (f"{self.source} {_CLAUSE_TC}, {_CLAUSE_TT}; "
-                                f"{r.describe(diameter)}")
+                return tc, tt, (f"{section}: {self.source} M68.5 τ_C, τ_T "
+                                f"({r.describe(diameter)})")
         c = self.crankshaft
         if c is not None and section in c.sections:
             return (np.full(speed.shape, c.continuous), np.full(speed.shape, c.transient),
-                    f"crankshaft: {c.source} (outside UR M68, see M68.1 and UR M53)")
+                    f"crankshaft {c.continuous / 1e6:.3g}/{c.transient / 1e6:.3g} MPa: "
+                    f"{c.source} (outside UR M68: M68.1)")
         if self.curves is not None and (not self.curves.sections or
                                         section in self.curves.sections):
             tc, tt = self.curves.at(speed)
