@@ -85,7 +85,7 @@ def amplitude_display(units: str):
 
     Examples
     --------
-    >>> amplitude_display("rad")[0], round(amplitude_display("rad")[1], 3)
+    >>> amplitude_display("rad")[0], round(float(amplitude_display("rad")[1]), 3)
     ('mdeg', 57295.78)
     """
     return _AMPLITUDE_DISPLAY.get(str(units), (str(units), 1.0))

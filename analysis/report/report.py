@@ -113,7 +113,7 @@ class Report:
     >>> rep.add_table(pd.DataFrame({"order": [6.0], "speed_rpm": [400.0]}), title="Criticals")
     >>> out = pathlib.Path(tempfile.mkdtemp()) / "r.html"
     >>> _ = rep.save(out)
-    >>> print(rep.n_figures, out.read_text().count("<img"))
+    >>> print(rep.n_figures, out.read_text().count("<svg"))
     1 1
     """
 
