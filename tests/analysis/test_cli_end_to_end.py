@@ -60,6 +60,8 @@ def test_compare_json(demo_dir, capsys):
     assert main(["-q", "compare", str(out / "marine_6l_runup.h5"), str(MODEL), "--json"]) == 0
     data = json.loads(capsys.readouterr().out)
     assert data["summary"]["model_agrees"] is True
+    assert data["verdict"]["verdict"] == "fail"
+    assert {c["verdict"] for c in data["checks"]} <= {"pass", "fail", "inconclusive"}
     assert len(data["matched"]) >= 8
     assert {"mode", "order", "deviation_pct", "amplitude_ratio"} <= set(data["matched"][0])
     assert data["natural_frequencies"][0]["mode"] >= 1
@@ -111,6 +113,7 @@ def test_batch_reports_failures_and_resumes(demo_dir, tmp_path, capsys):
     assert status == 1  # one record failed, the other was processed
     rows = {Path(r["record"]).name: r for r in csv.DictReader(summary.open())}
     assert rows["a.h5"]["status"] == "ok" and rows["a.h5"]["model_agrees"] == "True"
+    assert rows["a.h5"]["verdict"] == "fail" and rows["a.h5"]["comparison_verdict"] == "pass"
     assert rows["broken.h5"]["status"] == "error"
     assert "broken.h5" in rows["broken.h5"]["error"]
     cache = list((tmp_path / "summary.csv.cache").glob("a-*.json"))
