@@ -37,7 +37,8 @@ def test_demo_runs_the_chain_in_under_a_minute(demo_dir):
     n_figures = int(re.search(r'name="crankbench-figures" content="(\d+)"', text).group(1))
     assert n_figures >= 6
     for heading in ("Order map", "Campbell diagram", "Order tracks against prediction",
-                    "Mode shapes (model)", "Matched critical speeds", "Limit checks",
+                    "Mode shapes (model)", "Critical speeds: predicted and measured",
+                    "Limit checks", "Verdict:",
                     "Analysis settings", "Provenance"):
         assert heading in text, heading
     from crankbench.analysis.report import file_sha256
