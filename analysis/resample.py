@@ -384,15 +384,16 @@ def _split_chunks(speed, n: int, chunk: int):
     return np.asarray(out, dtype=np.int64), ranges
 
 
-def plan_chunks(speed, *, n: int, fs: float, samples_per_rev: int = 64,
+def plan_chunks(speed_rpm, *, n: int, fs: float, samples_per_rev: int = 64,
                 interpolation: str = "auto", antialias: bool = True,
                 chunk: int = 1 << 18) -> ChunkPlan:
     """Decide chunks, anti-alias filters and decimation of a resampling from the speed.
 
     Parameters
     ----------
-    speed : callable or ndarray
-        ``speed(a, b)`` → speed (rpm) of input samples ``a..b-1``; or the whole speed array.
+    speed_rpm : callable or ndarray
+        ``speed_rpm(a, b)`` → speed (rpm) of input samples ``a..b-1``; or the whole speed
+        array.
     n : int
         Input samples.
     fs : float
@@ -410,8 +411,10 @@ def plan_chunks(speed, *, n: int, fs: float, samples_per_rev: int = 64,
     >>> plan.chunks, plan.decimation, plan.interpolation
     (2, (6, 3), 'bandlimited')
     """
-    if not callable(speed):
-        arr = np.asarray(speed, dtype=float)
+    if callable(speed_rpm):
+        speed = speed_rpm
+    else:
+        arr = np.asarray(speed_rpm, dtype=float)
         speed = lambda a, b: arr[a:b]          # noqa: E731 - a span reader
     samples_per_rev = check_int(samples_per_rev, "samples_per_rev", minimum=4,
                                 error=AnalysisError)
@@ -465,7 +468,7 @@ def angle_range(plan: ChunkPlan, phi_first: float, phi_last: float) -> tuple[int
 
 
 def resample_span(plan: ChunkPlan, ks, values: np.ndarray, start: int, phi: np.ndarray,
-                  speed: np.ndarray, j_first: int, j_last: int, *, last: bool):
+                  speed_rpm: np.ndarray, j_first: int, j_last: int, *, last: bool):
     """Angle samples produced by chunks ``ks`` from one span of input samples.
 
     Parameters
@@ -473,7 +476,7 @@ def resample_span(plan: ChunkPlan, ks, values: np.ndarray, start: int, phi: np.n
     plan : ChunkPlan
     ks : sequence of int
         Consecutive chunk indices.
-    values, phi, speed : ndarray
+    values, phi, speed_rpm : ndarray
         Input samples, shaft angle (rad) and speed (rpm) of input samples ``start …``; they
         must cover the read windows of ``ks`` (:meth:`ChunkPlan.window`).
     start : int
@@ -513,15 +516,16 @@ def resample_span(plan: ChunkPlan, ks, values: np.ndarray, start: int, phi: np.n
         if band is not None:
             data = _fft_lowpass(data, fs, band[0], band[1], q)
         out[lo:hi] = _interp(data, (u_out[lo:hi] - a) * (1.0 / q), plan.interpolation)
-    rpm_out = np.interp(u_out, index, speed)
+    rpm_out = np.interp(u_out, index, speed_rpm)
     return out, u_out / fs, rpm_out, grid
 
 
-def resample_arrays(values: np.ndarray, fs: float, speed: np.ndarray, *,
+def resample_arrays(values: np.ndarray, fs: float, speed_rpm: np.ndarray, *,
                     samples_per_rev: int = 64, interpolation: str = "auto",
                     antialias: bool = True, chunk: int = 1 << 18, angle=None, label="x"):
     """:func:`angle_resample` on plain arrays: ``(values, time, rpm, angle, plan)``."""
     n = values.shape[0]
+    speed = speed_rpm
     plan = plan_chunks(speed, n=n, fs=fs, samples_per_rev=samples_per_rev,
                        interpolation=interpolation, antialias=antialias, chunk=chunk)
     phi = shaft_angle(speed, fs) if angle is None else angle
