@@ -346,7 +346,7 @@ def order_track(x, *, fs=None, speed_rpm, orders, amplitude: str = "peak", metho
                 samples_per_rev=None, revolutions=None, overlap: float = 0.5,
                 window="hann", interpolation: str = "auto", bandwidth_hz=None,
                 bandwidth_orders=None, filter_order: int = 2, shaft_angle=None,
-                trend: str = "auto"):
+                trend: str = "auto", min_bandwidth_orders=None):
     """Amplitude and phase of shaft orders against time (and speed).
 
     Parameters
@@ -381,6 +381,9 @@ def order_track(x, *, fs=None, speed_rpm, orders, amplitude: str = "peak", metho
     trend : {'auto', 'none', 'angle ramp', 'speed mean'}
         The channel's trend removed before tracking (:func:`analysis.trend.remove_trend`);
         'auto' detects an encoder angle's ramp and an IAS channel's mean speed.
+    min_bandwidth_orders : float, optional
+        'auto' only: a bandwidth floor in orders (a caller that must resolve features of a
+        known width, e.g. resonance identification at a known damping).
 
     Returns
     -------
@@ -419,7 +422,8 @@ def order_track(x, *, fs=None, speed_rpm, orders, amplitude: str = "peak", metho
     options = dict(orders=orders, amplitude=amplitude, method=method,
                    samples_per_rev=samples_per_rev, revolutions=revolutions, overlap=overlap,
                    window=window, interpolation=interpolation, bandwidth_hz=bandwidth_hz,
-                   bandwidth_orders=bandwidth_orders, filter_order=filter_order, trend=trend)
+                   bandwidth_orders=bandwidth_orders, filter_order=filter_order, trend=trend,
+                   min_bandwidth_orders=min_bandwidth_orders)
     masked = _dropout_spans(x, fs)
     if masked is not None:
         return _track_around_dropouts(x, fs, masked, speed_rpm=speed_rpm,

@@ -116,7 +116,8 @@ class PipelineResult:
     speed_channel : str
     speed_range_rpm : tuple
     sweep_rate_rpm_per_s : float
-        Median |d(rpm)/dt| over the record.
+        Median |d(rpm)/dt| over the record from straight-line fits over a tenth of it (0 for a
+        steady-speed record: ±1 % of its median).
     track : xarray.Dataset
         Order track of the channel.
     resonances : ResonanceTable
@@ -134,6 +135,10 @@ class PipelineResult:
         Every parameter used.
     timings : dict
         Seconds per step.
+    steady_orders : pandas.DataFrame or None
+        For a steady-speed record: the steady-state order table
+        (:func:`analysis.steady.steady_orders`: amplitude and phase per order with their
+        uncertainty) shown instead of a sweep rate and resonances.
     balance : tuple of (channel, BalanceComparison or None, pandas.DataFrame)
         Orders 1 and 2 at each vibrograph mounted at a named mount: the comparison with the
         predicted balance residuals through the mount model (None when the prediction is zero
@@ -162,6 +167,7 @@ class PipelineResult:
     timings: dict = field(default_factory=dict)
     balance: tuple = ()
     extra_verdicts: tuple = ()
+    steady_orders: object = None
 
     @property
     def steady(self) -> bool:
@@ -231,6 +237,7 @@ class PipelineResult:
                 "node": self.node, "speed_min_rpm": self.speed_range_rpm[0],
                 "speed_max_rpm": self.speed_range_rpm[1],
                 "sweep_rate_rpm_per_s": self.sweep_rate_rpm_per_s,
+                "steady_speed": self.steady_orders is not None,
                 "resonances": len(self.resonances), "matched": s["matched"],
                 "unmatched_measured": s["unmatched_measured"],
                 "unmatched_predicted_significant": s["unmatched_predicted_significant"],
@@ -413,6 +420,10 @@ def _prediction(system, orders, node, quantity, units, load, lo, hi, base_points
 def _track(x, fs, rpm, orders, *, method, bandwidth_orders, revolutions):
     from .orders import order_track
 
+    if method == "auto":
+        # the tracker's own choice, but never narrower than resonance identification needs
+        return order_track(x, fs=fs, speed_rpm=rpm, orders=orders, method="auto",
+                           min_bandwidth_orders=bandwidth_orders)
     if method == "vkf":
         return order_track(x, fs=fs, speed_rpm=rpm, orders=orders, method="vkf",
                            bandwidth_orders=bandwidth_orders)
@@ -443,10 +454,15 @@ def analyse(record, model, *, channel=None, speed_channel=None, orders=None, max
         predicted resonance amplitude in the range is at least ``order_fraction`` of the
         largest, at most ``max_tracked`` of them).
     max_order : float
-    method : {'vkf', 'cot'}
-        Order tracker: Vold–Kalman (time resolution for sweeps) or computed order tracking.
+    method : {'vkf', 'auto', 'cot'}
+        Order tracker: Vold–Kalman with ``bandwidth_orders`` chosen from the sweep rate (default:
+        the resonance identification and the comparison are calibrated on it), the adaptive
+        settings of :mod:`analysis.autotrack` (never narrower than ``bandwidth_orders``), or
+        computed order tracking.
     bandwidth_orders : float, optional
-        VKF −3 dB bandwidth in orders. Default from the sweep rate R (rpm/s): 0.25 up to
+        VKF −3 dB bandwidth in orders ('vkf'; with 'auto' the floor under the chosen
+        bandwidth, which the resonance identification needs). Default from the sweep rate R
+        (rpm/s): 0.25 up to
         25 rpm/s, then 0.25·√(R/25) up to 0.5 — a resonance crossed quickly has a wider
         envelope spectrum, and a narrow filter would flatten its peak (measured on the 6L32
         scene at 100 rpm/s: amplitude −17 % at 0.25 orders, −4 % at 0.5).
@@ -502,7 +518,7 @@ def analyse(record, model, *, channel=None, speed_channel=None, orders=None, max
     from .resonance import find_resonances
     from .speedref import find_speed_channel, speed_reference
 
-    check_option(method, "method", ("vkf", "cot"), error=ConfigError)
+    check_option(method, "method", ("auto", "vkf", "cot"), error=ConfigError)
     timings = {}
 
     def step(name):
@@ -541,10 +557,12 @@ def analyse(record, model, *, channel=None, speed_channel=None, orders=None, max
         # and the comparison says so (inconclusive)
         mid = 0.5 * (lo + hi)
         lo, hi = mid * 0.995, mid * 1.005
-    t = np.arange(x.size) / fs
-    rate = np.abs(np.gradient(rpm_ok, t))
-    moving = rate > 0.2
-    sweep_rate = float(np.median(rate[moving])) if moving.any() else 0.0
+    from .autotrack import steady_speed, sweep_rate as _sweep_rate
+
+    # robust to speed noise: a constant-speed record has no sweep (0), not its noise's slope
+    steady_run = steady_speed(rpm_ok, fs)
+    sweep_rate = 0.0 if steady_run else _sweep_rate(rpm_ok, fs)
+    speed_arg = rpm if bool(np.all(ok)) else rpm_ok   # keeps the encoder angle when present
     all_orders = [float(o) for o in (system.default_orders() if orders is None else orders)
                   if o <= max_order + 1e-9 and o * hi / 60.0 < 0.4 * fs]
     if not all_orders:
@@ -576,7 +594,7 @@ def analyse(record, model, *, channel=None, speed_channel=None, orders=None, max
         bandwidth_orders = float(np.clip(0.25 * np.sqrt(max(sweep_rate, 1e-9) / 25.0),
                                          0.25, 0.5))
     step("order tracking")
-    track = _track(x, fs, rpm_ok, orders, method=method, bandwidth_orders=bandwidth_orders,
+    track = _track(x, fs, speed_arg, orders, method=method, bandwidth_orders=bandwidth_orders,
                    revolutions=revolutions)
     if method == "vkf" and track.sizes.get("time", 0) > 100:
         # the filter's ends are not settled: drop one time constant 1/B at each end
@@ -585,6 +603,16 @@ def analyse(record, model, *, channel=None, speed_channel=None, orders=None, max
         keep = (tt >= tt[0] + edge) & (tt <= tt[-1] - edge)
         if keep.sum() > 0.5 * tt.size:
             track = track.isel(time=keep)
+    steady_table = None
+    if steady_run:
+        from .steady import steady_orders
+
+        try:
+            steady_table = steady_orders(x, fs=fs, speed_rpm=speed_arg, orders=orders,
+                                         amplitude=track.attrs.get("amplitude_convention",
+                                                                   "peak"))
+        except AnalysisError as exc:
+            log.info("no steady-state order table: %s", exc)
     done("order tracking")
 
     step("resonances")
@@ -615,13 +643,11 @@ def analyse(record, model, *, channel=None, speed_channel=None, orders=None, max
         "sample rate (Hz)": fs, "orders predicted": ", ".join(f"{o:g}" for o in all_orders),
         "order tracking": track.attrs.get("method", method),
         "amplitude convention": track.attrs.get("amplitude_convention", "peak"),
-        "VKF bandwidth (orders)" if method == "vkf" else "COT block (revolutions)":
-            bandwidth_orders if method == "vkf" else revolutions,
-        "order resolution": (f"{bandwidth_orders:g} orders (−3 dB)" if method == "vkf"
-                             else f"{1 / revolutions:g} orders"),
-        "window": track.attrs.get("window", "— (VKF)" if method == "vkf" else "hann"),
+        **_tracking_settings(track, method, bandwidth_orders, revolutions),
+        "phase reference": track.attrs.get("phase_reference", ""),
+        "channel trend": track.attrs.get("trend", ""),
         "speed range (rpm)": f"{lo:.1f} – {hi:.1f}",
-        "sweep rate (rpm/s, median)": sweep_rate,
+        "sweep rate (rpm/s, median)": "steady (no sweep)" if steady_run else sweep_rate,
         "estimated sweep peak loss (max over resonances)": max(
             (r.sweep_peak_loss for r in resonances if np.isfinite(r.sweep_peak_loss)),
             default=0.0),
@@ -640,7 +666,32 @@ def analyse(record, model, *, channel=None, speed_channel=None, orders=None, max
         speed_range_rpm=(lo, hi), sweep_rate_rpm_per_s=sweep_rate, track=track,
         resonances=resonances, predicted=predicted, response=response_da,
         comparison=comparison, limits=tuple(limits), system=system, record=rec,
-        settings=settings, timings=timings, balance=tuple(balance))
+        settings=settings, timings=timings, balance=tuple(balance), steady_orders=steady_table)
+
+
+def _tracking_settings(track, method, bandwidth_orders, revolutions) -> dict:
+    """The order tracker's settings, and why, for the report and --json."""
+    if method == "auto":
+        rng = track.attrs.get("auto_bandwidth_hz_range", [float("nan")] * 2)
+        err = track.attrs.get("auto_expected_error", [])
+        orders = track["order"].values
+        return {"VKF bandwidth (Hz, chosen from the record)": f"{rng[0]:.3g} – {rng[1]:.3g}",
+                "tracking settings (auto)": track.attrs.get("auto_settings", ""),
+                "expected amplitude error (max, per order)": ", ".join(
+                    f"{o:g}: {100 * e:.2g} %" for o, e in zip(orders, err)),
+                "window": "— (VKF)"}
+    if method == "vkf":
+        return {"VKF bandwidth (orders)": bandwidth_orders,
+                "order resolution": f"{bandwidth_orders:g} orders (−3 dB)", "window": "— (VKF)",
+                "bandwidth chosen because": "sweep rate R: 0.25 orders up to 25 rpm/s, then "
+                                            "0.25·√(R/25) up to 0.5 (a resonance crossed fast "
+                                            "needs a wider filter to keep its peak)",
+                "expected amplitude error (max, per order)": ", ".join(
+                    f"{o:g}: ±{np.nanmax(u):.3g}" for o, u in zip(
+                        track["order"].values, track["amplitude_uncertainty"].values))
+                if "amplitude_uncertainty" in track else "—"}
+    return {"COT block (revolutions)": revolutions, "order resolution": f"{1 / revolutions:g} "
+            "orders", "window": track.attrs.get("window", "hann")}
 
 
 def _balance(rec, system, lo, hi, orders=(1.0, 2.0)):
@@ -799,7 +850,8 @@ def _limit_checks(rec, system, track, grid, pred_stress, response, orders, chann
         for jt, q in enumerate(np.asarray(track["order"].values, float)):
             j = int(np.argmin(np.abs(np.asarray(orders) - q)))
             meas = np.full(centre.size, -np.inf)
-            np.maximum.at(meas, idx, tracked[jt])
+            fin = np.isfinite(tracked[jt])          # unsettled filter ends are NaN
+            np.maximum.at(meas, idx[fin], tracked[jt][fin])
             meas[~np.isfinite(meas)] = np.nan
             pred = np.interp(centre, grid, pred_amp[:, j])
             ok = np.isfinite(meas) & (pred >= 0.05 * pred_amp[:, j].max()) & (pred > 0)

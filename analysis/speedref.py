@@ -208,12 +208,17 @@ def _channel_angle(var, name, t_in):
 
 
 def _pulse_reference_channel(record, exclude=None):
-    """A pulse train with a TDC reference (gap or tdc attrs) to phase against, or None."""
-    for name in map(str, record.data_vars):
+    """A pulse train with a TDC reference to phase against, or None: a wheel with a gap first,
+    then a once-per-revolution mark with a ``tdc_offset_deg``."""
+    candidates = [str(n) for n in record.data_vars
+                  if str(n) != exclude and _is_pulses(record[n])
+                  and record[n].attrs.get("pulses_per_rev") and record[n].shape[0] > 8]
+    for name in candidates:
+        if int(record[name].attrs.get("missing_teeth", 0) or 0) > 0:
+            return name
+    for name in candidates:
         var = record[name]
-        if name != exclude and _is_pulses(var) and var.attrs.get("pulses_per_rev") and \
-                var.shape[0] > 8 and (int(var.attrs.get("missing_teeth", 0) or 0) > 0
-                                      or "tdc_offset_deg" in var.attrs):
+        if int(var.attrs.get("pulses_per_rev")) == 1 and "tdc_offset_deg" in var.attrs:
             return name
     return None
 

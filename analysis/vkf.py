@@ -534,31 +534,17 @@ def vold_kalman(x, *, fs=None, speed_rpm, orders, bandwidth_hz=None, bandwidth_o
 def _uncertainty(env, residual, fs_d, orders, rpm_d, bw_d, p, f_pass):
     """(noise, smearing) per sample and order, both 1-σ-like amplitudes in signal units.
 
-    Noise: ``sqrt(N0 · ENBW)`` with ``N0`` the residual's one-sided density at each order's
-    frequency (Welch, interpolated). Smearing: for a Lorentzian envelope of half-power crossing
-    time ``T`` the relative peak loss is ``K_p/(πTB)^{2p}``; ``T`` follows from the solved
-    envelope as ``T² = 8|A|/|A''|``, i.e. loss ``K_p (|A''|/(8|A|))^p/(πB)^{2p}``, with the
-    noise part of ``|A''|²`` removed first."""
-    from scipy.signal import welch
-
+    Noise: ``sqrt(N0 · ENBW)`` with ``N0`` the residual's one-sided density beside each order,
+    local in time and frequency: short-time spectra of the residual (frames of at least 2 s),
+    median over the bins within ±max(8 B, 20 bins) of the order's frequency outside its own
+    notch (±2 B) — the median is robust to the lines of orders not tracked that pass by —
+    divided by ln 2 (median of an exponential variable). Smearing: for a Lorentzian envelope of
+    half-power crossing time ``T`` the relative peak loss is ``K_p/(πTB)^{2p}``; ``T`` follows
+    from the solved envelope as ``T² = 8|A|/|A''|``, i.e. loss
+    ``K_p (|A''|/(8|A|))^p/(πB)^{2p}``, with the noise part of ``|A''|²`` removed first."""
     nd, k = env.shape
-    freq, psd = welch(residual, fs_d, nperseg=min(4096, nd))
     f_ord = orders[None, :] * (rpm_d if rpm_d.ndim == 2 else rpm_d[:, None]) / 60.0
-    n0 = np.empty_like(f_ord)
-    step = float(freq[1] - freq[0]) if freq.shape[0] > 1 else fs_d
-    for j in range(k):
-        # the filter notches the residual at the order: its level is read beside the notch
-        # (median over ±max(8 B, 20 bins), outside ±2 B), on a grid of the order's frequencies
-        b = float(np.median(bw_d[:, j]))
-        reach = max(8.0 * b, 20.0 * step)
-        grid = np.unique(np.quantile(f_ord[:, j], np.linspace(0.0, 1.0, 33)))
-        level = np.empty(grid.shape[0])
-        flat = (freq > 0) & (freq <= f_pass)               # the decimation filter's flat band
-        fallback = float(np.median(psd[flat])) if flat.any() else float(np.median(psd))
-        for i, f0 in enumerate(grid):
-            near = flat & (np.abs(freq - f0) <= reach) & (np.abs(freq - f0) > 2.0 * b)
-            level[i] = float(np.median(psd[near])) if near.sum() >= 5 else fallback
-        n0[:, j] = np.interp(f_ord[:, j], grid, level)
+    n0 = _local_noise(residual, fs_d, f_ord, bw_d, f_pass)
     noise = np.sqrt(n0 * enbw_hz(bw_d, p))
     if nd < 8:
         return noise, np.zeros_like(noise)
@@ -589,6 +575,37 @@ def _uncertainty(env, residual, fs_d, orders, rpm_d, bw_d, p, f_pass):
         loss = smearing_constant(p) * (ratio / 8.0) ** p / (np.pi * bw) ** (2 * p)
         out[:, j] = np.minimum(loss, 1.0) * amp[:, j]
     return noise, out
+
+
+def _local_noise(residual, fs_d, f_ord, bw_d, f_pass):
+    """One-sided noise density (units²/Hz) of the residual beside each order, per sample."""
+    nd, k = f_ord.shape
+    length = int(2 ** np.ceil(np.log2(max(64.0, 2.0 * fs_d))))
+    length = min(length, int(2 ** np.floor(np.log2(max(64, nd)))))
+    hop = length // 2
+    starts = np.arange(0, max(1, nd - length + 1), hop)
+    win = np.hanning(length + 1)[:length]
+    frames = residual[starts[:, None] + np.arange(min(length, nd))[None, :]]
+    if frames.shape[1] < length:                       # a record shorter than one frame
+        win = np.hanning(frames.shape[1] + 1)[:frames.shape[1]]
+    spec = np.abs(np.fft.rfft(frames * win, axis=1)) ** 2 * (2.0 / (fs_d * np.sum(win ** 2)))
+    freq = np.fft.rfftfreq(frames.shape[1], 1.0 / fs_d)
+    df = float(freq[1]) if freq.shape[0] > 1 else fs_d
+    centre = starts + 0.5 * frames.shape[1]
+    flat = (freq > 0) & (freq <= f_pass)
+    out = np.empty((nd, k))
+    for j in range(k):
+        b = float(np.median(bw_d[:, j]))
+        reach = max(8.0 * b, 20.0 * df)
+        level = np.empty(starts.shape[0])
+        f_frame = np.interp(centre, np.arange(nd), f_ord[:, j])
+        for i, f0 in enumerate(f_frame):
+            near = flat & (np.abs(freq - f0) <= reach) & (np.abs(freq - f0) > 2.0 * b)
+            if near.sum() < 5:
+                near = flat
+            level[i] = float(np.median(spec[i, near])) / np.log(2.0) if near.any() else 0.0
+        out[:, j] = np.interp(np.arange(nd), centre, level)
+    return out
 
 
 def _moving_mean(x, length):

@@ -80,7 +80,10 @@ def sdof_sweep(rate_rpm_s: float, *, natural_frequency: float = 100.0, q_factor:
 
 
 def _peak(rpm: np.ndarray, amp: np.ndarray) -> tuple[float, float]:
-    """Peak value and rpm by a parabola through the largest sample and its neighbours."""
+    """Peak value and rpm by a parabola through the largest sample and its neighbours (NaN
+    results, e.g. unsettled filter ends, are ignored)."""
+    ok = np.isfinite(amp)
+    rpm, amp = np.asarray(rpm)[ok], np.asarray(amp)[ok]
     i = int(np.argmax(amp))
     if 0 < i < amp.shape[0] - 1:
         y0, y1, y2 = amp[i - 1: i + 2]
