@@ -418,7 +418,7 @@ def auto_track(context, *, orders, bandwidth_hz=None, bandwidth_orders=None,
     tt = ds["time"].values
     near_end = np.minimum(tt - tt[0], tt[-1] - tt)[None, :] < 1.0 / bw_used
     if near_end.any():
-        for name in ("amplitude", "phase", "amplitude_uncertainty"):
+        for name in ("amplitude", "phase", "amplitude_uncertainty", "amplitude_noise"):
             ds[name] = ds[name].where(~near_end)
         ds.attrs["unsettled_ends"] = "results within 1/B of the record's ends are NaN"
 

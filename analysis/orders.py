@@ -489,6 +489,9 @@ def _vkf_dataset(res, context, orders):
                                    * factor, {"units": context["units"], "long_name":
                                               "1-sigma amplitude uncertainty (noise and "
                                               "envelope smearing)"})
+    ds["amplitude_noise"] = (("order", "time"), res["amplitude_noise"].values * factor,
+                             {"units": context["units"], "long_name":
+                              "1-sigma amplitude noise (its part of the uncertainty)"})
     ds.attrs.update(res.attrs)
     ds.attrs["phase_reference"] = context["reference"]
     return ds

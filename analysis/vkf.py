@@ -537,8 +537,9 @@ def _uncertainty(env, residual, fs_d, orders, rpm_d, bw_d, p, f_pass):
     Noise: ``sqrt(N0 · ENBW)`` with ``N0`` the residual's one-sided density beside each order,
     local in time and frequency: short-time spectra of the residual (frames of at least 2 s),
     median over the bins within ±max(8 B, 20 bins) of the order's frequency outside its own
-    notch (±2 B) — the median is robust to the lines of orders not tracked that pass by —
-    divided by ln 2 (median of an exponential variable). Smearing: for a Lorentzian envelope of
+    notch (±2 B): the lower quartile divided by ln(4/3) (quartile of an exponential variable),
+    robust to the lines of orders not tracked that pass by (up to three quarters of the
+    bins). Smearing: for a Lorentzian envelope of
     half-power crossing time ``T`` the relative peak loss is ``K_p/(πTB)^{2p}``; ``T`` follows
     from the solved envelope as ``T² = 8|A|/|A''|``, i.e. loss
     ``K_p (|A''|/(8|A|))^p/(πB)^{2p}``, with the noise part of ``|A''|²`` removed first."""
@@ -603,7 +604,10 @@ def _local_noise(residual, fs_d, f_ord, bw_d, f_pass):
             near = flat & (np.abs(freq - f0) <= reach) & (np.abs(freq - f0) > 2.0 * b)
             if near.sum() < 5:
                 near = flat
-            level[i] = float(np.median(spec[i, near])) / np.log(2.0) if near.any() else 0.0
+            # lower quartile of an exponential variable: ln(4/3) of its mean (robust to up to
+            # three quarters of the bins holding lines of orders not tracked)
+            level[i] = (float(np.percentile(spec[i, near], 25.0)) / np.log(4.0 / 3.0)
+                        if near.any() else 0.0)
         out[:, j] = np.interp(np.arange(nd), centre, level)
     return out
 

@@ -158,7 +158,9 @@ def test_a_stop_is_tracked_around_and_named(method):
     assert np.any(tt < 3.0) and np.any(tt > 3.5)
     amp = res.amplitude.values[0]
     inner = ((tt > 0.3) & (tt < 2.7)) | ((tt > 3.8) & (tt < 7.7))
-    assert np.abs(amp[inner] - 1.0).max() < 1e-3
+    # (the automatic tracker leaves its unsettled ends, within 1/B of each span, NaN)
+    assert np.isfinite(amp[inner]).mean() > 0.6
+    assert np.nanmax(np.abs(amp[inner] - 1.0)) < 1e-3
 
 
 @pytest.mark.parametrize("method", ["cot", "vkf"])
