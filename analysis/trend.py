@@ -179,9 +179,12 @@ def remove_trend(values: np.ndarray, fs: float, *, phi: np.ndarray, speed_rpm: n
     info = {"kind": "none", "scale": 0.0, "offset": 0.0, "removed": "nothing before tracking"}
     if kind == "none":
         return values, info
+    # the tests on about 4000 samples (a fit of a line needs no more; cheap on a long record)
+    step = max(1, values.shape[0] // 4000)
+    sub = slice(None, None, step)
     if kind in ("auto", "angle ramp"):
         # a cheap test on the raw reference first; the cycle average only when it may apply
-        if kind == "angle ramp" or _is_ramp(_fit(values, phi)):
+        if kind == "angle ramp" or _is_ramp(_fit(values[sub], phi[sub])):
             smooth = cycle_average(phi, phi, fs)
             ramp = _fit(values, smooth)
             if kind == "angle ramp" or _is_ramp(ramp):
@@ -193,8 +196,10 @@ def remove_trend(values: np.ndarray, fs: float, *, phi: np.ndarray, speed_rpm: n
                          "order tracking", quantity or "", f", {units}" if units else "", s)
                 return values - (s * smooth + c), info
     if kind in ("auto", "speed mean"):
-        omega = speed_rpm * (_TWO_PI / 60.0)
-        if kind == "speed mean" or _carries_speed(values, omega, _fit(values, omega)):
+        omega_sub = speed_rpm[sub] * (_TWO_PI / 60.0)
+        if kind == "speed mean" or _carries_speed(values[sub], omega_sub,
+                                                  _fit(values[sub], omega_sub)):
+            omega = speed_rpm * (_TWO_PI / 60.0)
             smooth = cycle_average(omega, phi, fs)
             fit = _fit(values, smooth)
             if kind == "speed mean" or _carries_speed(values, smooth, fit):

@@ -161,7 +161,10 @@ def _decimate(values: np.ndarray, fs: float, f_max: float):
     half = int(math.ceil(_aa_half_length(f_max, f_stop) * fs)) + 1
     if values.shape[0] <= 2 * half + 4 * q:
         return values, np.arange(values.shape[0]), fs
-    filtered = _fft_lowpass(values, fs, f_max, f_stop, q)
+    from .resample import _good_size
+
+    n_out = _good_size(-(-values.shape[0] // q))
+    filtered = _fft_lowpass(values, fs, f_max, f_stop, q * n_out, n_out)
     first = -(-half // q)                          # first complete output
     last = (values.shape[0] - 1 - half) // q        # last complete output
     index = q * np.arange(first, last + 1)
@@ -225,31 +228,31 @@ def _assemble(basis, x, q, w, n_coef, weights, p):
     size = n_coef * m
     pairs, slot_pairs, rows, col_off, src_slot, src_pair = _layout(m, s, u)
     prod = basis[:, pairs[:, 0]] * basis[:, pairs[:, 1]]            # (N, P)
-    span = int(np.max(np.bincount(q))) if s > 1 else 1              # samples per knot interval
     groups = int(q[-1]) + 1
     if s > 1:
-        # sample i sits at position i - span*q_i of its interval: uniform knots
+        span = int(np.max(np.bincount(q)))
+        # sample i sits at position i - span*q_i of its knot interval (uniform knots): lay the
+        # products out as (position, interval, pair) and sum each interval with the spline
+        # weights of every position in one matrix product
         pos = np.arange(n) - span * q
-        full = np.zeros((groups * span, prod.shape[1]))
-        full[q * span + pos] = prod
-        wp = np.stack([w[:, a] * w[:, b] for a, b in slot_pairs], axis=1)   # (N, S)
-        wpat = np.zeros((span, len(slot_pairs)))
-        wpat[pos[:span]] = wp[:span]
-        # (groups, span, P) x (span, S) -> (groups, S, P)
-        sums = np.einsum("gsp,sa->gap", full.reshape(groups, span, -1), wpat, optimize=True)
-        xr = np.zeros((groups * span, m))
-        xr[q * span + pos] = basis * x[:, None]
-        wv = np.zeros((span, s))
-        wv[pos[:span]] = w[:span]
-        rsum = np.einsum("gsj,sa->gaj", xr.reshape(groups, span, m), wv, optimize=True)
+        lay = np.zeros((span, groups, prod.shape[1]))
+        lay[pos, q] = prod
+        wpat = np.zeros((len(slot_pairs), span))
+        wpat[:, pos[:span]] = np.stack([w[:span, a] * w[:span, b] for a, b in slot_pairs])
+        sums = (wpat @ lay.reshape(span, -1)).reshape(len(slot_pairs), groups, -1)
+        lay_x = np.zeros((span, groups, m))
+        lay_x[pos, q] = basis * x[:, None]
+        wv = np.zeros((s, span))
+        wv[:, pos[:span]] = w[:span].T
+        rsum = (wv @ lay_x.reshape(span, -1)).reshape(s, groups, m)
     else:
-        sums = prod[:, None, :]
-        rsum = (basis * x[:, None])[:, None, :]
-    # scatter: entry (row, (g + 0) m + col_off) gets sums[g, src_slot, src_pair]
+        sums = prod[None]                                            # (1, N, P)
+        rsum = (basis * x[:, None])[None]                            # (1, N, m)
+    # scatter: entry (row, g m + col_off) gets sums[src_slot, g, src_pair]
     g = np.arange(groups)
     flat_cols = (g[:, None] * m + col_off[None, :]).ravel()
     flat_rows = np.broadcast_to(rows, (groups, rows.shape[0])).ravel()
-    vals = sums[:, src_slot, src_pair].ravel()
+    vals = sums[src_slot, :, src_pair].T.ravel()
     ab = np.bincount(flat_rows * size + flat_cols, weights=vals,
                      minlength=(u + 1) * size).reshape(u + 1, size)
     c = _DIFF[p]
@@ -258,7 +261,7 @@ def _assemble(basis, x, q, w, n_coef, weights, p):
         for b in range(a, p + 1):
             cols = ((rowsd[:, None] + b) * m + np.arange(m)[None, :]).ravel()
             ab[u - (b - a) * m, cols] += c[a] * c[b] * weights.ravel()
-    rhs = np.bincount(((g[:, None, None] + np.arange(s)[None, :, None]) * m
+    rhs = np.bincount(((g[None, :, None] + np.arange(s)[:, None, None]) * m
                        + np.arange(m)[None, None, :]).ravel(), weights=rsum.ravel(),
                       minlength=size)
     return ab, rhs
@@ -316,7 +319,10 @@ def _solve_block(x, phase, knot_weights, p, m, trend):
 
 
 def _bandwidths(bandwidth_hz, bandwidth_orders, orders, speeds, n):
-    """Bandwidth (K, N) in Hz against time and a description."""
+    """Bandwidth in Hz against time: ``(at, top, low, kind)`` with ``at(index)`` the (len,
+    K) bandwidths at those samples, ``top``/``low`` the largest/smallest per order, and a
+    description (the full (K, N) array is never built for a constant or speed-proportional
+    bandwidth)."""
     k = orders.shape[0]
     if bandwidth_hz is not None and bandwidth_orders is not None:
         raise AnalysisError("give bandwidth_hz or bandwidth_orders, not both")
@@ -330,15 +336,20 @@ def _bandwidths(bandwidth_hz, bandwidth_orders, orders, speeds, n):
                                     f"= ({k}, {n}), got {arr.shape}")
             if not np.isfinite(arr).all() or arr.min() <= 0:
                 raise AnalysisError("bandwidth_hz must be finite and > 0")
-            return arr, f"per order against time, {arr.min():.4g}..{arr.max():.4g} Hz"
+            return (lambda idx: arr[:, idx].T, arr.max(axis=1), arr.min(axis=1),
+                    f"per order against time, {arr.min():.4g}..{arr.max():.4g} Hz")
         bw = np.broadcast_to(arr, (k,)).copy()
         for i, b in enumerate(bw):
             check_positive(b, f"bandwidth_hz[{i}]", error=AnalysisError)
-        return np.repeat(bw[:, None], n, axis=1), f"{bw.tolist()} Hz (constant)"
+        return (lambda idx: np.broadcast_to(bw, (np.size(idx), k)).copy(), bw, bw,
+                f"{bw.tolist()} Hz (constant)")
     bo = np.broadcast_to(np.asarray(bandwidth_orders, float), (k,)).copy()
     for i, b in enumerate(bo):
         check_positive(b, f"bandwidth_orders[{i}]", error=AnalysisError)
-    return bo[:, None] * speeds / 60.0, f"{bo.tolist()} orders (∝ speed)"
+    return (lambda idx: (bo[:, None] * speeds[:, idx] / 60.0).T if speeds.shape[0] == k
+            else bo[None, :] * speeds[0, idx][:, None] / 60.0,
+            bo * speeds.max(axis=1) / 60.0, bo * speeds.min(axis=1) / 60.0,
+            f"{bo.tolist()} orders (∝ speed)")
 
 
 @renamed(rpm="speed_rpm")
@@ -436,9 +447,9 @@ def vold_kalman(x, *, fs=None, speed_rpm, orders, bandwidth_hz=None, bandwidth_o
             angle = _as_angle(speed_rpm.coords["shaft_angle"].values, n)
     speed_at = (lambda i: single if i is None else single[i]) if speeds is None else None
     top_speed = single.max() if speeds is None else speeds.max(axis=1)
-    bw_t, kind = _bandwidths(bandwidth_hz, bandwidth_orders, orders,
-                             single[None, :] if speeds is None else speeds, n)
-    f_max = float(np.max(orders * top_speed / 60.0 + bw_t.max(axis=1)))
+    bw_at, bw_top, bw_low, kind = _bandwidths(bandwidth_hz, bandwidth_orders, orders,
+                                              single[None, :] if speeds is None else speeds, n)
+    f_max = float(np.max(orders * top_speed / 60.0 + bw_top))
     if f_max >= 0.5 * fs:
         raise AnalysisError(f"the highest order frequency {f_max:.6g} Hz is above the Nyquist "
                             f"frequency {0.5 * fs:.6g} Hz of {label}")
@@ -456,7 +467,7 @@ def vold_kalman(x, *, fs=None, speed_rpm, orders, bandwidth_hz=None, bandwidth_o
         phase = np.stack([_integrate_speed(s, fs)[index] for s in speeds], axis=1) * orders
         rpm_d = speeds[0, index]
         low_speed = float(speeds[:, index].min())
-    bw_d = bw_t[:, index].T                                    # (Nd, K)
+    bw_d = bw_at(index)                                        # (Nd, K)
     if (bw_d >= fs_d).any():
         raise AnalysisError(f"bandwidth up to {bw_d.max():.6g} Hz is too wide for the solve rate "
                             f"{fs_d:.6g} Hz")
@@ -519,7 +530,7 @@ def vold_kalman(x, *, fs=None, speed_rpm, orders, bandwidth_hz=None, bandwidth_o
         attrs={"method": "Vold-Kalman filter (joint with an order-0 trend, banded Cholesky)"
                          if trend else "Vold-Kalman filter (joint, banded Cholesky)",
                "channel": label, "bandwidth": kind, "filter_order": p,
-               "bandwidth_hz_min": float(bw_t.min()), "bandwidth_hz_max": float(bw_t.max()),
+               "bandwidth_hz_min": float(np.min(bw_low)), "bandwidth_hz_max": float(np.max(bw_top)),
                "trend_bandwidth_hz": b_trend if trend else float("nan"),
                "solve_rate_hz": fs_d, "decimation": int(round(fs / fs_d)),
                "block_samples": block, "overlap_samples": overlap, "knot_spacing_samples": m,
