@@ -127,8 +127,10 @@ class Excitation:
     Attributes
     ----------
     orders : ndarray (n_o,)
-    gas : ndarray (n_o,), complex
-        Gas-torque harmonics G_q, N·m.
+    gas : ndarray (n_o,) or (n_o, n_cylinders), complex
+        Gas-torque harmonics G_q, N·m, each in its cylinder's own crank angle from firing
+        TDC: one set shared by all cylinders, or one column per cylinder (measured pressure
+        of each cylinder, :func:`predict.gas_torque.excitation_from_pressure`).
     inertia : ndarray (n_o,), complex
         Inertia-torque harmonics per unit ω², N·m·s² (``T_q = G_q + Ω² I_q``).
     n_cylinders : int
@@ -170,22 +172,28 @@ class Excitation:
                 raise ModelError(f"order {q:g} is not in the excitation (orders "
                                  f"{self.orders.min():g}..{self.orders.max():g})")
             idx.append(hit[0])
-        g, i = self.gas[idx], self.inertia[idx]
-        out = g[None, :, None] + (omega ** 2)[:, None, None] * i[None, :, None]
-        out = np.repeat(out, self.n_cylinders, axis=2)
+        g = self.gas[idx]
+        g = np.repeat(g[:, None], self.n_cylinders, axis=1) if g.ndim == 1 else g
+        out = g[None] + (omega ** 2)[:, None, None] * self.inertia[idx][None, :, None]
         if misfire is not None:
             c = check_int(misfire, "misfire", minimum=1, error=ModelError)
             if c > self.n_cylinders:
                 raise ModelError(f"misfire={c} but the engine has {self.n_cylinders} cylinders")
-            out[:, :, c - 1] -= g[None, :]
+            out[:, :, c - 1] -= g[None, :, c - 1]
         return out
+
+    @property
+    def gas_mean(self) -> np.ndarray:
+        """Gas harmonics averaged over the cylinders (the shared set when there is one), N·m."""
+        return self.gas if self.gas.ndim == 1 else self.gas.mean(axis=1)
 
     def to_frame(self):
         """Orders with |G_q|, |I_q| and phases (deg)."""
         import pandas as pd
 
-        return pd.DataFrame({"order": self.orders, "gas_nm": np.abs(self.gas),
-                             "gas_phase_deg": np.rad2deg(np.angle(self.gas)),
+        g = self.gas_mean
+        return pd.DataFrame({"order": self.orders, "gas_nm": np.abs(g),
+                             "gas_phase_deg": np.rad2deg(np.angle(g)),
                              "inertia_nm_s2": np.abs(self.inertia),
                              "inertia_phase_deg": np.rad2deg(np.angle(self.inertia))})
 
@@ -197,10 +205,11 @@ class Excitation:
             fig, ax = plt.subplots(figsize=(7, 3.5))
         else:
             fig = ax.figure
-        ax.bar(self.orders - 0.1, np.abs(self.gas), width=0.2, label="gas")
+        g = self.gas_mean
+        ax.bar(self.orders - 0.1, np.abs(g), width=0.2, label="gas")
         if speed_rpm is not None:
             w = speed_rpm * np.pi / 30
-            ax.bar(self.orders + 0.1, np.abs(self.gas + w * w * self.inertia), width=0.2,
+            ax.bar(self.orders + 0.1, np.abs(g + w * w * self.inertia), width=0.2,
                    label=f"gas + inertia at {speed_rpm:g} rpm")
         ax.set_xlabel("order")
         ax.set_ylabel("|T_q| [N m]")
