@@ -39,7 +39,8 @@ Sensor keys by kind: *torsiograph* ``node``, ``quantity``, ``sample_rate``; *enc
 ``output = "pulses" | "analogue"`` (``sample_rate`` for the analogue pick-up voltage);
 *vibrograph* ``point = [x, y, z]`` or ``mount = "name"``, ``direction`` (x/y/z),
 ``quantity`` (acceleration/velocity/displacement), ``sample_rate``; *pressure* ``cylinder``,
-``sample_rate``; *speed* ``sample_rate``. Torsiograph and vibrograph sensors may give a
+``sample_rate`` and the transducer errors of :mod:`.pressure` (``offset``, ``thermal_shock``,
+``thermal_shock_deg``, ``tdc_error_deg``, ``cycle_variation``); *speed* ``sample_rate``. Torsiograph and vibrograph sensors may give a
 seismic instrument, ``instrument_frequency`` (Hz) and ``instrument_damping`` (fraction of
 critical, default 0.65): the channel is then the instrument's reading
 (:mod:`measure.instruments`: a seismic torsiograph/vibrograph for angles and displacements, a
@@ -72,7 +73,8 @@ SENSOR_KINDS = {
               "sample_rate", "location"),
     "vibrograph": ("point", "mount", "direction", "quantity", "sample_rate", "location",
                    "instrument_frequency", "instrument_damping"),
-    "pressure": ("cylinder", "sample_rate", "location"),
+    "pressure": ("cylinder", "sample_rate", "location", "offset", "thermal_shock",
+                 "thermal_shock_deg", "tdc_error_deg", "cycle_variation"),
     "speed": ("sample_rate", "location"),
 }
 
@@ -363,8 +365,11 @@ def _sensor(t: Table, defaults: Imperfections) -> SensorSpec:
                                  options=["acceleration", "velocity", "displacement"])
         p["sample_rate"] = t.positive("sample_rate")
     if kind == "pressure":
+        from .pressure import TransducerErrors
+
         p["cylinder"] = t.integer("cylinder", 1, minimum=1)
         p["sample_rate"] = t.positive("sample_rate")
+        p["transducer"] = TransducerErrors.from_table(t)
     if kind == "speed":
         p["sample_rate"] = t.positive("sample_rate")
     if kind in ("torsiograph", "vibrograph") and "instrument_frequency" in t:
