@@ -125,7 +125,9 @@ class IndicatorResult:
 
     @property
     def cov_imep(self) -> float:
-        """Coefficient of variation of the net IMEP, % (Heywood §9.4)."""
+        """Coefficient of variation of the net IMEP, % (Heywood §9.4; NaN without geometry)."""
+        if self.imep_net is None:
+            return float("nan")
         m = float(np.mean(self.imep_net))
         return float(100.0 * np.std(self.imep_net, ddof=1) / abs(m)) if (
             self.n_cycles > 1 and m != 0) else float("nan")
@@ -151,42 +153,44 @@ class IndicatorResult:
 
         hr = self.heat_release
         m = self.mean
-        return {
+        geo = self.imep_net is not None
+        out = {
             "channel": self.channel, "cylinder": self.cylinder, "cycle": self.cycle,
             "cycles": self.n_cycles, "speed_rpm": float(np.mean(self.speed_rpm)),
             "peak_pressure_bar": m["peak_pressure"] / BAR,
             "peak_angle_deg": float(np.rad2deg(m["peak_angle"])),
             "peak_pressure_bar_per_cycle": stats(self.peak_pressure, BAR),
             "peak_angle_deg_per_cycle": stats(np.rad2deg(self.peak_angle), 1.0),
-            "imep_net_bar": float(np.mean(self.imep_net)) / BAR,
-            "imep_gross_bar": float(np.mean(self.imep_gross)) / BAR,
-            "pmep_bar": float(np.mean(self.pmep)) / BAR,
-            "imep_net_bar_per_cycle": stats(self.imep_net, BAR),
-            "cov_imep_net_percent": self.cov_imep,
+            "imep_net_bar": float(np.mean(self.imep_net)) / BAR if geo else None,
+            "imep_gross_bar": float(np.mean(self.imep_gross)) / BAR if geo else None,
+            "pmep_bar": float(np.mean(self.pmep)) / BAR if geo else None,
+            "imep_net_bar_per_cycle": stats(self.imep_net, BAR) if geo else None,
+            "cov_imep_net_percent": self.cov_imep if geo else None,
             "peg": {"method": self.peg["method"],
                     "offset_bar": float(np.mean(self.peg["offset"])) / BAR,
                     "exponent": self.peg.get("exponent"), "note": self.peg.get("note", "")},
             "tdc": {"reference": self.tdc["reference"], "phase": self.tdc["phase"],
                     "applied_correction_deg": self.tdc["applied_deg"],
-                    "check": self.tdc["check"].to_dict()},
-            "heat_release": {"gamma": hr.gamma, "total_j": hr.total,
-                             "mfb10_deg": hr.mfb_deg[10], "mfb50_deg": hr.mfb_deg[50],
-                             "mfb90_deg": hr.mfb_deg[90]},
+                    "check": None if self.tdc["check"] is None else self.tdc["check"].to_dict()},
+            "heat_release": None if hr is None else {
+                "gamma": hr.gamma, "total_j": hr.total, "mfb10_deg": hr.mfb_deg[10],
+                "mfb50_deg": hr.mfb_deg[50], "mfb90_deg": hr.mfb_deg[90]},
             "warnings": list(self.warnings),
         }
+        return out
 
     def to_frame(self):
         """Per-cycle table: time, speed, peak (bar, deg), IMEP net/gross and PMEP (bar)."""
         import pandas as pd
 
-        return pd.DataFrame({"cycle": np.arange(1, self.n_cycles + 1),
-                             "time_s": self.cycle_time, "speed_rpm": self.speed_rpm,
-                             "peak_pressure_bar": self.peak_pressure / BAR,
-                             "peak_angle_deg": np.rad2deg(self.peak_angle),
-                             "imep_net_bar": self.imep_net / BAR,
-                             "imep_gross_bar": self.imep_gross / BAR,
-                             "pmep_bar": self.pmep / BAR,
-                             "peg_offset_bar": np.asarray(self.peg["offset"]) / BAR})
+        cols = {"cycle": np.arange(1, self.n_cycles + 1), "time_s": self.cycle_time,
+                "speed_rpm": self.speed_rpm, "peak_pressure_bar": self.peak_pressure / BAR,
+                "peak_angle_deg": np.rad2deg(self.peak_angle)}
+        if self.imep_net is not None:
+            cols.update(imep_net_bar=self.imep_net / BAR, imep_gross_bar=self.imep_gross / BAR,
+                        pmep_bar=self.pmep / BAR)
+        cols["peg_offset_bar"] = np.asarray(self.peg["offset"]) / BAR
+        return pd.DataFrame(cols)
 
     # ------------------------------------------------------------------ plots
     def plot(self, ax=None):
@@ -361,8 +365,8 @@ def _angle(record, *, angle_channel, tdc_channel, tdc_offset_deg):
     if tdc_channel is not None:
         marks = _mark_times(record, tdc_channel)
         off = 0.0 if given is None else float(given)
-        trace = angle_from_pulses(edges, pulses_per_rev=ppr, missing_teeth=missing,
-                                  reference_times=marks, tdc_offset_deg=off)
+        trace = _referenced(angle_from_pulses(edges, pulses_per_rev=ppr, missing_teeth=missing),
+                            marks, off, tdc_channel)
         return trace, (f"TDC mark channel {tdc_channel!r}" + (f" + {off:g} deg" if off else "")
                        + f"; angle from {angle_channel!r} ({ppr}-{missing} pulses/rev)"), True
     attr = record[angle_channel].attrs.get("tdc_offset_deg")
@@ -375,6 +379,30 @@ def _angle(record, *, angle_channel, tdc_channel, tdc_offset_deg):
                        "deg after it"), True
     trace = angle_from_pulses(edges, pulses_per_rev=ppr, missing_teeth=missing)
     return trace, f"no TDC reference; angle from {angle_channel!r} ({ppr}-{missing})", False
+
+
+def _referenced(trace, marks, offset_deg, name):
+    """Move the zero of ``trace`` to the TDC marks: their circular mean angle (mod 2π).
+
+    Averaging over every mark in the record removes the timing error of a single mark (a
+    mark two samples wide is located to about half a sample); the spread of the marks is
+    checked (a warning above 1°: a slipping or noisy mark).
+    """
+    from crankbench.measure.tacho import AngleTrace
+
+    inside = marks[(marks >= trace.time[0]) & (marks <= trace.time[-1])]
+    if inside.size == 0:
+        raise AnalysisError(f"TDC channel {name!r}: no mark falls within the pulse train "
+                            f"[{trace.time[0]:g}, {trace.time[-1]:g}] s")
+    z = np.exp(1j * trace.at(inside))
+    ref = float(np.angle(np.mean(z)))
+    spread = np.angle(z * np.exp(-1j * ref))
+    if inside.size > 1 and np.max(np.abs(spread)) > DEG:
+        log.warning("TDC channel %r: marks spread by %.2f deg (largest deviation); using their "
+                    "mean", name, np.rad2deg(np.max(np.abs(spread))))
+    tdc = ref + np.deg2rad(offset_deg)
+    return AngleTrace(time=trace.time, angle=trace.angle - tdc, pulses_per_rev=trace.pulses_per_rev,
+                      reference="reference mark", tdc_offset=float(np.deg2rad(offset_deg)))
 
 
 # ------------------------------------------------------------------------------ resampling
@@ -441,17 +469,23 @@ def _coarse_tdc(theta, p, period):
 def _peg(engine, psi, cycles, cylinder, *, peg, peg_pressure, window_deg, exponent):
     """Offsets per cycle and a description."""
     level = peg_pressure
-    if level is None and peg == "bdc":
+    if level is None and peg == "bdc" and engine is not None:
         level = engine.combustion.get("intake_pressure")
-        if level is None:
-            raise AnalysisError("peg='bdc' needs peg_pressure= (absolute pressure at intake "
-                                "BDC, Pa; CLI --peg-pressure-bar) or intake_pressure in the "
-                                "engine's [engine.combustion] table")
+    if level is None and peg == "bdc":
+        raise AnalysisError("peg='bdc' needs peg_pressure= (absolute pressure at intake BDC, "
+                            "Pa; CLI --peg-pressure-bar) or intake_pressure in the engine's "
+                            "[engine.combustion] table")
     if peg == "auto" and peg_pressure is not None:
         peg = "bdc"
     if peg == "none":
         return {"method": "none", "offset": np.zeros(len(cycles)),
                 "note": "the channel is taken as absolute pressure"}, None
+    if engine is None and peg != "bdc":
+        if peg == "polytropic":
+            raise AnalysisError("peg='polytropic' needs the engine model (cylinder volume)")
+        return {"method": "none", "offset": np.zeros(len(cycles)),
+                "note": "level not checked (no engine model; give peg_pressure= for the BDC "
+                        "peg)"}, None
     if peg == "bdc":
         off = thermo.peg_bdc(psi, cycles, level=float(level))
         return {"method": "bdc", "offset": off, "level": float(level),
@@ -489,15 +523,18 @@ def indicator_analysis(record, engine, *, channel=None, cylinder=None, angle_cha
                        peg_pressure=None, peg_window_deg=(-100.0, -35.0),
                        polytropic_exponent=None, tdc_correction=False,
                        tdc_window_deg=(-90.0, -25.0), loss_angle_deg=0.5, gamma=1.32,
-                       resolution_deg=0.1, max_cycles=None):
+                       resolution_deg=0.1, max_cycles=None, cycle=4):
     """Indicator analysis of one cylinder-pressure channel (see the module docstring).
 
     Parameters
     ----------
     record : xarray.Dataset or path-like
         A Record with a ``pressure`` channel and a crank-angle source.
-    engine : predict.engine.Engine or path-like
-        Engine model with bore, stroke (crank radius), rod length and compression ratio.
+    engine : predict.engine.Engine, path-like or None
+        Engine model with bore, stroke (crank radius), rod length and compression ratio (an
+        engine TOML or a shaft-line TOML naming one). Without it only what needs no geometry
+        is given: cycles, peak pressure and angle, BDC pegging; IMEP, PMEP, heat release,
+        the polytropic peg and the TDC check are left out (None) and a warning says so.
     channel : str, optional
         Pressure channel (default: the first one).
     cylinder : int, optional
@@ -533,6 +570,8 @@ def indicator_analysis(record, engine, *, channel=None, cylinder=None, angle_cha
         Crank-angle grid step, deg (divides 360).
     max_cycles : int, optional
         Analyse at most this many cycles (the first ones).
+    cycle : {2, 4}
+        Strokes, used only without an engine model.
 
     Returns
     -------
@@ -547,8 +586,11 @@ def indicator_analysis(record, engine, *, channel=None, cylinder=None, angle_cha
     from crankbench.measure.record import channel_time
 
     record = _load_record(record)
-    engine = _load_engine(engine)
-    thermo._check_engine(engine)
+    engine = None if engine is None else _load_engine(engine)
+    if engine is not None:
+        thermo._check_engine(engine)
+    elif cycle not in (2, 4):
+        raise AnalysisError(f"cycle={cycle!r} must be 2 or 4")
     peg = check_option(peg, "peg", ("auto", "bdc", "polytropic", "none"), error=AnalysisError)
     res = check_range(resolution_deg, "resolution_deg", 0.005, 2.0, error=AnalysisError)
     if abs(360.0 / res - round(360.0 / res)) > 1e-6:
@@ -564,14 +606,18 @@ def indicator_analysis(record, engine, *, channel=None, cylinder=None, angle_cha
                             f"channels: {', '.join(chans) or 'none'}")
     warnings = []
     cyl = _cylinder_of(record, channel, cylinder)
+    n_cyl = engine.n_cylinders if engine is not None else None
+    if engine is None:
+        warnings.append("no engine model: IMEP, PMEP, heat release, the polytropic peg and "
+                        "the TDC check need the cylinder geometry (engine=, CLI --model)")
     if cyl is None:
         cyl = 1
-        if engine.n_cylinders > 1:
+        if n_cyl is None or n_cyl > 1:
             warnings.append(f"channel {channel!r} names no cylinder; taken as cylinder 1 "
                             "(pass cylinder=)")
-    if not 1 <= cyl <= engine.n_cylinders:
+    if n_cyl is not None and not 1 <= cyl <= n_cyl:
         raise AnalysisError(f"channel {channel!r} is cylinder {cyl}, but the engine has "
-                            f"{engine.n_cylinders}")
+                            f"{n_cyl}")
     trace, reference, has_tdc = _angle(record, angle_channel=angle_channel,
                                        tdc_channel=tdc_channel, tdc_offset_deg=tdc_offset_deg)
     p = np.asarray(record[channel].values, float)
@@ -589,11 +635,20 @@ def indicator_analysis(record, engine, *, channel=None, cylinder=None, angle_cha
     if np.any(np.diff(theta) <= 0):
         raise AnalysisError("the crank angle does not increase steadily over the pressure "
                             "record (engine stopped or turning backwards?)")
-    period = np.pi * engine.cycle
+    strokes = engine.cycle if engine is not None else int(cycle)
+    period = np.pi * strokes
     n = int(round(np.rad2deg(period) / res))
     psi = -period / 2 + np.arange(n) * (period / n)
-    fire = float(np.deg2rad(engine.firing_angles_deg()[cyl - 1]))
+    fire = float(np.deg2rad(engine.firing_angles_deg()[cyl - 1])) if engine is not None else 0.0
+    if engine is None and cyl != 1:
+        warnings.append(f"no engine model: the firing offset of cylinder {cyl} is unknown; the "
+                        "TDC reference is taken as this cylinder's own")
     applied = 0.0
+    if not has_tdc and engine is None:
+        raise AnalysisError("no TDC reference (no TDC mark channel, no wheel-gap offset) and no "
+                            "engine model: locating TDC from the pressure needs the cylinder "
+                            "geometry; give tdc_offset_deg= (CLI --tdc-offset-deg) or the "
+                            "engine model (CLI --model)")
     if not has_tdc:
         base0 = _coarse_tdc(theta, p, period)
         phase_text = "TDC located from the pressure (highest mean pressure, then compression fit)"
@@ -618,6 +673,9 @@ def indicator_analysis(record, engine, *, channel=None, cylinder=None, angle_cha
         peg_info, peg_warn = _peg(engine, psi, cycles, cyl, peg=peg, peg_pressure=peg_pressure,
                                   window_deg=peg_window_deg, exponent=polytropic_exponent)
         pegged = cycles + np.asarray(peg_info["offset"])[:, None]
+        if engine is None:
+            check = None
+            break
         check = thermo.thermodynamic_tdc(engine, psi, pegged.mean(axis=0), cylinder=cyl,
                                          window_deg=tdc_window_deg,
                                          loss_angle_deg=loss_angle_deg, search_deg=search)
@@ -629,22 +687,27 @@ def indicator_analysis(record, engine, *, channel=None, cylinder=None, angle_cha
         break
     if peg_warn:
         warnings.append(peg_warn)
-    big = abs(check.offset_deg) > 1.0 and not (
+    big = check is not None and abs(check.offset_deg) > 1.0 and not (
         np.isfinite(check.standard_error) and abs(check.offset) < 3 * check.standard_error)
     if big and not tdc_correction:
         warnings.append(f"TDC check ({check.method}): the thermodynamic TDC lies "
                         f"{check.offset_deg:+.2f} deg from the reference; check the TDC mark "
                         "offset (tdc_offset_deg=) or pass tdc_correction=True")
-    mep = thermo.mean_effective_pressures(engine, psi, pegged, cylinder=cyl)
     pk = thermo.cycle_peaks(psi, pegged)
     mean_pk = thermo.cycle_peaks(psi, pegged.mean(axis=0))
-    volume = thermo.chamber_volume(engine, psi, cylinder=cyl)
-    hr = thermo.heat_release(engine, psi, pegged.mean(axis=0), cylinder=cyl, gamma=gamma)
+    if engine is not None:
+        mep = thermo.mean_effective_pressures(engine, psi, pegged, cylinder=cyl)
+        mep = {k: np.asarray(v) for k, v in mep.items()}
+        volume = thermo.chamber_volume(engine, psi, cylinder=cyl)
+        hr = thermo.heat_release(engine, psi, pegged.mean(axis=0), cylinder=cyl, gamma=gamma)
+    else:
+        mep = {"imep_net": None, "imep_gross": None, "pmep": None}
+        volume = hr = None
     result = IndicatorResult(
-        channel=channel, cylinder=cyl, cycle=engine.cycle, crank_angle=psi, pressure=pegged,
+        channel=channel, cylinder=cyl, cycle=strokes, crank_angle=psi, pressure=pegged,
         volume=volume, cycle_time=t_c, speed_rpm=rpm, peak_pressure=pk["pressure"],
-        peak_angle=pk["angle"], imep_net=np.asarray(mep["imep_net"]),
-        imep_gross=np.asarray(mep["imep_gross"]), pmep=np.asarray(mep["pmep"]), peg=peg_info,
+        peak_angle=pk["angle"], imep_net=mep["imep_net"], imep_gross=mep["imep_gross"],
+        pmep=mep["pmep"], peg=peg_info,
         tdc={"reference": reference, "phase": phase_text, "check": check,
              "applied_deg": float(applied)},
         heat_release=hr, warnings=tuple(warnings),
@@ -712,10 +775,26 @@ def _load_record(record):
 
 
 def _load_engine(engine):
+    """An Engine from an Engine, a torsional system with one, or an engine/shaft-line TOML."""
     if hasattr(engine, "piston_motion"):
         return engine
     if getattr(engine, "engine", None) is not None:              # a torsional system
         return engine.engine
+    import tomllib
+
     from crankbench.predict.engine import Engine
 
+    try:
+        with open(engine, "rb") as fh:
+            tables = tomllib.load(fh)
+    except (OSError, tomllib.TOMLDecodeError):
+        tables = {"engine": True}          # let Engine.from_toml report the problem
+    if "engine" not in tables and "shaftline" in tables:
+        from crankbench.predict.torsion import from_toml
+
+        system = from_toml(engine)
+        if getattr(system, "engine", None) is None:
+            raise AnalysisError(f"{engine}: the shaft line names no engine model; the indicator "
+                                "analysis needs the cylinder geometry ([engine] table)")
+        return system.engine
     return Engine.from_toml(engine)
