@@ -259,7 +259,7 @@ def peg_bdc(crank_angle, pressure, *, level, window_deg=10.0):
     return float(level) - p[:, sel].mean(axis=1)
 
 
-def _fit_compression(v, p, *, n=None, delta_slope=None, fit_offset=True):
+def _fit_compression(v, p, *, n=None, delta_bound=0.7, fit_offset=True):
     """Least squares p + Δp = C V^{-n}, optionally with an angle shift (Gauss–Newton).
 
     ``v`` is a callable δ -> V(ψ − δ) when the shift is fitted, else an array. Returns dict
@@ -294,8 +294,8 @@ def _fit_compression(v, p, *, n=None, delta_slope=None, fit_offset=True):
         res, coef = inner(n, 0.0)
         return {"n": n, "delta": 0.0, "C": coef[0], "offset": coef[1] if fit_offset else 0.0,
                 "rms": float(np.sqrt(np.mean(res ** 2))), "delta_se": np.nan, "n_se": np.nan}
-    lo = np.array([1.0, -0.7])[free]
-    hi = np.array([1.8, 0.7])[free]
+    lo = np.array([1.0, -delta_bound])[free]
+    hi = np.array([1.8, delta_bound])[free]
     sol = least_squares(lambda x: inner(*unpack(x))[0] / scale, x0=x0, bounds=(lo, hi),
                         x_scale=np.array([0.05, 0.02])[free], method="trf")
     nn, d = unpack(sol.x)
@@ -481,15 +481,16 @@ def thermodynamic_tdc(engine, crank_angle, pressure, *, cylinder=1, window_deg=(
     def vol(d):
         return _volume_and_slope(engine, psi[sel] - d, cylinder)[0]
 
-    # coarse scan of δ (the fit is not convex far from the answer), then Gauss–Newton
+    # coarse scan of δ with n = 1.3 (the fit is not convex far from the answer; a fixed n keeps
+    # it from trading δ against n), then Gauss–Newton with n free
     scan = np.arange(lo, hi + 0.25, 0.25) * DEG
-    rms = [_fit_compression(vol(d), p[sel])["rms"] for d in scan]
+    rms = [_fit_compression(vol(d), p[sel], n=1.3)["rms"] for d in scan]
     d0 = float(scan[int(np.argmin(rms))])
 
     def vol_shifted(d):
         return vol(d0 + d)
 
-    fit = _fit_compression(vol_shifted, p[sel])
+    fit = _fit_compression(vol_shifted, p[sel], delta_bound=DEG)
     return TdcCheck(offset=d0 + fit["delta"], standard_error=fit["delta_se"],
                     method="compression polytropic fit", motored=False, exponent=fit["n"],
                     note="random error from the fit residual; a polytropic compression has no "

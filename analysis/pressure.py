@@ -421,7 +421,7 @@ def _cut(theta, p, t, base, psi, period):
     first = int(np.ceil((theta[0] - psi[0] - base) / period - 1e-9))
     last = int(np.floor((theta[-1] - (psi[-1] + (psi[1] - psi[0])) - base) / period + 1e-9))
     if last < first:
-        return np.empty((0, psi.size)), np.empty(0), np.empty(0)
+        return np.empty((0, psi.size)), np.empty(0), np.empty(0), np.empty((0, psi.size))
     centres = base + np.arange(first, last + 1) * period
     target = centres[:, None] + psi[None, :]
     u = np.interp(target.ravel(), theta, np.arange(theta.size, dtype=float))
@@ -430,7 +430,8 @@ def _cut(theta, p, t, base, psi, period):
     t0 = np.interp(centres + psi[0], theta, t)
     t1 = np.interp(centres - psi[0], theta, t)
     rpm = period / TWO_PI * 60.0 / (t1 - t0)
-    return cycles, t_c, rpm
+    t_grid = np.interp(target.ravel(), theta, t).reshape(target.shape)
+    return cycles, t_c, rpm, t_grid
 
 
 def _phase(theta, p, cyl_offset, period, phase_marks, record_name):
@@ -439,10 +440,18 @@ def _phase(theta, p, cyl_offset, period, phase_marks, record_name):
     if len(cands) == 1:
         return cands[0], "2-stroke: every TDC fires"
     if phase_marks is not None:
-        # firing TDC of cylinder 1 = first TDC (multiple of 2π) at or after a phase mark
-        m = float(np.ceil(phase_marks[0] / TWO_PI - 1e-9) * TWO_PI)
-        return m + cyl_offset, f"phase channel {record_name!r}: firing TDC of cylinder 1 is " \
-                               "the first TDC at or after each mark"
+        # firing TDC of cylinder 1 = first TDC (multiple of 2π) at or after a phase mark; the
+        # parity (which of the two TDCs of a cycle) is taken by majority over all marks
+        if phase_marks.size == 0:
+            raise AnalysisError(f"phase channel {record_name!r}: no mark within the pulse train")
+        parity = np.mod(np.ceil(phase_marks / TWO_PI - 1e-9).astype(np.int64), 2)
+        odd = float(np.mean(parity))
+        if 0.1 < odd < 0.9:
+            log.warning("phase channel %r: marks disagree on the firing TDC (%.0f%% one way)",
+                        record_name, 100 * max(odd, 1 - odd))
+        return int(odd > 0.5) * TWO_PI + cyl_offset, \
+            f"phase channel {record_name!r}: firing TDC of cylinder 1 is the first TDC at or " \
+            "after each mark"
     means = []
     for c in cands:
         rel = np.mod(theta - c + period / 2, period) - period / 2
@@ -515,6 +524,23 @@ def _peg(engine, psi, cycles, cylinder, *, peg, peg_pressure, window_deg, expone
     return {"method": "polytropic", "offset": off, "exponent": fit["exponent"],
             "note": f"p + dp = C V^-n fitted over {where} (auto: the raw level did not "
                     "match)"}, warn
+
+
+def _offset_field(peg_info, psi, t_grid, window_deg):
+    """Offset at every grid point: the per-cycle offsets (valid at the middle of the peg
+    window, or of the BDC window) interpolated linearly in time between cycles and
+    extrapolated at both ends, so a drifting transducer is corrected within each cycle."""
+    off = np.asarray(peg_info["offset"], float)
+    if off.size < 2 or np.ptp(off) == 0.0:
+        return np.broadcast_to(off[:, None], t_grid.shape)
+    centre = -np.pi if peg_info["method"] == "bdc" else np.deg2rad(np.mean(window_deg))
+    j = int(np.argmin(np.abs(psi - centre)))
+    tk = t_grid[:, j]
+    slope_lo = (off[1] - off[0]) / (tk[1] - tk[0])
+    slope_hi = (off[-1] - off[-2]) / (tk[-1] - tk[-2])
+    field = np.interp(t_grid, tk, off)
+    field = np.where(t_grid < tk[0], off[0] + slope_lo * (t_grid - tk[0]), field)
+    return np.where(t_grid > tk[-1], off[-1] + slope_hi * (t_grid - tk[-1]), field)
 
 
 # ------------------------------------------------------------------------------ analysis
@@ -652,39 +678,46 @@ def indicator_analysis(record, engine, *, channel=None, cylinder=None, angle_cha
     if not has_tdc:
         base0 = _coarse_tdc(theta, p, period)
         phase_text = "TDC located from the pressure (highest mean pressure, then compression fit)"
-        search = (-40.0, 5.0)
+        search = (-40.0, 5.0)               # the fired peak follows TDC
         warnings.append("no TDC reference (no TDC mark, no wheel-gap offset): TDC located from "
                         "the pressure by the compression fit; give tdc_channel= or "
                         "tdc_offset_deg= (CLI --tdc-offset-deg) for a measured reference")
     else:
         marks = None
         if phase_channel is not None:
-            marks = trace.at(_mark_times(record, phase_channel))
+            tm = _mark_times(record, phase_channel)
+            marks = trace.at(tm[(tm >= trace.time[0]) & (tm <= trace.time[-1])])
         base0, phase_text = _phase(theta, p, fire, period, marks, phase_channel)
         search = None
     base = base0
-    for attempt in range(2):
-        cycles, t_c, rpm = _cut(theta, p, t, base, psi, period)
+    # thermodynamic TDC passes: without a reference first a wide scan with a window well before
+    # the pressure peak (the guess), then the normal window; the last pass only checks
+    passes = []
+    if not has_tdc:
+        passes.append(((tdc_window_deg[0], min(tdc_window_deg[1], -45.0)), search))
+    if tdc_correction or not has_tdc:
+        passes.append((tdc_window_deg, None))
+    passes.append((tdc_window_deg, None))
+    for k, (window, scan) in enumerate(passes):
+        cycles, t_c, rpm, t_grid = _cut(theta, p, t, base, psi, period)
         if max_cycles is not None:
-            cycles, t_c, rpm = cycles[:max_cycles], t_c[:max_cycles], rpm[:max_cycles]
+            cycles, t_c, rpm, t_grid = (cycles[:max_cycles], t_c[:max_cycles],
+                                        rpm[:max_cycles], t_grid[:max_cycles])
         if cycles.shape[0] == 0:
             raise AnalysisError(f"pressure channel {channel!r} holds no complete "
                                 f"{np.rad2deg(period):g}-deg cycle within the pulse train")
         peg_info, peg_warn = _peg(engine, psi, cycles, cyl, peg=peg, peg_pressure=peg_pressure,
                                   window_deg=peg_window_deg, exponent=polytropic_exponent)
-        pegged = cycles + np.asarray(peg_info["offset"])[:, None]
+        pegged = cycles + _offset_field(peg_info, psi, t_grid, peg_window_deg)
         if engine is None:
             check = None
             break
         check = thermo.thermodynamic_tdc(engine, psi, pegged.mean(axis=0), cylinder=cyl,
-                                         window_deg=tdc_window_deg,
-                                         loss_angle_deg=loss_angle_deg, search_deg=search)
-        if attempt == 0 and (tdc_correction or not has_tdc):
+                                         window_deg=window, loss_angle_deg=loss_angle_deg,
+                                         search_deg=scan)
+        if k < len(passes) - 1:
             base = base + check.offset
             applied += check.offset_deg
-            search = None
-            continue
-        break
     if peg_warn:
         warnings.append(peg_warn)
     big = check is not None and abs(check.offset_deg) > 1.0 and not (

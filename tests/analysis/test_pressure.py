@@ -1,0 +1,212 @@
+"""Indicator analysis against closed-form cycles in raw records (analysis.pressure).
+
+References are independent of the code under test: the closed-form slider-crank volume, IMEP by
+``scipy.integrate.quad`` or the Otto-cycle integral, the peak by ``scipy.optimize`` on the
+closed form (tests/analysis/pressure_cycles.py). Records carry a 60-2 wheel (edge times) or a
+360-ppr encoder (sampled square wave), a two-sample TDC mark and speed fluctuations at orders ½
+and 2. Accuracy figures stated in analysis/pressure.py and the README are asserted here.
+"""
+
+import json
+
+import numpy as np
+import pytest
+
+import pressure_cycles as pc
+from crankbench.analysis.pressure import indicator_analysis, measured_excitation
+from crankbench.predict.errors import AnalysisError
+
+
+@pytest.fixture(scope="module")
+def smooth():
+    return pc.SmoothCycle()
+
+
+@pytest.fixture(scope="module")
+def clean(smooth):
+    return pc.record(smooth, duration=1.0)
+
+
+def test_clean_smooth_cycle_peak_within_0p2_deg_and_imep_within_0p5_percent(smooth, clean):
+    ref = smooth.reference()
+    r = indicator_analysis(clean, pc.engine())
+    s = r.summary()
+    assert s["cycles"] >= 10
+    assert abs(s["peak_angle_deg"] - ref["angle_deg"]) < 0.2          # issue's bound
+    assert abs(s["peak_angle_deg"] - ref["angle_deg"]) < 0.02         # what it achieves
+    assert abs(s["peak_pressure_bar"] * 1e5 / ref["peak"] - 1) < 1e-3
+    assert abs(s["imep_net_bar"] * 1e5 / ref["imep_net"] - 1) < 0.005
+    assert abs(s["imep_net_bar"] * 1e5 / ref["imep_net"] - 1) < 1e-3
+    assert abs(s["imep_gross_bar"] * 1e5 / ref["imep_gross"] - 1) < 1e-3
+    assert abs(s["pmep_bar"] * 1e5 - ref["pmep"]) < 1e-3 * ref["imep_net"]
+    assert np.all(np.abs(np.rad2deg(r.peak_angle) - ref["angle_deg"]) < 0.05)
+    assert s["peg"]["method"] == "none"          # already absolute, the polytropic fit agrees
+    assert abs(s["tdc"]["check"]["offset_deg"]) < 0.05
+    assert s["tdc"]["reference"].startswith("TDC mark channel 'tdc'")
+    assert "from the pressure" in s["tdc"]["phase"]
+    assert abs(s["speed_rpm"] - 1500.0) < 1.0
+    assert s["warnings"] == []
+
+
+def test_otto_cycle_imep_matches_closed_form_integral():
+    otto = pc.OttoCycle()
+    ref = otto.reference()
+    r = indicator_analysis(pc.record(otto, duration=0.5), pc.engine())
+    assert abs(np.mean(r.imep_gross) / ref["imep_gross"] - 1) < 0.005
+    assert abs(np.mean(r.imep_net) / ref["imep_net"] - 1) < 0.005
+    assert abs(np.mean(r.pmep) - ref["pmep"]) < 0.002 * ref["imep_net"]
+
+
+def test_encoder_voltage_at_71_khz_gives_the_same_numbers(smooth):
+    ref = smooth.reference()
+    rec = pc.record(smooth, duration=0.5, fs=71_000.0, wheel="encoder")
+    s = indicator_analysis(rec, pc.engine()).summary()
+    assert "encoder" in s["tdc"]["reference"]
+    assert abs(s["peak_angle_deg"] - ref["angle_deg"]) < 0.05
+    assert abs(s["imep_net_bar"] * 1e5 / ref["imep_net"] - 1) < 1e-3
+
+
+def test_noisy_drifting_offset_record_errors_per_quantity(smooth):
+    """0.05 bar rms noise, -0.7 bar offset, 0.3 bar/s drift, 1 s (12 cycles): the stated
+    errors under noise (README): peak angle (mean cycle) < 0.1 deg, peak pressure < 0.3 %,
+    net IMEP < 0.5 %, peg offset within 0.05 bar."""
+    ref = smooth.reference()
+    rec = pc.record(smooth, duration=1.0, noise_pa=5e3, offset_pa=-0.7e5, drift_pa_s=0.3e5,
+                    seed=2)
+    r = indicator_analysis(rec, pc.engine())
+    s = r.summary()
+    assert s["peg"]["method"] == "polytropic"            # auto: the raw level did not match
+    assert any("pegged by the polytropic compression" in w for w in s["warnings"])
+    t = r.cycle_time
+    true_offset = 0.7e5 - 0.3e5 * t                        # what must be added back
+    assert np.max(np.abs(np.asarray(r.peg["offset"]) - true_offset)) < 0.05e5
+    assert abs(s["peak_angle_deg"] - ref["angle_deg"]) < 0.1
+    assert abs(s["peak_pressure_bar"] * 1e5 / ref["peak"] - 1) < 0.003
+    assert abs(s["imep_net_bar"] * 1e5 / ref["imep_net"] - 1) < 0.005
+    assert abs(s["pmep_bar"] * 1e5 - ref["pmep"]) < 0.01e5
+
+
+def test_bdc_peg_with_given_intake_pressure(smooth):
+    rec = pc.record(smooth, duration=0.5, offset_pa=0.4e5)
+    r = indicator_analysis(rec, pc.engine(), peg_pressure=pc.P_IN)
+    assert r.peg["method"] == "bdc"
+    # the mean within ±10 deg of BDC is the intake level only to the compression's rise
+    # there (+0.1 % of it in this cycle)
+    assert np.allclose(r.peg["offset"], -0.4e5, atol=0.002 * pc.P_IN)
+
+
+def test_tdc_error_is_found_and_corrected(smooth):
+    """A TDC mark 1.5 deg early: the compression fit finds it within 3 of its own standard
+    errors (0.07 deg at 0.02 bar noise and 25 cycles, 3e-5 deg clean); the correction leaves
+    the peak angle that close to the truth."""
+    ref = smooth.reference()
+    clean = indicator_analysis(pc.record(smooth, duration=1.0, tdc_error_deg=1.5), pc.engine())
+    assert abs(clean.tdc["check"].offset_deg - 1.5) < 0.01
+    assert any("thermodynamic TDC lies +1.50" in w for w in clean.warnings)
+    rec = pc.record(smooth, duration=1.0, tdc_error_deg=1.5, noise_pa=2e3, seed=1)
+    r = indicator_analysis(rec, pc.engine())
+    se = np.rad2deg(r.tdc["check"].standard_error)
+    assert 0.02 < se < 0.1
+    assert abs(r.tdc["check"].offset_deg - 1.5) < 3 * se
+    fixed = indicator_analysis(rec, pc.engine(), tdc_correction=True)
+    assert abs(fixed.tdc["applied_deg"] - 1.5) < 3 * se
+    assert abs(np.rad2deg(fixed.mean["peak_angle"]) - ref["angle_deg"]) < 3 * se
+    assert abs(np.mean(fixed.imep_net) / ref["imep_net"] - 1) < 0.02    # ~10 %/deg here
+    assert fixed.tdc["check"].offset_deg == pytest.approx(0.0, abs=3 * se)
+
+
+def test_without_any_tdc_reference_tdc_comes_from_the_pressure(smooth):
+    ref = smooth.reference()
+    rec = pc.record(smooth, duration=1.0, mark=False).drop_vars("tdc", errors="ignore")
+    r = indicator_analysis(rec, pc.engine())
+    assert any("no TDC reference" in w for w in r.warnings)
+    assert abs(np.rad2deg(r.mean["peak_angle"]) - ref["angle_deg"]) < 0.2
+    assert abs(np.mean(r.imep_net) / ref["imep_net"] - 1) < 0.005
+
+
+def test_wheel_gap_offset_without_a_mark(smooth):
+    ref = smooth.reference()
+    rec = pc.record(smooth, duration=0.5, mark=False)
+    r = indicator_analysis(rec, pc.engine(), tdc_offset_deg=84.0)
+    assert "wheel gap" in r.tdc["reference"]
+    assert abs(np.rad2deg(r.mean["peak_angle"]) - ref["angle_deg"]) < 0.02
+
+
+def test_cam_channel_resolves_the_phase_and_is_stated(smooth):
+    rec = pc.record(smooth, duration=1.0, cam=True, start_deg=-100.0)
+    r = indicator_analysis(rec, pc.engine(), phase_channel="cam")
+    assert "phase channel 'cam'" in r.tdc["phase"]
+    auto = indicator_analysis(rec, pc.engine())
+    assert np.allclose(r.peak_angle.mean(), auto.peak_angle.mean(), atol=1e-9)
+    # the cam says firing TDC is the TDC after its mark; marks a revolution later flip it
+    bad = pc.record(smooth, duration=1.0, cam=True, start_deg=-100.0, cam_deg=270.0)
+    flipped = indicator_analysis(bad, pc.engine(), phase_channel="cam")
+    at_tdc = np.argmin(np.abs(auto.crank_angle))
+    assert flipped.mean_pressure[at_tdc] < 0.1 * auto.mean_pressure[at_tdc]
+
+
+def test_two_stroke_cycles_are_360_deg():
+    e = pc.engine(cycle=2)
+    cyc = pc.SmoothCycle()
+    closed = cyc.closed
+
+    def two_stroke(theta):
+        th = np.mod(np.asarray(theta, float) + np.pi, 2 * np.pi) - np.pi
+        return closed(th)
+
+    rec = pc.record(two_stroke, duration=0.3)
+    r = indicator_analysis(rec, e)
+    assert r.pressure.shape[1] == 3600
+    ref = cyc.reference()
+    assert abs(np.mean(r.imep_net) / ref["imep_gross"] - 1) < 1e-3
+    assert float(np.mean(r.pmep)) == 0.0
+
+
+def test_heat_release_of_a_wiebe_free_cycle_finds_the_bump():
+    r = indicator_analysis(pc.record(pc.SmoothCycle(), duration=0.5), pc.engine(),
+                           gamma=pc.K)
+    hr = r.heat_release
+    assert hr.total > 0
+    assert -20.0 < hr.mfb_deg[10] < hr.mfb_deg[50] < hr.mfb_deg[90] < 60.0
+
+
+def test_without_engine_model_peak_only(smooth):
+    ref = smooth.reference()
+    r = indicator_analysis(pc.record(smooth, duration=0.5), None)
+    s = r.summary()
+    assert s["imep_net_bar"] is None and s["heat_release"] is None
+    assert abs(s["peak_angle_deg"] - ref["angle_deg"]) < 0.02
+    assert any("no engine model" in w for w in s["warnings"])
+    json.dumps(s)
+
+
+def test_bad_inputs_get_named_errors(smooth, clean):
+    with pytest.raises(AnalysisError, match="no cylinder-pressure channel"):
+        indicator_analysis(clean.drop_vars("p_cyl1"), pc.engine())
+    with pytest.raises(AnalysisError, match="no crank-angle source"):
+        indicator_analysis(clean.drop_vars("crank"), pc.engine())
+    from crankbench.predict.engine import Engine
+
+    bare = Engine(crank_angles_deg=[0], crank_radius=0.045, rod_length=0.15,
+                  reciprocating_mass=0.5, bore=0.085)
+    with pytest.raises(AnalysisError, match="compression_ratio"):
+        indicator_analysis(clean, bare)
+    with pytest.raises(AnalysisError, match="peg"):
+        indicator_analysis(clean, pc.engine(), peg="magic")
+    with pytest.raises(AnalysisError, match="no TDC reference"):
+        indicator_analysis(clean.drop_vars("tdc"), None)
+    short = pc.record(smooth, duration=0.05)
+    with pytest.raises(AnalysisError, match="no complete"):
+        indicator_analysis(short, pc.engine())
+
+
+def test_measured_excitation_from_the_analysis_matches_the_closed_form_torque(smooth, clean):
+    """Gas torque harmonics of the measured mean cycle against the FFT of the closed-form
+    tangential torque −A (p − p_cc) dx/dθ (independent quadrature on 8192 points)."""
+    e = pc.engine()
+    x = measured_excitation(indicator_analysis(clean, e), e, orders=[0.5, 1.0, 1.5, 2.0, 3.0])
+    n = 8192
+    th = np.arange(n) * 4 * np.pi / n
+    torque = (smooth(th) - 1e5) * pc.volume_slope(th)     # A (p − p_cc) dx/dθ = (p − p_cc) dV/dθ
+    ref = np.array([2.0 / n * np.sum(torque * np.exp(-1j * q * th)) for q in x.orders])
+    assert np.max(np.abs(x.gas - ref)) < 2e-3 * np.max(np.abs(ref))
