@@ -191,11 +191,15 @@ def mean_effective_pressures(engine, crank_angle, pressure, *, cylinder=1):
 
 
 # ------------------------------------------------------------------------------ peaks
-def cycle_peaks(crank_angle, pressure):
-    """Peak pressure (Pa) and its angle (rad) of each cycle, refined by a parabola.
+def cycle_peaks(crank_angle, pressure, *, window_deg=3.0):
+    """Peak pressure (Pa) and its angle (rad) of each cycle, by a local polynomial fit.
 
-    The largest grid value and its two neighbours define a parabola whose vertex is the peak
-    (error O(h³ p'''/p'') in the angle for grid step h).
+    Around the highest point of each cycle (found on the trace smoothed over ±1°), a quartic
+    is fitted by least squares to the samples within ``±window_deg`` and its maximum taken
+    (evaluated at 0.001° steps). A quartic follows an asymmetric combustion peak without the
+    bias of a parabola, and the fit averages sample noise: on a 0.1° grid the angle's noise is
+    about a quarter of the three-point vertex's. ``window_deg=0`` uses the three-point
+    parabola through the highest sample (no smoothing).
 
     Returns
     -------
@@ -204,22 +208,39 @@ def cycle_peaks(crank_angle, pressure):
 
     Examples
     --------
-    >>> psi = np.deg2rad(np.arange(-30.0, 30.0, 0.5))
-    >>> pk = cycle_peaks(psi, 5e6 - 1e7 * (psi - np.deg2rad(10.2)) ** 2)
-    >>> round(float(np.rad2deg(pk["angle"][0])), 6), round(float(pk["pressure"][0]), 3)
-    (10.2, 5000000.0)
+    >>> psi = np.deg2rad(np.arange(-30.0, 30.0, 0.1))
+    >>> pk = cycle_peaks(psi, 5e6 - 1e7 * (psi - np.deg2rad(10.23)) ** 2)
+    >>> round(float(np.rad2deg(pk["angle"][0])), 3), round(float(pk["pressure"][0]), 3)
+    (10.23, 5000000.0)
     """
     psi = check_finite_array(crank_angle, "crank_angle", ndim=1, min_length=3,
                              error=AnalysisError)
     p = _rows(pressure, psi.size)
-    i = np.clip(np.argmax(p, axis=1), 1, psi.size - 2)
+    h = float(np.median(np.diff(psi)))
+    m = int(round(check_range(window_deg, "window_deg", 0.0, 30.0, error=AnalysisError)
+                  * DEG / h))
     r = np.arange(p.shape[0])
-    y0, y1, y2 = p[r, i - 1], p[r, i], p[r, i + 1]
-    den = y0 - 2 * y1 + y2
-    frac = np.where(den < 0, 0.5 * (y0 - y2) / np.where(den < 0, den, -1.0), 0.0)
-    frac = np.clip(frac, -0.5, 0.5)
-    h = psi[i + 1] - psi[i]
-    return {"pressure": y1 - 0.25 * (y0 - y2) * frac, "angle": psi[i] + frac * h}
+    if m < 3 or psi.size < 2 * m + 1:
+        i = np.clip(np.argmax(p, axis=1), 1, psi.size - 2)
+        y0, y1, y2 = p[r, i - 1], p[r, i], p[r, i + 1]
+        den = y0 - 2 * y1 + y2
+        frac = np.where(den < 0, 0.5 * (y0 - y2) / np.where(den < 0, den, -1.0), 0.0)
+        frac = np.clip(frac, -0.5, 0.5)
+        return {"pressure": y1 - 0.25 * (y0 - y2) * frac, "angle": psi[i] + frac * h}
+    k = max(1, int(round(DEG / h)))
+    from scipy.ndimage import uniform_filter1d
+
+    smooth = uniform_filter1d(p, 2 * k + 1, axis=1, mode="nearest")
+    i = np.clip(np.argmax(smooth, axis=1), m, psi.size - 1 - m)
+    offs = np.arange(-m, m + 1)
+    x = offs / m                                             # scaled abscissa
+    basis = np.vander(x, 5, increasing=True)                 # 1, x, ..., x⁴
+    coef = np.linalg.lstsq(basis, p[r[:, None], i[:, None] + offs[None, :]].T,
+                           rcond=None)[0]                     # (5, n_cycles)
+    fine = np.linspace(-1.0, 1.0, 2 * int(round(m * h / (0.001 * DEG))) + 1)
+    values = np.vander(fine, 5, increasing=True) @ coef       # (n_fine, n_cycles)
+    j = np.argmax(values, axis=0)
+    return {"pressure": values[j, r], "angle": psi[i] + fine[j] * m * h}
 
 
 # ------------------------------------------------------------------------------ pegging

@@ -66,24 +66,28 @@ def test_encoder_voltage_at_71_khz_gives_the_same_numbers(smooth):
     assert abs(s["imep_net_bar"] * 1e5 / ref["imep_net"] - 1) < 1e-3
 
 
-def test_noisy_drifting_offset_record_errors_per_quantity(smooth):
-    """0.05 bar rms noise, -0.7 bar offset, 0.3 bar/s drift, 1 s (12 cycles): the stated
-    errors under noise (README): peak angle (mean cycle) < 0.1 deg, peak pressure < 0.3 %,
-    net IMEP < 0.5 %, peg offset within 0.05 bar."""
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_noisy_drifting_offset_record_errors_per_quantity(smooth, seed):
+    """0.05 bar rms noise, -0.7 bar offset, 0.3 bar/s drift, 1 s (12 cycles at 1500 rpm), the
+    level pegged by the polytropic compression (auto). Stated errors (README, measured 0.011
+    deg, 0.022 %, 0.064 %, 0.0024 bar, COV 0.11 % over seeds 0-3): peak angle of the mean
+    cycle < 0.05 deg, peak pressure < 0.1 %, net IMEP < 0.2 %, PMEP < 0.01 bar, the peg offset
+    within 0.05 bar of the truth, COV of IMEP < 0.3 % (truth 0)."""
     ref = smooth.reference()
     rec = pc.record(smooth, duration=1.0, noise_pa=5e3, offset_pa=-0.7e5, drift_pa_s=0.3e5,
-                    seed=2)
+                    seed=seed)
     r = indicator_analysis(rec, pc.engine())
     s = r.summary()
     assert s["peg"]["method"] == "polytropic"            # auto: the raw level did not match
     assert any("pegged by the polytropic compression" in w for w in s["warnings"])
-    t = r.cycle_time
-    true_offset = 0.7e5 - 0.3e5 * t                        # what must be added back
+    true_offset = 0.7e5 - 0.3e5 * r.cycle_time          # what must be added back
     assert np.max(np.abs(np.asarray(r.peg["offset"]) - true_offset)) < 0.05e5
-    assert abs(s["peak_angle_deg"] - ref["angle_deg"]) < 0.1
-    assert abs(s["peak_pressure_bar"] * 1e5 / ref["peak"] - 1) < 0.003
-    assert abs(s["imep_net_bar"] * 1e5 / ref["imep_net"] - 1) < 0.005
+    assert abs(s["peak_angle_deg"] - ref["angle_deg"]) < 0.05
+    assert abs(s["peak_pressure_bar"] * 1e5 / ref["peak"] - 1) < 0.001
+    assert abs(s["imep_net_bar"] * 1e5 / ref["imep_net"] - 1) < 0.002
     assert abs(s["pmep_bar"] * 1e5 - ref["pmep"]) < 0.01e5
+    assert s["cov_imep_net_percent"] < 0.3
+    assert s["peak_angle_deg_per_cycle"]["std"] < 0.1
 
 
 def test_bdc_peg_with_given_intake_pressure(smooth):
