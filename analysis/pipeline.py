@@ -138,6 +138,9 @@ class PipelineResult:
         Orders 1 and 2 at each vibrograph mounted at a named mount: the comparison with the
         predicted balance residuals through the mount model (None when the prediction is zero
         by design), and a table of predicted and measured maxima per order.
+    pressure : analysis.excitation_compare.ExcitationComparison or None
+        With cylinder pressure in the record: the indicator analysis and the response
+        predicted from the measured excitation beside the model's.
     """
 
     source: str
@@ -161,6 +164,7 @@ class PipelineResult:
     settings: dict = field(default_factory=dict)
     timings: dict = field(default_factory=dict)
     balance: tuple = ()
+    pressure: object = None
 
     @property
     def passed(self) -> bool:
@@ -258,9 +262,12 @@ def _load_model(model):
                       f"{type(model).__name__}")
 
 
-def predicted_response(system, speed_rpm, orders, node, *, load, quantity="angle"):
+def predicted_response(system, speed_rpm, orders, node, *, load, quantity="angle",
+                       excitation=None):
     """Steady-state order amplitudes at ``node`` and the complex stress of each section.
 
+    ``excitation`` (an :class:`predict.torsion.excitation.Excitation`, e.g. from measured
+    pressure) replaces the model's parametric one; its gas part is scaled by the load law.
     Returns (amplitude (n_s, n_o), stress (n_s, n_o, n_edges) complex Pa — NaN where a
     section has no diameter —, the ForcedResponse).
     """
@@ -268,13 +275,14 @@ def predicted_response(system, speed_rpm, orders, node, *, load, quantity="angle
 
     from crankbench.predict.torsion.excitation import engine_excitation
 
-    imep = load.imep if load.imep is not None else system.operating.get("imep")
-    exc = engine_excitation(system, imep=imep, orders=orders)
+    if excitation is None:
+        imep = load.imep if load.imep is not None else system.operating.get("imep")
+        excitation = engine_excitation(system, imep=imep, orders=orders)
     omega = np.asarray(speed_rpm, float) * np.pi / 30.0
     scale = load.scale(speed_rpm)
-    torque = (exc.gas[None, :] * scale[:, None]
-              + (omega**2)[:, None] * exc.inertia[None, :])[:, :, None]
-    torque = np.repeat(torque, exc.n_cylinders, axis=2)
+    gas = excitation.harmonics(np.zeros(1), orders)[0]                 # (n_o, z)
+    inertia = excitation.harmonics(np.ones(1), orders)[0] - gas
+    torque = gas[None] * scale[:, None, None] + (omega**2)[:, None, None] * inertia[None]
     res = system.forced_response(speed_rpm, torque=torque, orders=orders, superpose=False)
     i = system.node_names.index(node)
     amp = np.abs(res.angle[:, :, i])
@@ -550,6 +558,13 @@ def analyse(record, model, *, channel=None, speed_channel=None, orders=None, max
                            channel, machine_class, operating_range_rpm)
     done("limits")
 
+    step("measured excitation")                # cylinder pressure, if the record has it
+    from .excitation_compare import measured_excitation_prediction
+
+    pressure = measured_excitation_prediction(rec, system, grid, all_orders, node, quantity,
+                                              units, load, track, response_da)
+    done("measured excitation")
+
     ppr = next((int(rec[n].attrs["pulses_per_rev"]) for n in rec.data_vars
                 if "pulses_per_rev" in rec[n].attrs), None)
     settings = {
@@ -583,7 +598,7 @@ def analyse(record, model, *, channel=None, speed_channel=None, orders=None, max
         speed_range_rpm=(lo, hi), sweep_rate_rpm_per_s=sweep_rate, track=track,
         resonances=resonances, predicted=predicted, response=response_da,
         comparison=comparison, limits=tuple(limits), system=system, record=rec,
-        settings=settings, timings=timings, balance=tuple(balance))
+        settings=settings, timings=timings, balance=tuple(balance), pressure=pressure)
 
 
 def _balance(rec, system, lo, hi, orders=(1.0, 2.0)):

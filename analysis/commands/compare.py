@@ -47,7 +47,9 @@ def run(args) -> int:
                     "unmatched_measured": comp.unmatched_measured,
                     "unmatched_predicted": comp.unmatched_predicted,
                     "resonances": result.resonances.to_frame(), "limits": limits,
-                    "flags": list(comp.flags), "settings": result.settings})
+                    "flags": list(comp.flags), "settings": result.settings,
+                    "measured_excitation": None if result.pressure is None
+                    else result.pressure.summary()})
     else:
         print(f"record   {result.source}  channel {result.channel} at {result.node}")
         print(f"model    {result.model_path}")
@@ -73,6 +75,11 @@ def run(args) -> int:
         for c in result.limits:
             print(f"{'PASS' if c.passed else 'FAIL'}  {c.name}: {c.detail}")
         print()
+        if result.pressure is not None:
+            print_table(result.pressure.table, title="measured response against the model's "
+                        "prediction and the prediction from measured cylinder pressure")
+            print(f"  ({result.pressure.note})")
+            print()
         if comp.flags:
             print("disagreements:")
             for f in comp.flags:
