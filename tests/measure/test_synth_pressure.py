@@ -137,7 +137,7 @@ cycle_variation = 0.03
     assert abs(r.tdc["applied_deg"] - 1.0) < max(3 * se, 0.1)
     imep = np.array([x["imep_net_pa"] for x in rows])
     err = r.imep_net / imep - 1
-    assert -0.03 < np.mean(err) < 0.0                    # thermal shock lowers expansion p
+    assert -0.025 < np.mean(err) < -0.01                 # thermal shock lowers expansion p
     cov_true = 100 * np.std(imep, ddof=1) / np.mean(imep)
     assert abs(r.cov_imep - cov_true) < 0.3 * cov_true
     assert np.corrcoef(r.imep_net, imep)[0, 1] > 0.95
