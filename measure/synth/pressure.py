@@ -6,7 +6,8 @@ the heat released, ``p = p_motored + Q u(ψ)``, so cycle-to-cycle variation is a
 release per cycle, ``Q_k = Q (1 + cycle_variation ε_k)``, ε ~ N(0, 1). The channel then gets
 
 * ``offset`` (Pa): the unknown level of a piezoelectric transducer — the pegging error;
-* ``drift_rate`` (Pa/s) and ``noise_rms`` (Pa) from the scene's :class:`.imperfections.Imperfections`;
+* ``drift_rate`` (Pa/s) and ``noise_rms`` (Pa) from the scene's
+  :class:`.imperfections.Imperfections`;
 * ``thermal_shock`` (Pa): the flame heats the diaphragm and the reading dips during expansion,
   ``−A (Q_k/Q) g(ψ − ψ_s)`` with ``g(u) = (u/τ)² e^{2(1 − u/τ)}`` (peak 1 at ``u = τ`` =
   ``thermal_shock_deg`` after the start of combustion ψ_s), i.e. a short-term drift of the
