@@ -452,6 +452,13 @@ def indicator_analysis(record, engine, *, channel=None, cylinder=None, angle_cha
     if not good.all():
         warnings.append(f"{int((~good).sum())} non-finite pressure samples interpolated")
         p = np.interp(t, t[good], p[good])
+    from crankbench.measure.record import clipped_spans
+
+    top = [sp for sp in clipped_spans(p) if p[sp[0]] >= np.max(p)]
+    if top:
+        warnings.append(f"pressure channel {channel!r} is clipped at {np.max(p) / BAR:.4g} bar "
+                        f"in {len(top)} places (a saturated amplifier or ADC): peak pressure, "
+                        "its angle and IMEP of those cycles are wrong; re-range the amplifier")
     inside = (t >= trace.time[0]) & (t <= trace.time[-1])
     t, p = t[inside], p[inside]
     if t.size < 16:

@@ -16,7 +16,8 @@ pressure curve.
 * :func:`mount_excitation` — the force and moment phasors on the engine block for one order:
   the free forces and moments of :func:`predict.balance.unbalance` plus the reaction to the
   crankshaft torque (a roll moment about the crankshaft axis), ready for
-  :meth:`predict.mounts.MountedEngine.response`.
+  :meth:`predict.mounts.MountedEngine.response`; :func:`mount_response` gives the motion of
+  points on the block over speed and order from it.
 
 The harmonics use the same quadrature as :func:`predict.torsion.excitation.engine_excitation`
 (rectangle rule over one cycle, ``points`` samples; aliasing error estimated with half as many
@@ -38,7 +39,7 @@ from .errors import ModelError
 from .pressure import PressureTrace, as_trace
 from .torsion.excitation import Excitation, torque_harmonics
 
-__all__ = ["excitation_from_pressure", "mount_excitation"]
+__all__ = ["excitation_from_pressure", "mount_excitation", "mount_response"]
 
 
 def _traces_by_cylinder(engine, pressure) -> dict:
@@ -209,3 +210,59 @@ def mount_excitation(engine, excitation, *, order, omega, load=1.0):
     moment[0] += torque
     return {"force": force, "moment": moment, "point": point,
             "freq_hz": q * w / (2 * np.pi)}
+
+
+def mount_response(mounted, engine, excitation, *, speed_rpm, orders, points, load=1.0):
+    """Motion of points on the block on its mounts, per speed and order (quasi-steady).
+
+    Parameters
+    ----------
+    mounted : predict.mounts.MountedEngine
+    engine : predict.engine.Engine
+    excitation : Excitation
+        Measured (:func:`excitation_from_pressure`) or modelled cylinder torque harmonics.
+    speed_rpm : array_like
+        Crankshaft speeds, rpm (> 0).
+    orders : array_like
+        Orders (each in ``excitation.orders``).
+    points : array_like (n_p, 3)
+        Points on the block, m (mount frame).
+    load : float or array_like
+        Factor on the gas part, scalar or one per speed.
+
+    Returns
+    -------
+    ndarray (n_s, n_o, n_p, 3), complex
+        Displacement phasors, m: the motion is ``Re(u e^{i q ψ})``, ψ the crank angle of
+        cylinder 1 from its firing TDC (velocity ``i q ω u``, acceleration ``−(q ω)² u``).
+
+    Examples
+    --------
+    >>> from crankbench.predict.engine import Engine
+    >>> from crankbench.predict.mounts import MountedEngine
+    >>> from crankbench.predict.pressure import synthetic_pressure
+    >>> e = Engine.from_toml("sample_data/engines/i4.toml")
+    >>> m = MountedEngine.from_toml("sample_data/engines/i4.toml")
+    >>> x = excitation_from_pressure(e, synthetic_pressure(e, imep=1.0e6), orders=[2.0])
+    >>> u = mount_response(m, e, x, speed_rpm=[3000.0], orders=[2.0], points=[[0.2, 0, 0]])
+    >>> round(float(abs(u[0, 0, 0, 2]) * 1e6), 3)     # vertical, µm
+    51.507
+    """
+    speed = check_finite_array(speed_rpm, "speed_rpm", ndim=1, min_length=1,
+                               error=ModelError)
+    if np.any(speed <= 0):
+        raise ModelError("speed_rpm must be > 0")
+    orders = check_finite_array(orders, "orders", ndim=1, min_length=1, error=ModelError)
+    pts = np.atleast_2d(check_finite_array(points, "points", error=ModelError))
+    loads = np.broadcast_to(np.asarray(load, float), speed.shape)
+    omega = speed * np.pi / 30.0
+    out = np.empty((speed.size, orders.size, pts.shape[0], 3), complex)
+    for k, q in enumerate(orders):
+        ex = [mount_excitation(engine, excitation, order=q, omega=w, load=f)
+              for w, f in zip(omega, loads)]
+        r = mounted.response(np.array([e["force"] for e in ex]),
+                             np.array([e["moment"] for e in ex]),
+                             np.array([e["freq_hz"] for e in ex]), point=ex[0]["point"],
+                             at=pts)
+        out[:, k] = r.displacement
+    return out

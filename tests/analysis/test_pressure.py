@@ -214,3 +214,11 @@ def test_measured_excitation_from_the_analysis_matches_the_closed_form_torque(sm
     torque = (smooth(th) - 1e5) * pc.volume_slope(th)     # A (p − p_cc) dx/dθ = (p − p_cc) dV/dθ
     ref = np.array([2.0 / n * np.sum(torque * np.exp(-1j * q * th)) for q in x.orders])
     assert np.max(np.abs(x.gas - ref)) < 2e-3 * np.max(np.abs(ref))
+
+
+def test_a_clipped_pressure_channel_is_named(smooth):
+    rec = pc.record(smooth, duration=0.5)
+    limit = 45e5
+    rec["p_cyl1"] = rec["p_cyl1"].clip(max=limit)
+    r = indicator_analysis(rec, pc.engine())
+    assert any("is clipped at 45 bar" in w for w in r.warnings)

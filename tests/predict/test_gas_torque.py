@@ -89,3 +89,29 @@ def test_mount_roll_moment_is_the_engine_torque_harmonic(i4):
     assert abs(m2["force"][2]) == pytest.approx(4 * 0.55 * 0.043 * omega ** 2 * a2, rel=1e-4)
     with pytest.raises(ModelError, match="omega"):
         mount_excitation(i4, x, order=2.0, omega=0.0)
+
+
+def test_mount_response_matches_the_synthetic_bench_second_implementation():
+    """mount_response against measure.synth.vibrograph.MountChannels (written apart) with a
+    per-cylinder measured excitation: every axis, orders 1, 2, 4, three speeds."""
+    from pathlib import Path
+
+    from crankbench.measure.synth.vibrograph import MountChannels
+    from crankbench.predict.gas_torque import mount_response
+    from crankbench.predict.mounts import MountedEngine
+
+    f = Path(__file__).resolve().parents[2] / "sample_data/engines/i4.toml"
+    e, mounted = Engine.from_toml(f), MountedEngine.from_toml(f)
+    traces = [synthetic_pressure(e, imep=p) for p in (1.0e6, 1.2e6, 0.9e6, 1.1e6)]
+    orders = np.array([0.5, 1.0, 2.0, 4.0])
+    x = excitation_from_pressure(e, traces, orders=orders)
+    pts = np.array([[0.2, 0.05, 0.1], [-0.1, 0.25, 0.15]])
+    speeds = np.array([1200.0, 3000.0, 5500.0])
+    u = mount_response(mounted, e, x, speed_rpm=speeds, orders=orders, points=pts, load=0.8)
+    mc = MountChannels(mounted, e, x, orders, pts, speeds * np.pi / 30)
+    scale = np.abs(u).max()
+    for k in range(orders.size):
+        for p in range(2):
+            for axis, name in enumerate("xyz"):
+                ref = mc.table(k, p, name, "displacement", lambda w: np.full_like(w, 0.8))
+                assert np.allclose(u[:, k, p, axis], ref, rtol=0, atol=1e-9 * scale)
