@@ -21,7 +21,8 @@ import numpy as np
 
 from crankbench.predict.errors import CrankbenchError
 
-__all__ = ["ExcitationComparison", "measured_excitation_prediction", "add_pressure_section"]
+__all__ = ["ExcitationComparison", "measured_excitation_prediction", "add_pressure_section",
+           "add_indicator_section"]
 
 log = logging.getLogger("crankbench")
 
@@ -136,41 +137,65 @@ def measured_excitation_prediction(record, system, grid, orders, node, quantity,
                                 table=table, note=note)
 
 
-def add_pressure_section(rep, comparison, *, result=None, figures=True,
-                         section="Cylinder pressure and measured excitation"):
-    """Add the indicator analysis and the measured-excitation comparison to a Report."""
+def add_indicator_section(rep, results, *, figures=True,
+                          section="Cylinder pressure and measured excitation"):
+    """Add indicator-analysis results (``{channel: IndicatorResult}``) to a Report.
+
+    Examples
+    --------
+    >>> from crankbench.analysis.report import Report
+    >>> rep = Report("pressure")
+    >>> add_indicator_section(rep, {}, figures=False)          # nothing to add: no error
+    """
     import pandas as pd
 
+    if not results:
+        return
     rows = []
-    for c, r in comparison.indicator.items():
+    for c, r in results.items():
         s = r.summary()
+        check = s["tdc"]["check"]
         rows.append({"channel": c, "cylinder": s["cylinder"], "cycles": s["cycles"],
                      "speed_rpm": s["speed_rpm"], "peak_bar": s["peak_pressure_bar"],
                      "peak_angle_deg": s["peak_angle_deg"], "imep_net_bar": s["imep_net_bar"],
                      "imep_gross_bar": s["imep_gross_bar"], "pmep_bar": s["pmep_bar"],
                      "cov_imep_pct": s["cov_imep_net_percent"], "peg": s["peg"]["method"],
-                     "tdc_check_deg": s["tdc"]["check"]["offset_deg"],
-                     "mfb50_deg": s["heat_release"]["mfb50_deg"]})
+                     "tdc_check_deg": None if check is None else check["offset_deg"],
+                     "mfb50_deg": None if s["heat_release"] is None
+                     else s["heat_release"]["mfb50_deg"]})
     rep.add_table(pd.DataFrame(rows), title="Indicator analysis", section=section,
                   caption="Peak of the cycle-averaged trace; IMEP net over 720/360 deg, gross "
                           "over compression and expansion, PMEP = gross - net (Heywood 1988 "
                           "§2.4); COV of net IMEP; TDC check: thermodynamic TDC after the "
                           "reference (compression polytropic fit); heat release single-zone.")
-    for c, r in comparison.indicator.items():
+    for c, r in results.items():
+        rep.add_text(f"{c}: TDC reference {r.tdc['reference']}; firing TDC {r.tdc['phase']}; "
+                     f"pegging {r.peg['method']} ({r.peg.get('note', '')}).", section=section)
         for w in r.warnings:
-            rep.add_text(f"{c}: {w}", section=section)
+            rep.add_text(f"{c}: warning: {w}", section=section)
+    if figures:
+        for c, r in results.items():
+            try:
+                rep.add_figure(r.plot(), title=f"{c}: pressure against crank angle",
+                               section=section)
+                if r.volume is not None:
+                    rep.add_figure(r.plot_log_pv(), title=f"{c}: log p - log V",
+                                   section=section)
+                    rep.add_figure(r.plot_heat_release(), title=f"{c}: heat release",
+                                   section=section)
+            except Exception as exc:       # a figure must never sink the report
+                log.warning("pressure figure skipped: %s", exc)
+
+
+def add_pressure_section(rep, comparison, *, result=None, figures=True,
+                         section="Cylinder pressure and measured excitation"):
+    """Add the indicator analysis and the measured-excitation comparison to a Report."""
+    add_indicator_section(rep, comparison.indicator, figures=figures, section=section)
     units = comparison.table.attrs.get("units", "")
     rep.add_table(comparison.table, title="Measured response against both predictions",
                   section=section, caption=f"Peaks over the measured speed range, {units} "
                                            f"(peak). {comparison.note}.")
     if figures:
-        for c, r in comparison.indicator.items():
-            try:
-                rep.add_figure(r.plot(), title=f"{c}: pressure against crank angle",
-                               section=section)
-                rep.add_figure(r.plot_log_pv(), title=f"{c}: log p - log V", section=section)
-            except Exception as exc:       # a figure must never sink the report
-                log.warning("pressure figure skipped: %s", exc)
         try:
             rep.add_figure(comparison.plot(measured=getattr(result, "track", None),
                                            model=getattr(result, "response", None)),

@@ -7,7 +7,8 @@ gross IMEP, PMEP, COV of IMEP and the single-zone heat release (:mod:`analysis.p
 The engine model (``--model``: an engine TOML, or a shaft-line TOML naming one) gives the
 cylinder geometry; without it only the quantities that need none are given. ``--cycles``
 prints the per-cycle table; ``--plot DIR`` writes ``pressure_<channel>.png`` (p–θ, log p–log V,
-heat release) atomically.
+heat release) and ``--report OUT.html`` a report section (:class:`analysis.report.Report`)
+atomically; ``--map`` reads a raw export through a channel map.
 """
 
 from __future__ import annotations
@@ -49,7 +50,11 @@ def configure(parser) -> None:
     parser.add_argument("--cycles", action="store_true", help="print the per-cycle table")
     parser.add_argument("--plot", default=None, metavar="DIR",
                         help="write pressure_<channel>.png into DIR")
-    parser.add_argument("--overwrite", action="store_true", help="replace existing plots")
+    parser.add_argument("--report", default=None, metavar="OUT.html",
+                        help="write an HTML report of the indicator analysis")
+    parser.add_argument("--map", default=None, metavar="MAP.toml",
+                        help="channel map of a raw export (see crankbench import)")
+    parser.add_argument("--overwrite", action="store_true", help="replace existing outputs")
     parser.add_argument("--json", action="store_true", help="print JSON instead of tables")
 
 
@@ -97,7 +102,7 @@ def run(args) -> int:
             from crankbench.predict.errors import ConfigError
 
             raise ConfigError(f"--plot {out_dir}: exists and is not a directory")
-    record = io.read(args.record)
+    record = _read(io, args)
     channels = [args.channel] if args.channel else pressure_channels(record)
     if not channels:
         from crankbench.predict.errors import AnalysisError
@@ -112,6 +117,10 @@ def run(args) -> int:
                    peg_pressure=None if args.peg_pressure_bar is None
                    else args.peg_pressure_bar * 1e5,
                    gamma=args.gamma, cycle=args.cycle)
+    if args.report:
+        from crankbench.measure._atomic import check_overwrite
+
+        check_overwrite(args.report, args.overwrite, option="--overwrite")
     if args.plot:
         from crankbench.measure._atomic import check_overwrite
 
@@ -135,7 +144,31 @@ def run(args) -> int:
             print()
     if args.plot:
         _plots(results, Path(args.plot), args.overwrite)
+    if args.report:
+        from crankbench.analysis.excitation_compare import add_indicator_section
+        from crankbench.analysis.report import Report
+
+        rep = Report(f"Cylinder pressure - {record.attrs.get('test_id', args.record)}",
+                     subtitle=f"record {args.record} · model {args.model or 'none'}")
+        rep.add_metadata({"record": str(args.record), "engine model": str(args.model),
+                          "engine": record.attrs.get("engine_id", "—"),
+                          "test": record.attrs.get("test_id", "—")})
+        add_indicator_section(rep, results, section="Cylinder pressure")
+        log.info("wrote %s", rep.save(args.report, overwrite=args.overwrite,
+                                      option="--overwrite"))
     return 0
+
+
+def _read(io, args):
+    if args.map is None:
+        return io.read(args.record)
+    import inspect
+
+    if "map" not in inspect.signature(io.read).parameters:
+        from crankbench.predict.errors import ConfigError
+
+        raise ConfigError("--map: this build reads no channel maps")
+    return io.read(args.record, map=args.map)
 
 
 def _plots(results, out_dir, overwrite):

@@ -134,3 +134,8 @@ def test_pressure_command_json_and_text(run, capsys, tmp_path):
     assert main(["pressure", str(h5), "--plot", str(tmp_path)]) != 0      # no overwrite
     assert main(["pressure", str(h5)]) == 0                                  # no model
     assert "needs --model" in capsys.readouterr().out
+    out = tmp_path / "p.html"
+    assert main(["pressure", str(h5), "--model", str(MODEL), "--report", str(out)]) == 0
+    html = out.read_text()
+    assert "Indicator analysis" in html and "log p - log V" in html
+    assert main(["pressure", str(h5), "--report", str(out)]) != 0            # no overwrite
