@@ -193,7 +193,7 @@ def add_pressure_section(rep, comparison, *, result=None, figures=True,
     add_indicator_section(rep, comparison.indicator, figures=figures, section=section)
     units = comparison.table.attrs.get("units", "")
     rep.add_table(comparison.table, title="Measured response against both predictions",
-                  section=section, caption=f"Peaks over the measured speed range, {units} "
+                  section=section, amplitude_units=units, caption=f"Peaks over the measured speed range, {units} "
                                            f"(peak). {comparison.note}.")
     if figures:
         try:
