@@ -120,6 +120,8 @@ def measured_excitation_prediction(record, system, grid, orders, node, quantity,
         k = int(np.argmax(np.where(ok, values, -np.inf)))
         lo, hi = np.nanmin(rpm), np.nanmax(rpm)
         inside = (grid >= lo) & (grid <= hi)
+        if not inside.any():                     # a steady run: the nearest predicted speed
+            inside = np.abs(grid - 0.5 * (lo + hi)) == np.abs(grid - 0.5 * (lo + hi)).min()
         pm = float(model_response.sel(order=q).values[inside].max())
         px = float(response.sel(order=q).values[inside].max())
         rows.append({"order": q, "measured_peak": float(values[k]),

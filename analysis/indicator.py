@@ -17,14 +17,15 @@ ratio give the exact volume ``V(ψ)`` and its slope ``dV/dψ`` from ``Engine.pis
   ``"polytropic"`` fits ``p + Δp = C V^{-n}`` to the compression between ``window_deg`` (default
   −100° to −35°, after intake closing and before combustion), with ``n`` fitted on the mean
   cycle and ``Δp`` then found per cycle (a linear least-squares fit for fixed ``n``).
-* **TDC check** (the thermodynamic loss angle): a wrong TDC shifts the whole diagram. Fired
-  cycles: the compression is fitted by ``p + Δp = C V(ψ − δ)^{-n}`` with ``n``, ``δ`` (and
-  ``Δp``, ``C``) free (variable projection, Gauss–Newton); the standard error of ``δ`` follows
-  from the residual and the Jacobian. Motored cycles: ``δ = ψ_peak + loss angle`` (the motored
-  peak leads TDC by the loss angle, a few tenths of a degree to about one degree from heat
-  transfer and blow-by; Pipitone & Beccari, Applied Thermal Engineering 30, 2010). A polytropic
-  model has no heat transfer, so on real data the fitted ``δ`` carries a bias of the order of the
-  loss angle besides its stated random error.
+* **TDC check** (the thermodynamic loss angle): a wrong TDC shifts the whole diagram. The
+  compression is fitted by ``p + Δp = C V(ψ − δ)^{-n}`` with ``n``, ``δ`` (and ``Δp``, ``C``)
+  free (variable projection, Gauss–Newton), motored or fired; the standard error of ``δ``
+  follows from the residual and the Jacobian. A motored cycle also gets the classical second
+  estimate ``δ = ψ_peak + loss angle`` (the motored peak leads TDC by the loss angle, a few
+  tenths of a degree to about one degree from heat transfer and blow-by; Pipitone & Beccari,
+  Applied Thermal Engineering 30, 2010). A polytropic model has no heat transfer, so on real
+  data the fitted ``δ`` carries a bias of the order of the loss angle besides its stated
+  random error.
 * **Heat release** (single zone, apparent, constant ratio of specific heats γ; Heywood §10.2,
   eq. 10.4): ``dQ/dψ = γ/(γ−1) p dV/dψ + 1/(γ−1) V dp/dψ``; cumulative release and mass fraction
   burnt (MFB) between the minimum before the peak and the maximum after it.
@@ -415,13 +416,17 @@ class TdcCheck:
     standard_error : float
         Random error (1 σ) of δ from the fit, rad (NaN for the motored-peak method).
     method : str
-        "compression polytropic fit" or "motored peak + loss angle".
+        "compression polytropic fit".
     motored : bool
-        The cycle looked motored (no combustion).
+        The cycle looked motored (expansion within 15 % of the compression at 40–80° from
+        TDC).
     exponent : float
-        Polytropic exponent of the fit (NaN for the motored-peak method).
+        Polytropic exponent of the fit.
     note : str
         What the accuracy rests on.
+    motored_peak_offset : float
+        For a motored cycle, the second estimate: peak angle plus the loss angle, rad (NaN
+        when fired).
     """
 
     offset: float
@@ -430,6 +435,7 @@ class TdcCheck:
     motored: bool
     exponent: float = float("nan")
     note: str = ""
+    motored_peak_offset: float = float("nan")
 
     @property
     def offset_deg(self) -> float:
@@ -440,7 +446,8 @@ class TdcCheck:
         return {"offset_deg": self.offset_deg,
                 "standard_error_deg": float(np.rad2deg(self.standard_error)),
                 "method": self.method, "motored": bool(self.motored),
-                "exponent": float(self.exponent), "note": self.note}
+                "exponent": float(self.exponent), "note": self.note,
+                "motored_peak_offset_deg": float(np.rad2deg(self.motored_peak_offset))}
 
 
 def thermodynamic_tdc(engine, crank_angle, pressure, *, cylinder=1, window_deg=(-90.0, -25.0),
@@ -459,7 +466,8 @@ def thermodynamic_tdc(engine, crank_angle, pressure, *, cylinder=1, window_deg=(
     window_deg : (float, float)
         Compression window of the fit, deg (before combustion starts).
     loss_angle_deg : float
-        Thermodynamic loss angle for motored cycles (by how much the peak leads TDC), deg.
+        Thermodynamic loss angle of the motored-peak estimate (by how much the peak leads
+        TDC), deg.
     search_deg : (float, float), optional
         Range of δ to scan first, deg (default ±3°; wider when the zero is only a guess).
 
@@ -483,40 +491,42 @@ def thermodynamic_tdc(engine, crank_angle, pressure, *, cylinder=1, window_deg=(
     psi, _ = _grid(crank_angle, cycle)
     p = _rows(pressure, psi.size).mean(axis=0)
     sel = _window(psi, window_deg)
-    # motored? compare the peak with the fitted compression extrapolated to TDC
-    v_sel, _ = _volume_and_slope(engine, psi[sel], cylinder)
-    base = _fit_compression(v_sel, p[sel])
-    v_tdc = float(_volume_and_slope(engine, np.array([0.0]), cylinder)[0][0])
-    p_tdc = base["C"] * v_tdc ** -base["n"] - base["offset"]
-    near = np.abs(psi) <= 60 * DEG
-    motored = bool(p[near].max() < 1.1 * p_tdc)
+    # motored or fired: a fired cycle's expansion stands well above its compression at the same
+    # distance from TDC (informational: the compression fit serves both)
+    h = psi[1] - psi[0]
+    side = np.arange(int(round(40 * DEG / h)), int(round(80 * DEG / h)) + 1)
+    mid = int(np.argmin(np.abs(psi)))
+    ratio = float(p[mid + side].mean() / p[mid - side].mean())
+    motored = bool(ratio < 1.15)
+    peak_offset = np.nan
     if motored:
-        pk = cycle_peaks(psi[near], p[near])
+        near = np.abs(psi) <= 60 * DEG
         loss = check_range(loss_angle_deg, "loss_angle_deg", 0.0, 5.0, error=AnalysisError)
-        return TdcCheck(offset=float(pk["angle"][0] + loss * DEG), standard_error=np.nan,
-                        method="motored peak + loss angle", motored=True,
-                        note=f"loss angle {loss:g} deg assumed (typically a few tenths to 1 "
-                             "deg); the result is as good as that assumption")
+        peak_offset = float(cycle_peaks(psi[near], p[near])["angle"][0] + loss * DEG)
     lo, hi = (-3.0, 3.0) if search_deg is None else (float(x) for x in search_deg)
 
     def vol(d):
         return _volume_and_slope(engine, psi[sel] - d, cylinder)[0]
 
-    # coarse scan of δ with n = 1.3 (the fit is not convex far from the answer; a fixed n keeps
-    # it from trading δ against n), then Gauss–Newton with n free
-    scan = np.arange(lo, hi + 0.25, 0.25) * DEG
-    rms = [_fit_compression(vol(d), p[sel], n=1.3)["rms"] for d in scan]
+    # coarse scan of δ at 0.5° (the fit is not convex far from the answer), then Gauss–Newton
+    # within ±1° of the best point, moved on while it ends on that bound
+    scan = np.arange(lo, hi + 0.25, 0.5) * DEG
+    rms = [_fit_compression(vol(d), p[sel])["rms"] for d in scan]
     d0 = float(scan[int(np.argmin(rms))])
-
-    def vol_shifted(d):
-        return vol(d0 + d)
-
-    fit = _fit_compression(vol_shifted, p[sel], delta_bound=DEG)
-    return TdcCheck(offset=d0 + fit["delta"], standard_error=fit["delta_se"],
-                    method="compression polytropic fit", motored=False, exponent=fit["n"],
-                    note="random error from the fit residual; a polytropic compression has no "
-                         "heat transfer, so on real data add a bias of the order of the loss "
-                         "angle (a few tenths of a degree)")
+    for _ in range(4):
+        fit = _fit_compression(lambda d: vol(d0 + d), p[sel], delta_bound=DEG)
+        d0 += fit["delta"]
+        if abs(fit["delta"]) < 0.999 * DEG:
+            break
+    note = ("random error from the fit residual; a polytropic compression has no heat "
+            "transfer, so on real data add a bias of the order of the loss angle (a few tenths "
+            "of a degree)")
+    if motored:
+        note += (f"; motored (expansion/compression {ratio:.2f}): the peak plus a "
+                 f"{loss_angle_deg:g} deg loss angle gives {np.rad2deg(peak_offset):+.2f} deg")
+    return TdcCheck(offset=d0, standard_error=fit["delta_se"],
+                    method="compression polytropic fit", motored=motored, exponent=fit["n"],
+                    note=note, motored_peak_offset=peak_offset)
 
 
 # ------------------------------------------------------------------------------ heat release

@@ -19,7 +19,8 @@ model (cylinder geometry). It
    interpolation between samples: error O((ω/fs)⁴ p⁗));
 4. pegs each cycle (:mod:`analysis.indicator`: BDC level or polytropic compression; ``"auto"``
    keeps an already absolute level when the polytropic fit agrees with it);
-5. checks TDC thermodynamically (compression fit or motored peak + loss angle) and corrects it
+5. checks TDC thermodynamically (compression fit; for a motored cycle also its peak plus the
+   loss angle) and corrects it
    when asked (``tdc_correction=True``) or when there was no TDC reference;
 6. gives per-cycle and cycle-averaged peak pressure and angle, net and gross IMEP, PMEP,
    COV of IMEP and the single-zone heat release (γ stated) of the mean cycle.

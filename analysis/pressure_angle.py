@@ -149,6 +149,13 @@ def _angle(record, *, angle_channel, tdc_channel, tdc_offset_deg):
                             marks, off, tdc_channel)
         return trace, (f"TDC mark channel {tdc_channel!r}" + (f" + {off:g} deg" if off else "")
                        + f"; angle from {angle_channel!r} ({ppr}-{missing} pulses/rev)"), True
+    gap = _gap_reference(record, names, angle_channel, given)
+    if gap is not None:
+        g, g_off, marks = gap
+        trace = _referenced(angle_from_pulses(edges, pulses_per_rev=ppr, missing_teeth=missing),
+                            marks, 0.0, g)
+        return trace, (f"TDC {g_off:g} deg after the gap of {g!r}; angle from "
+                       f"{angle_channel!r} ({ppr}-{missing} pulses/rev)"), True
     attr = record[angle_channel].attrs.get("tdc_offset_deg")
     off = given if given is not None else attr
     if off is not None and (missing or given is not None):
@@ -159,6 +166,30 @@ def _angle(record, *, angle_channel, tdc_channel, tdc_offset_deg):
                        "deg after it"), True
     trace = angle_from_pulses(edges, pulses_per_rev=ppr, missing_teeth=missing)
     return trace, f"no TDC reference; angle from {angle_channel!r} ({ppr}-{missing})", False
+
+
+def _gap_reference(record, names, angle_channel, given):
+    """TDC times from another channel's wheel gap, when the angle channel has no gap.
+
+    A finer encoder without a reference gives the angle; a missing-tooth wheel with a known TDC
+    offset (``given`` or its ``tdc_offset_deg`` attr) gives the zero: its TDC instants become
+    the marks. None when the angle channel has its own gap or no such wheel exists.
+    """
+    from crankbench.measure.tacho import angle_from_pulses
+
+    if (_pulse_info(record[angle_channel]) or (0, 0))[1]:
+        return None
+    for g in _find(record, names, "angle"):
+        info = _pulse_info(record[g])
+        off = given if given is not None else record[g].attrs.get("tdc_offset_deg")
+        if g == angle_channel or not info[1] or off is None:
+            continue
+        tr = angle_from_pulses(_edges(record, g), pulses_per_rev=info[0], missing_teeth=info[1],
+                               tdc_offset_deg=float(off))
+        k = np.arange(np.ceil(tr.angle[0] / TWO_PI), np.floor(tr.angle[-1] / TWO_PI) + 1)
+        if k.size:
+            return g, float(off), np.interp(k * TWO_PI, tr.angle, tr.time)
+    return None
 
 
 def _referenced(trace, marks, offset_deg, name):

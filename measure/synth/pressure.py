@@ -3,7 +3,8 @@
 The true pressure of each cycle is the single-zone Wiebe trace of :mod:`predict.pressure`
 (evaluated on a 0.1° grid and interpolated by a periodic cubic spline). The trace is affine in
 the heat released, ``p = p_motored + Q u(ψ)``, so cycle-to-cycle variation is a random heat
-release per cycle, ``Q_k = Q (1 + cycle_variation ε_k)``, ε ~ N(0, 1). The channel then gets
+release per cycle, ``Q_k = Q (1 + cycle_variation ε_k)``, ε ~ N(0, 1), times the scene's load
+factor at that speed (a load law scales the fuel, not the compression). The channel then gets
 
 * ``offset`` (Pa): the unknown level of a piezoelectric transducer — the pegging error;
 * ``drift_rate`` (Pa/s) and ``noise_rms`` (Pa) from the scene's
@@ -181,9 +182,7 @@ def pressure_channel(scene, spec, psi0, rng, *, vibration=None):
     load = scene.load.scale(prof.speed(ts) / RPM)
     shifted = psi - np.radians(err.tdc_error_deg)
     wrapped = np.mod(shifted, period)
-    p_min = float(full.pressure.min())
-    true = motored(wrapped) + q * scale[k - k0] * unit(wrapped)
-    true = p_min + load * (true - p_min)
+    true = motored(wrapped) + q * load * scale[k - k0] * unit(wrapped)
     data = true + err.offset
     start = np.radians(full.parameters["combustion_start_deg"])
     if err.thermal_shock > 0:
@@ -221,9 +220,7 @@ def _truth(engine, full, q, motored, unit, scale, k0, psi0, fire, prof, err, spe
             continue
         t_tdc = float(np.interp(target, a_grid, t_grid))
         lf = float(load_spec.scale(prof.speed(np.array([t_tdc])) / RPM)[0])
-        p_min = float(full.pressure.min())
-        tr = PressureTrace(angle=ang, pressure=p_min + lf * (m_grid + q * s * u_grid - p_min),
-                           cycle=engine.cycle)
+        tr = PressureTrace(angle=ang, pressure=m_grid + q * s * lf * u_grid, cycle=engine.cycle)
         net = tr.work(engine) / engine.swept_volume
         if bdc is not None:
             sel = (ang <= np.pi) | (ang >= 3 * np.pi)
@@ -234,7 +231,7 @@ def _truth(engine, full, q, motored, unit, scale, k0, psi0, fire, prof, err, spe
             gross = float(np.sum(0.5 * (p2[1:] + p2[:-1]) * np.diff(v))) / engine.swept_volume
         else:
             gross = net
-        pf = p_min + lf * (m_f + q * s * u_f - p_min)
+        pf = m_f + q * s * lf * u_f
         i = int(np.argmax(pf))
         rows.append({"time_s": t_tdc, "heat_release_j": q * s * lf, "imep_net_pa": net,
                      "imep_gross_pa": gross, "pmep_pa": gross - net,

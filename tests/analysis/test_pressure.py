@@ -222,3 +222,35 @@ def test_a_clipped_pressure_channel_is_named(smooth):
     rec["p_cyl1"] = rec["p_cyl1"].clip(max=limit)
     r = indicator_analysis(rec, pc.engine())
     assert any("is clipped at 45 bar" in w for w in r.warnings)
+
+
+def test_motored_cycle_tdc_from_the_peak_and_loss_angle():
+    """No combustion: the check uses the motored peak; this closed-form cycle has no heat loss,
+    so with loss angle 0 the TDC error comes back exactly."""
+    motored = pc.SmoothCycle(bump=0.0)
+    rec = pc.record(motored, duration=0.5, tdc_error_deg=0.8)
+    r = indicator_analysis(rec, pc.engine(), loss_angle_deg=0.0)
+    chk = r.tdc["check"]
+    assert chk.motored and chk.method == "compression polytropic fit"
+    assert abs(chk.offset_deg - 0.8) < 0.01
+    assert abs(np.rad2deg(chk.motored_peak_offset) - 0.8) < 0.02
+    assert "motored" in chk.note
+    assert np.mean(r.imep_gross) > 0.1e5                  # 0.8 deg late makes fake work ...
+    fixed = indicator_analysis(rec, pc.engine(), tdc_correction=True)
+    assert abs(np.mean(fixed.imep_gross)) < 200.0         # ... a lossless motored loop has none
+
+
+def test_encoder_angle_with_the_zero_from_a_gap_wheel(smooth):
+    """A 360-ppr encoder without a reference and a 60-2 wheel whose TDC offset is known (the
+    usual bench): the encoder gives the angle, the gap wheel the TDC."""
+    ref = smooth.reference()
+    rec = pc.record(smooth, duration=0.5, fs=71_000.0, wheel="encoder", mark=False)
+    gap = pc.record(smooth, duration=0.5, fs=71_000.0, mark=False)
+    rec["crank"] = gap["crank"]
+    rec["crank"].attrs["tdc_offset_deg"] = 84.0
+    r = indicator_analysis(rec, pc.engine())
+    assert r.tdc["reference"].startswith("TDC 84 deg after the gap of 'crank'; angle from "
+                                         "'encoder'")
+    # the sampled square wave puts each encoder edge within half a sample (0.06 deg here)
+    assert abs(np.rad2deg(r.mean["peak_angle"]) - ref["angle_deg"]) < 0.1
+    assert abs(np.mean(r.imep_net) / ref["imep_net"] - 1) < 3e-3
