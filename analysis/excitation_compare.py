@@ -8,8 +8,10 @@ through :func:`predict.gas_torque.excitation_from_pressure`, the reciprocating i
 model). If measurement and the measured-excitation prediction agree while the parametric one
 does not, the pressure model is at fault; if both predictions miss alike, the dynamic model is.
 
-The measured pressure is one operating point (the record's cycles averaged); over a sweep it is
-scaled with speed by the same load law as the parametric excitation — stated in the result.
+On a sweep (cycle speeds spanning more than 5 % of their mean) the gas torque is taken per
+speed bin as measured (:func:`analysis.pressure.measured_speed_excitation`, no load law); on a
+steady run the cycles are averaged into one operating point, scaled over the model's speed
+grid by the same load law as the parametric excitation — stated in the result.
 """
 
 from __future__ import annotations
@@ -87,14 +89,19 @@ def measured_excitation_prediction(record, system, grid, orders, node, quantity,
     A problem with the pressure (no crank-angle source, no complete cycle, ...) is logged as a
     warning and gives None: the torsional comparison does not depend on it.
     """
-    from .pressure import indicator_analyses, measured_excitation, pressure_channels
+    from .pressure import (indicator_analyses, measured_excitation, measured_speed_excitation,
+                           pressure_channels)
 
     engine = getattr(system, "engine", None)
     if engine is None or not pressure_channels(record):
         return None
     try:
         results = indicator_analyses(record, engine)
-        exc = measured_excitation(results, engine, orders=orders)
+        speeds = np.concatenate([r.speed_rpm for r in results.values()])
+        if np.ptp(speeds) > 0.05 * speeds.mean():       # a sweep: the gas torque per speed
+            exc = measured_speed_excitation(results, engine, orders=orders)
+        else:
+            exc = measured_excitation(results, engine, orders=orders)
     except CrankbenchError as exc_:
         log.warning("measured excitation skipped: %s", exc_)
         return None
@@ -132,9 +139,12 @@ def measured_excitation_prediction(record, system, grid, orders, node, quantity,
                      else float("nan")})
     table = pd.DataFrame(rows)
     table.attrs["units"] = units
-    speeds = [float(np.mean(r.speed_rpm)) for r in results.values()]
-    note = (f"{exc.source}; measured at {min(speeds):.0f}-{max(speeds):.0f} rpm and scaled "
-            f"over the sweep by the load law ({load.law})")
+    if getattr(exc, "speed_dependent", False):
+        note = f"{exc.source}; the gas torque of each speed as measured (no load law)"
+    else:
+        speeds = [float(np.mean(r.speed_rpm)) for r in results.values()]
+        note = (f"{exc.source}; measured at {min(speeds):.0f}-{max(speeds):.0f} rpm and scaled "
+                f"over the sweep by the load law ({load.law})")
     return ExcitationComparison(indicator=results, excitation=exc, response=response,
                                 table=table, note=note)
 

@@ -311,7 +311,8 @@ def predicted_response(system, speed_rpm, orders, node, *, load, quantity="angle
     """Steady-state order amplitudes at ``node`` and the complex stress of each section.
 
     ``excitation`` (an :class:`predict.torsion.excitation.Excitation`, e.g. from measured
-    pressure) replaces the model's parametric one; its gas part is scaled by the load law.
+    pressure) replaces the model's parametric one; its gas part is scaled by the load law —
+    except for a :class:`predict.gas_torque.SpeedExcitation`, measured at each speed.
     Returns (amplitude (n_s, n_o), stress (n_s, n_o, n_edges) complex Pa — NaN where a
     section has no diameter —, the ForcedResponse).
     """
@@ -323,10 +324,13 @@ def predicted_response(system, speed_rpm, orders, node, *, load, quantity="angle
         imep = load.imep if load.imep is not None else system.operating.get("imep")
         excitation = engine_excitation(system, imep=imep, orders=orders)
     omega = np.asarray(speed_rpm, float) * np.pi / 30.0
-    scale = load.scale(speed_rpm)
-    gas = excitation.harmonics(np.zeros(1), orders)[0]                 # (n_o, z)
-    inertia = excitation.harmonics(np.ones(1), orders)[0] - gas
-    torque = gas[None] * scale[:, None, None] + (omega**2)[:, None, None] * inertia[None]
+    if getattr(excitation, "speed_dependent", False):       # measured per speed: no load law
+        torque = excitation.harmonics(omega, orders)
+    else:
+        scale = load.scale(speed_rpm)
+        gas = excitation.harmonics(np.zeros(1), orders)[0]                 # (n_o, z)
+        inertia = excitation.harmonics(np.ones(1), orders)[0] - gas
+        torque = gas[None] * scale[:, None, None] + (omega**2)[:, None, None] * inertia[None]
     res = system.forced_response(speed_rpm, torque=torque, orders=orders, superpose=False)
     i = system.node_names.index(node)
     amp = np.abs(res.angle[:, :, i])

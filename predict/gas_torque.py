@@ -36,10 +36,12 @@ import numpy as np
 
 from ._validate import check_finite_array, check_int
 from .errors import ModelError
+from dataclasses import dataclass
+
 from .pressure import PressureTrace, as_trace
 from .torsion.excitation import Excitation, torque_harmonics
 
-__all__ = ["excitation_from_pressure", "mount_excitation", "mount_response"]
+__all__ = ["excitation_from_pressure", "mount_excitation", "mount_response", "SpeedExcitation"]
 
 
 def _traces_by_cylinder(engine, pressure) -> dict:
@@ -62,6 +64,105 @@ def _traces_by_cylinder(engine, pressure) -> dict:
                              "cylinders; pass a dict {cylinder: trace} for some cylinders")
         return {i + 1: as_trace(p, cycle=engine.cycle) for i, p in enumerate(pressure)}
     return {1: as_trace(pressure, cycle=engine.cycle)}
+
+
+@dataclass(frozen=True)
+class SpeedExcitation:
+    """Cylinder torque harmonics whose gas part was measured at several speeds.
+
+    A run-up with cylinder pressure gives the gas torque at each speed it passed; this object
+    holds it per speed bin and interpolates linearly between the bins (holding the end bins
+    outside the measured range), with the model's inertia torque added: ``T_q(Ω) = G_q(Ω) +
+    Ω² I_q``. It is used wherever an :class:`~predict.torsion.excitation.Excitation` is (its
+    ``harmonics`` has the same signature); the gas part is already at the measured load, so no
+    load law applies (``speed_dependent`` is True).
+
+    Attributes
+    ----------
+    speed_rpm : ndarray (n_b,)
+        Bin centres, rpm, ascending.
+    orders : ndarray (n_o,)
+    gas : ndarray (n_b, n_o, n_cylinders), complex
+        Gas-torque harmonics per bin, N·m, in each cylinder's own crank angle.
+    inertia : ndarray (n_o,), complex
+        Inertia harmonics per unit Ω², N·m·s².
+    n_cylinders : int
+    source : str
+    cycles : ndarray (n_b,)
+        Cycles averaged in each bin.
+    """
+
+    speed_rpm: np.ndarray
+    orders: np.ndarray
+    gas: np.ndarray
+    inertia: np.ndarray
+    n_cylinders: int
+    source: str
+    cycles: np.ndarray
+    speed_dependent: bool = True
+
+    def describe(self) -> str:
+        return self.source
+
+    def harmonics(self, omega, orders, *, misfire=None) -> np.ndarray:
+        """Per-cylinder harmonics at each speed: (n_s, n_o, z) complex, N·m.
+
+        Examples
+        --------
+        >>> x = SpeedExcitation(speed_rpm=np.array([1000.0, 2000.0]), orders=np.array([1.0]),
+        ...                     gas=np.array([[[10.0]], [[20.0]]]), inertia=np.array([0.0]),
+        ...                     n_cylinders=1, source="two bins", cycles=np.array([5, 5]))
+        >>> x.harmonics([1500 * np.pi / 30, 3000 * np.pi / 30], [1.0])[:, 0, 0].real.tolist()
+        [15.0, 20.0]
+        """
+        omega = np.atleast_1d(np.asarray(omega, float))
+        idx = []
+        for q in np.atleast_1d(np.asarray(orders, float)):
+            hit = np.flatnonzero(np.isclose(self.orders, q))
+            if hit.size == 0:
+                raise ModelError(f"order {q:g} is not in the measured excitation (orders "
+                                 f"{self.orders.min():g}..{self.orders.max():g})")
+            idx.append(hit[0])
+        rpm = omega * 30.0 / np.pi
+        g = self.gas[:, idx, :]
+        if self.speed_rpm.size == 1:
+            gs = np.repeat(g, rpm.size, axis=0)
+        else:
+            u = np.interp(rpm, self.speed_rpm, np.arange(self.speed_rpm.size, dtype=float))
+            j = np.minimum(u.astype(int), self.speed_rpm.size - 2)
+            w = (u - j)[:, None, None]
+            gs = (1 - w) * g[j] + w * g[j + 1]
+        out = gs + (omega ** 2)[:, None, None] * self.inertia[idx][None, :, None]
+        if misfire is not None:
+            c = check_int(misfire, "misfire", minimum=1, error=ModelError)
+            if c > self.n_cylinders:
+                raise ModelError(f"misfire={c} but the engine has {self.n_cylinders} cylinders")
+            out[:, :, c - 1] -= gs[:, :, c - 1]
+        return out
+
+    def to_frame(self):
+        """|G_q| of the cylinders' mean per bin and order: columns ``speed_rpm``, ``order``,
+        ``gas_nm``, ``cycles``."""
+        import pandas as pd
+
+        g = np.abs(self.gas.mean(axis=2))
+        return pd.DataFrame({"speed_rpm": np.repeat(self.speed_rpm, self.orders.size),
+                             "order": np.tile(self.orders, self.speed_rpm.size),
+                             "gas_nm": g.ravel(),
+                             "cycles": np.repeat(self.cycles, self.orders.size)})
+
+    def plot(self, ax=None):
+        """|G_q| against speed for the strongest orders; returns the figure."""
+        import matplotlib.pyplot as plt
+
+        fig, ax = plt.subplots(figsize=(7, 3.5)) if ax is None else (ax.figure, ax)
+        g = np.abs(self.gas.mean(axis=2))
+        for k in np.argsort(-g.max(axis=0))[:6]:
+            ax.plot(self.speed_rpm, g[:, k], "o-", ms=3, label=f"order {self.orders[k]:g}")
+        ax.set_xlabel("speed (rpm)")
+        ax.set_ylabel("|gas torque harmonic| (N m)")
+        ax.legend(fontsize=8)
+        return fig
 
 
 def excitation_from_pressure(engine, pressure, *, orders=None, points=1440,

@@ -139,3 +139,17 @@ def test_pressure_command_json_and_text(run, capsys, tmp_path):
     html = out.read_text()
     assert "Indicator analysis" in html and "log p - log V" in html
     assert main(["pressure", str(h5), "--report", str(out)]) != 0            # no overwrite
+
+
+def test_run_up_excitation_is_measured_per_speed(run, result):
+    """On the run-up the pipeline takes the gas torque per speed bin; at this constant load
+    every bin reproduces predict's harmonics for the scene's imep (within 1 % of the largest)."""
+    from crankbench.predict.torsion.excitation import engine_excitation
+
+    exc = result.pressure.excitation
+    assert exc.speed_dependent and exc.speed_rpm.size >= 10
+    assert "speed bins" in exc.source and "no load law" in result.pressure.note
+    ref = engine_excitation(run[0].scene.engine, imep=1.0e6, orders=exc.orders).gas
+    for k in range(exc.speed_rpm.size):
+        assert np.max(np.abs(exc.gas[k, :, 0] - ref)) < 0.01 * np.abs(ref).max()
+    assert np.allclose(exc.gas[:, :, 1], exc.gas[:, :, 0])        # cylinder 1 for all
