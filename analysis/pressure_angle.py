@@ -123,16 +123,20 @@ def _angle(record, *, angle_channel, tdc_channel, tdc_offset_deg):
 
     names = [str(n) for n in record.data_vars]
     if angle_channel is None:
-        cands = _find(record, names, "angle")
+        cands = _find(record, names, "angle") or _crank_angle_channels(record, names)
         if not cands:
             raise AnalysisError("no crank-angle source: the record has no pulse train or "
-                                "pick-up/encoder voltage with pulses_per_rev > 1; channels: "
+                                "pick-up/encoder voltage with pulses_per_rev > 1 and no "
+                                "crank-angle channel; channels: "
                                 f"{', '.join(names)} (set pulses_per_rev with the import "
                                 "channel map, or pass angle_channel=)")
         angle_channel = cands[0]
     elif angle_channel not in record.data_vars:
         raise AnalysisError(f"angle_channel={angle_channel!r} is not a channel of the record; "
                             f"channels: {', '.join(names)}")
+    if _pulse_info(record[angle_channel]) is None and \
+            record[angle_channel].attrs.get("quantity") == "angle":
+        return _crank_angle_trace(record, angle_channel)
     info = _pulse_info(record[angle_channel])
     if info is None:
         raise AnalysisError(f"angle channel {angle_channel!r} has no pulses_per_rev attr")
@@ -166,6 +170,46 @@ def _angle(record, *, angle_channel, tdc_channel, tdc_offset_deg):
                        "deg after it"), True
     trace = angle_from_pulses(edges, pulses_per_rev=ppr, missing_teeth=missing)
     return trace, f"no TDC reference; angle from {angle_channel!r} ({ppr}-{missing})", False
+
+
+def _crank_angle_channels(record, names):
+    """Sampled crank-angle channels (an indicating system's export): quantity 'angle' spanning
+    more than 300° (a torsiograph's vibration angle spans far less)."""
+    out = []
+    for n in names:
+        var = record[n]
+        if var.attrs.get("quantity") != "angle" or _pulse_info(var) is not None:
+            continue
+        x = np.asarray(var.values, float)
+        if x.size > 16 and np.nanmax(x) - np.nanmin(x) > 300 * DEG:
+            out.append(n)
+    return out
+
+
+def _crank_angle_trace(record, name):
+    """AngleTrace of a sampled crank-angle channel, 0 at TDC as exported, unwrapped."""
+    from crankbench.measure.record import channel_time
+    from crankbench.measure.tacho import AngleTrace
+
+    x = np.asarray(record[name].values, float)
+    t = channel_time(record, name)
+    ok = np.isfinite(x)
+    x, t = x[ok], t[ok]
+    span = float(x.max() - x.min())
+    period = 4 * np.pi if span > 1.1 * TWO_PI else TWO_PI       # 720° or 360° sawtooth
+    d = np.diff(x)
+    wraps = d < -0.5 * span
+    angle = x + period * np.concatenate([[0], np.cumsum(wraps)])
+    step = np.diff(angle)
+    if np.mean(step > 0) < 0.99 or np.any(step < -2 * DEG):
+        raise AnalysisError(f"crank-angle channel {name!r} does not increase steadily (wraps at "
+                            f"{np.rad2deg(period):g} deg taken out); expected a sawtooth or a "
+                            "cumulative angle")
+    keep = np.concatenate([[True], step > 0])               # repeated values carry no time
+    trace = AngleTrace(time=t[keep], angle=angle[keep], pulses_per_rev=0,
+                       reference="crank-angle channel", tdc_offset=0.0)
+    return trace, (f"crank-angle channel {name!r} (its 0 taken as TDC of cylinder 1, wrapping "
+                   f"every {np.rad2deg(period):g} deg)"), True
 
 
 def _gap_reference(record, names, angle_channel, given):
@@ -234,14 +278,18 @@ def _cut(theta, p, t, base, psi, period):
     if last < first:
         return np.empty((0, psi.size)), np.empty(0), np.empty(0), np.empty((0, psi.size))
     centres = base + np.arange(first, last + 1) * period
-    target = centres[:, None] + psi[None, :]
-    u = np.interp(target.ravel(), theta, np.arange(theta.size, dtype=float))
-    cycles = _lagrange4(p, u).reshape(target.shape)
+    cycles = np.empty((centres.size, psi.size))
+    t_grid = np.empty_like(cycles)
+    index = np.arange(theta.size, dtype=float)
+    for a in range(0, centres.size, 64):             # bounded temporaries on long records
+        target = centres[a:a + 64, None] + psi[None, :]
+        u = np.interp(target.ravel(), theta, index)
+        cycles[a:a + 64] = _lagrange4(p, u).reshape(target.shape)
+        t_grid[a:a + 64] = np.interp(target.ravel(), theta, t).reshape(target.shape)
     t_c = np.interp(centres, theta, t)
     t0 = np.interp(centres + psi[0], theta, t)
     t1 = np.interp(centres - psi[0], theta, t)
     rpm = period / TWO_PI * 60.0 / (t1 - t0)
-    t_grid = np.interp(target.ravel(), theta, t).reshape(target.shape)
     return cycles, t_c, rpm, t_grid
 
 

@@ -254,3 +254,19 @@ def test_encoder_angle_with_the_zero_from_a_gap_wheel(smooth):
     # the sampled square wave puts each encoder edge within half a sample (0.06 deg here)
     assert abs(np.rad2deg(r.mean["peak_angle"]) - ref["angle_deg"]) < 0.1
     assert abs(np.mean(r.imep_net) / ref["imep_net"] - 1) < 5e-3
+
+
+def test_a_sampled_crank_angle_channel_is_an_angle_source(smooth):
+    """An indicating system's export: crank angle 0..720 deg as a sampled column."""
+    ref = smooth.reference()
+    rec = pc.record(smooth, duration=0.5, mark=False).drop_vars("crank")
+    theta = pc.crank_law()(rec["time"].values)
+    deg = np.mod(np.degrees(theta), 720.0)
+    from crankbench.measure.record import make_record
+
+    rec = rec.merge(make_record({"CA": dict(data=deg, sample_rate=100_000.0, units="deg",
+                                            quantity="angle")}))
+    r = indicator_analysis(rec, pc.engine())
+    assert "crank-angle channel 'CA'" in r.tdc["reference"]
+    assert abs(np.rad2deg(r.mean["peak_angle"]) - ref["angle_deg"]) < 0.02
+    assert abs(np.mean(r.imep_net) / ref["imep_net"] - 1) < 1e-3
