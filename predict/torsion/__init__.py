@@ -15,7 +15,8 @@ from .._lazy import lazy_names
 
 __all__ = ["chain", "TorsionalSystem", "Modes", "from_toml", "forced_response",
            "ForcedResponse", "ShaftLine", "resonance_amplitudes", "engine_excitation",
-           "Excitation", "StressLimits", "check_stress"]
+           "Excitation", "StressLimits", "check_stress", "CrankThrow", "throw_stiffness",
+           "uniform_shaft_frequencies"]
 
 _LAZY = {
     "chain": "system",
@@ -30,6 +31,9 @@ _LAZY = {
     "Excitation": "excitation",
     "StressLimits": "stress",
     "check_stress": "stress",
+    "CrankThrow": "throws",
+    "throw_stiffness": "throws",
+    "uniform_shaft_frequencies": "throws",
 }
 
 __getattr__, __dir__, _names = lazy_names(__name__, _LAZY)

@@ -20,7 +20,11 @@ Layout (SI unless the key names another unit; values at each part's own speed)::
     [[shaftline.shaft]]
     from = "cyl 1"
     to = "cyl 2"
-    stiffness = 6.0e7                      # or length + diameter [+ bore], or segments
+    stiffness = 6.0e7                      # or length + diameter [+ bore], or segments,
+                                           # or a [shaftline.shaft.throw] table (journal_*,
+                                           # pin_*, web_*, crank_radius, method)
+    # density = 7850 (kg/m³) or inertia = 1.2 (kg·m²): distributed inertia, split into
+    # elements = N pieces (default 21)
     diameter = 0.30                        # for stress (with stiffness given)
     loss_factor = 0.02                     # hysteretic η (and/or damping, N·m·s/rad)
 
@@ -155,7 +159,21 @@ def from_toml(path):
                   segments=segs, shear_modulus=t.positive("shear_modulus", None),
                   damping=t.number("damping", 0.0, low=0.0),
                   loss_factor=t.number("loss_factor", 0.0, low=0.0),
-                  name=t.string("name", None))
+                  name=t.string("name", None), density=t.positive("density", None),
+                  inertia=t.positive("inertia", None),
+                  elements=t.integer("elements", None, minimum=1))
+        tt = t.table("throw", None)
+        if tt is not None:
+            from .throws import THROW_METHODS, CrankThrow
+
+            kw["throw_method"] = tt.string("method", "wilson", options=THROW_METHODS)
+            dims = {key: tt.positive(key) for key in (
+                "journal_diameter", "journal_length", "pin_diameter", "pin_length",
+                "web_thickness", "web_width", "crank_radius")}
+            dims.update(journal_bore=tt.number("journal_bore", 0.0, low=0.0),
+                        pin_bore=tt.number("pin_bore", 0.0, low=0.0))
+            tt.check_unknown()
+            kw["throw"] = wrap(tt, CrankThrow, **dims)
         a, b = t.string("from"), t.string("to")
         t.check_unknown()
         wrap(t, line.add_shaft, a, b, **kw)
