@@ -150,7 +150,15 @@ class Engine:
     rod_inertia_correction : float or sequence of float
         J_G − m h k l² of each plain rod (kg·m², usually negative), the inertia through which
         the residual couple of the two-point rod acts (:meth:`predict.masses.Rod.two_point`);
-        adds −ΔJ ω² φ' φ'' to the crank torque. 0 (default) keeps the two-point model.
+        adds −ΔJ ω² φ' φ'' to the crank torque. 0 (default) keeps the classical two-point
+        (2-mass) rod model, a lower fidelity whose torque error is this residual couple.
+    series_order, lambda_terms : int, optional
+        Textbook lower fidelity of the piston motion: None (default) is the exact slider
+        crank; ``series_order=N`` truncates its harmonic series after order N and
+        ``lambda_terms=k`` keeps only k powers of λ per coefficient (``series_order=2,
+        lambda_terms=1`` is x = r cos θ + l − (λr/4)(1 − cos 2θ), a = rω²(cos θ + λ cos 2θ)).
+        Its acceleration error relative to r ω² is
+        :func:`predict.kinematics.series_error`. Plain rods with a centred pin only.
 
     References
     ----------
@@ -170,7 +178,7 @@ class Engine:
                  firing_order=None, bore=None, name="engine", pin_offset=0.0,
                  firing_angles_deg=None, articulated=None, compression_ratio=None,
                  rated_speed_rpm=None, combustion=None, rod_inertia_correction=0.0,
-                 source=None):
+                 source=None, series_order=None, lambda_terms=None):
         alpha = check_finite_array(crank_angles_deg, "crank_angles_deg", ndim=1, min_length=1,
                                    error=ModelError)
         n = alpha.size
@@ -208,6 +216,24 @@ class Engine:
                              "is modelled for plain rods only")
         self._rod_corr = _readonly(corr)
         self._firing_order, self._firing = self._resolve_firing(firing_order, firing_angles_deg)
+        self.series_order = None if series_order is None else check_int(
+            series_order, "series_order", error=ModelError)
+        if self.series_order is not None and self.series_order < 1:
+            raise ModelError(f"series_order={series_order!r} must be >= 1")
+        if lambda_terms is not None and self.series_order is None:
+            raise ModelError("lambda_terms needs series_order (the harmonic series it truncates)")
+        if self.series_order is not None and (self.pin_offset != 0 or any(
+                a is not None for a in self._articulated)):
+            raise ModelError("series_order (textbook piston series) needs plain rods and a "
+                             "centred piston pin")
+        self.lambda_terms = lambda_terms
+        self._series = None
+        if self.series_order is not None:
+            from .kinematics import displacement_coefficients
+
+            c = displacement_coefficients(self.crank_radius / self.rod_length,
+                                          self.series_order, lambda_terms=lambda_terms)
+            self._series = c
 
     # ------------------------------------------------------------------ validation helpers
     def _per_cylinder(self, value, name):
@@ -522,7 +548,9 @@ class Engine:
         beta = np.deg2rad(self._beta_deg)
         for i in range(self._n):
             art = self._articulated[i]
-            if art is None:
+            if art is None and self._series is not None:
+                jet = self._series_jet(th + alpha[i] - beta[i], r, l, self._series)
+            elif art is None:
                 jet = self._plain_jet(th + alpha[i] - beta[i], r, l, e)
             else:
                 m = art.master
@@ -537,6 +565,17 @@ class Engine:
         s = _jlin(sj, r / l, c=-e / l)
         c = _jsqrt(_jlin(_jmul(s, s), -1.0, c=1.0))
         return _jlin(cj, r, c, l)
+
+    @staticmethod
+    def _series_jet(psi, r, l, c):
+        """Truncated series x = r cos ψ + l Σ c_2k cos 2kψ and its θ-derivatives."""
+        k = np.arange(2, c.size, 2)
+        ck = c[2::2]
+        ang = np.multiply.outer(psi, k)
+        x = r * np.cos(psi) + l * (c[0] + np.cos(ang) @ ck)
+        dx = -r * np.sin(psi) - l * (np.sin(ang) @ (k * ck))
+        d2x = -r * np.cos(psi) - l * (np.cos(ang) @ (k * k * ck))
+        return x, dx, d2x
 
     @staticmethod
     def _articulated_jet(psi_m, art, delta, r, l, e):
@@ -725,6 +764,8 @@ class Engine:
             rated_speed_rpm=t.positive("rated_speed_rpm", None),
             combustion=combustion,
             rod_inertia_correction=masses("rod_inertia_correction", 0.0, low=None),
+            series_order=t.integer("series_order", None, minimum=1),
+            lambda_terms=t.integer("lambda_terms", None, minimum=1),
             articulated=arts,
             source=str(path),
         )
