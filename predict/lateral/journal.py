@@ -249,7 +249,9 @@ class JournalBearing:
         half = self.length / 2
         dth = 2 * np.pi / nt
         dz = half / nz
-        th = np.arange(nt) * dth
+        # the grid starts at the largest film thickness (the oil inlet, p = 0 there), so the
+        # forces are smooth in (x, y): no node snapping as the journal moves
+        th = np.arctan2(-y, -x) + np.arange(nt) * dth
         h = lambda t: c - x * np.cos(t) - y * np.sin(t)  # noqa: E731
         h3p = h(th + dth / 2) ** 3                         # between θ_i and θ_i+1
         h3m = np.roll(h3p, 1)
@@ -284,9 +286,8 @@ class JournalBearing:
         scale = k.diagonal()
         # oil inlet at the largest film thickness (Raimondi & Boyd's full-bearing condition):
         # p = 0 along that line, the film then runs round to the Reynolds cavitation boundary
-        inlet = int(np.rint(np.mod(np.arctan2(-y, -x), 2 * np.pi) / dth)) % nt
         fixed = np.zeros(n, bool)
-        fixed[idx[inlet]] = True
+        fixed[idx[0]] = True
         active = fixed.copy()
         p = np.zeros(n)
         for _ in range(60):
