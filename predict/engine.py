@@ -152,6 +152,12 @@ class Engine:
         the residual couple of the two-point rod acts (:meth:`predict.masses.Rod.two_point`);
         adds −ΔJ ω² φ' φ'' to the crank torque. 0 (default) keeps the classical two-point
         (2-mass) rod model, a lower fidelity whose torque error is this residual couple.
+    rotary : bool
+        Rotary engine (Gnome, Le Rhône): the crankshaft stands still and the cylinders,
+        crankcase and propeller turn; θ is then the angle of the cylinder block relative to
+        the fixed crank. The reciprocating masses also move round the axis at radius x, so
+        their inertia torque gains −m ω² x x' (kinetic energy ½ m ω² (x'² + x²), Liang 1948
+        ch. 10); the gas torque is unchanged (kinematic inversion).
     series_order, lambda_terms : int, optional
         Textbook lower fidelity of the piston motion: None (default) is the exact slider
         crank; ``series_order=N`` truncates its harmonic series after order N and
@@ -178,7 +184,7 @@ class Engine:
                  firing_order=None, bore=None, name="engine", pin_offset=0.0,
                  firing_angles_deg=None, articulated=None, compression_ratio=None,
                  rated_speed_rpm=None, combustion=None, rod_inertia_correction=0.0,
-                 source=None, series_order=None, lambda_terms=None):
+                 source=None, series_order=None, lambda_terms=None, rotary=False):
         alpha = check_finite_array(crank_angles_deg, "crank_angles_deg", ndim=1, min_length=1,
                                    error=ModelError)
         n = alpha.size
@@ -215,6 +221,9 @@ class Engine:
             raise ModelError(f"rod_inertia_correction[{bad[0]}] must be 0: the residual couple "
                              "is modelled for plain rods only")
         self._rod_corr = _readonly(corr)
+        if not isinstance(rotary, (bool, np.bool_)):
+            raise ModelError(f"rotary={rotary!r} must be true or false")
+        self.rotary = bool(rotary)
         self._firing_order, self._firing = self._resolve_firing(firing_order, firing_angles_deg)
         self.series_order = None if series_order is None else check_int(
             series_order, "series_order", error=ModelError)
@@ -765,6 +774,7 @@ class Engine:
             combustion=combustion,
             rod_inertia_correction=masses("rod_inertia_correction", 0.0, low=None),
             series_order=t.integer("series_order", None, minimum=1),
+            rotary=t.raw("rotary", False),
             lambda_terms=t.integer("lambda_terms", None, minimum=1),
             articulated=arts,
             source=str(path),

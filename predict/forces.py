@@ -301,11 +301,14 @@ def cylinder_torque(engine, theta, *, omega, pressure=None, cylinder=1,
     ang = check_finite_array(theta, "theta", error=ModelError)
     flat = ang.reshape(-1)
     shaft = engine.shaft_angle(flat) + np.deg2rad(engine.firing_angles_deg()[i])
-    _, dx, d2x = (v[i] for v in engine.piston_motion(shaft))
+    x, dx, d2x = (v[i] for v in engine.piston_motion(shaft))
     force = engine.reciprocating_mass[i] * w * w * d2x
     if pressure is not None:
         force = force + gas_force(engine, flat, pressure, crankcase_pressure=crankcase_pressure)
     out = force * -dx
+    if getattr(engine, "rotary", False):
+        # rotary engine: the piston also circles the axis at radius x (½ m ω² x² energy)
+        out = out - engine.reciprocating_mass[i] * w * w * x * dx
     if engine.rod_inertia_correction[i] != 0.0:
         d1, d2 = (v[i] for v in engine.rod_motion(shaft))
         out = out - engine.rod_inertia_correction[i] * w * w * d1 * d2
@@ -352,7 +355,7 @@ def engine_torque(engine, theta, *, omega, pressure=None,
     w = _omega(omega)
     ang = check_finite_array(theta, "theta", error=ModelError)
     flat = ang.reshape(-1)
-    _, dx, d2x = engine.piston_motion(engine.shaft_angle(flat))
+    x, dx, d2x = engine.piston_motion(engine.shaft_angle(flat))
     force = engine.reciprocating_mass[:, None] * w * w * d2x
     traces = _traces(engine, pressure)
     if traces is not None:
@@ -362,6 +365,8 @@ def engine_torque(engine, theta, *, omega, pressure=None,
         for i, tr in enumerate(traces):
             force[i] += (tr.at(flat - fire[i]) - pcc) * area
     parts = force * -dx
+    if getattr(engine, "rotary", False):
+        parts = parts - engine.reciprocating_mass[:, None] * w * w * x * dx
     corr = engine.rod_inertia_correction
     if np.any(corr != 0.0):
         # residual couple ΔM = ΔJ φ̈ through virtual work: −ΔJ ω² φ' φ''

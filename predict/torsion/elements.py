@@ -132,6 +132,14 @@ def crank_throw_inertia(engine, cylinder: int, throw_inertia: float = 0.0) -> fl
     r = engine.crank_radius
     lam = r / engine.rod_length
     j0 = check_nonnegative(throw_inertia, "throw_inertia", error=ModelError)
+    if engine.articulated[c] is not None or getattr(engine, "rotary", False):
+        # articulated rod / rotary engine: the exact mean of the kinetic-energy factor over a
+        # revolution (x'² for a link rod, x'² + x² for a piston circling the axis)
+        th = np.arange(720) * 2 * np.pi / 720
+        x, dx, _ = engine.piston_motion(th)
+        factor = np.mean(dx[c] ** 2 + (x[c] ** 2 if getattr(engine, "rotary", False) else 0.0))
+        return j0 + float(engine.rotating_mass[c]) * r * r + float(
+            engine.reciprocating_mass[c]) * float(factor)
     return (j0 + float(engine.rotating_mass[c]) * r * r
             + float(engine.reciprocating_mass[c]) * r * r * (0.5 + lam * lam / 8.0))
 
@@ -193,8 +201,9 @@ class ShaftLine:
             Speed of the part relative to the crankshaft.
         damping : float
             Absolute viscous damping to ground, N·m·s/rad (propeller, engine).
-        cylinder : int, optional
-            1-based cylinder whose tangential torque acts on this node.
+        cylinder : int or sequence of int, optional
+            1-based cylinder(s) whose tangential torque acts on this node (several for a V
+            throw or a radial row on one crank pin).
         throw_inertia : float, optional
             With ``cylinder``: the throw's own inertia; the node inertia is
             :func:`crank_throw_inertia`.
@@ -206,17 +215,21 @@ class ShaftLine:
         ratio = float(ratio)
         if ratio == 0 or not np.isfinite(ratio):
             raise ModelError(f"{name}: ratio={ratio!r} must be a finite non-zero speed ratio")
+        cylinders = [] if cylinder is None else (
+            [int(c) for c in cylinder] if np.ndim(cylinder) else [int(cylinder)])
         if throw_inertia is not None:
-            if cylinder is None or self.engine is None:
+            if not cylinders or self.engine is None:
                 raise ModelError(f"{name}: throw_inertia needs cylinder= and an engine")
-            inertia = crank_throw_inertia(self.engine, cylinder, throw_inertia)
+            # one throw carrying several cylinders (V, radial row): its own inertia once, the
+            # crank-train masses of every cylinder on it
+            inertia = throw_inertia + sum(
+                crank_throw_inertia(self.engine, c, 0.0) for c in cylinders)
         inertia = check_positive(inertia, f"{name}: inertia", error=ModelError)
         damping = check_nonnegative(damping, f"{name}: damping", error=ModelError)
         self._alias[name] = (len(self._nodes), ratio)
         self._nodes.append(dict(name=name, inertia=inertia * ratio ** 2, ratio=ratio,
                                 damping=damping * ratio ** 2, eigen=bool(eigen)))
-        if cylinder is not None:
-            c = int(cylinder)
+        for c in cylinders:
             if c in self._cylinders:
                 raise ModelError(f"{name}: cylinder {c} already sits on another node")
             self._cylinders[c] = len(self._nodes) - 1

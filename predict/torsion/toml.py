@@ -11,7 +11,8 @@ Layout (SI unless the key names another unit; values at each part's own speed)::
 
     [[shaftline.mass]]                     # disks, flywheel, propeller, crank throws
     name = "cyl 1"
-    cylinder = 1                           # the cylinder acting on this node
+    cylinder = 1                           # the cylinder acting on this node (an array for
+                                           # a V throw or a radial row on one crank pin)
     throw_inertia = 30.0                   # throw only: crank-train masses are added
     # inertia = 41.0                       # ... or the total inertia
     ratio = 1.0                            # speed relative to the crankshaft
@@ -133,8 +134,15 @@ def from_toml(path):
             raise ModelError(f"{table.where()}: {exc}") from None
 
     for t in sl.tables("mass", []):
+        cyl = t.raw("cylinder", None)
+        if isinstance(cyl, list):
+            if not cyl or not all(isinstance(c, int) and not isinstance(c, bool) and c >= 1
+                                  for c in cyl):
+                t.fail("cylinder", f"= {cyl!r} must be a cylinder number or an array of them")
+        else:
+            cyl = t.integer("cylinder", None, minimum=1)
         kw = dict(ratio=t.number("ratio", 1.0), damping=t.number("damping", 0.0, low=0.0),
-                  cylinder=t.integer("cylinder", None, minimum=1))
+                  cylinder=cyl)
         if "throw_inertia" in t:
             kw["throw_inertia"] = t.number("throw_inertia", low=0.0)
             inertia = None
