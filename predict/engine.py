@@ -158,6 +158,15 @@ class Engine:
         the fixed crank. The reciprocating masses also move round the axis at radius x, so
         their inertia torque gains −m ω² x x' (kinetic energy ½ m ω² (x'² + x²), Liang 1948
         ch. 10); the gas torque is unchanged (kinematic inversion).
+    double_acting : bool
+        Double-acting cylinders: combustion on both sides of the piston, the lower chamber
+        firing half a working cycle after the upper one with the same pressure trace. The
+        net gas force towards the crank is ``(p_top − p_cc) A − (p_bottom − p_cc)(A − A_rod)``
+        (p_cc: the pressure outside, acting on the rod's cross-section).
+    piston_rod_diameter : float
+        Piston-rod diameter through the lower chamber, m (double-acting only). 0 is the
+        textbook lower fidelity that neglects the rod area; its error in the gas force is
+        p_bottom·A_rod.
     series_order, lambda_terms : int, optional
         Textbook lower fidelity of the piston motion: None (default) is the exact slider
         crank; ``series_order=N`` truncates its harmonic series after order N and
@@ -184,7 +193,8 @@ class Engine:
                  firing_order=None, bore=None, name="engine", pin_offset=0.0,
                  firing_angles_deg=None, articulated=None, compression_ratio=None,
                  rated_speed_rpm=None, combustion=None, rod_inertia_correction=0.0,
-                 source=None, series_order=None, lambda_terms=None, rotary=False):
+                 source=None, series_order=None, lambda_terms=None, rotary=False,
+                 double_acting=False, piston_rod_diameter=0.0):
         alpha = check_finite_array(crank_angles_deg, "crank_angles_deg", ndim=1, min_length=1,
                                    error=ModelError)
         n = alpha.size
@@ -224,6 +234,18 @@ class Engine:
         if not isinstance(rotary, (bool, np.bool_)):
             raise ModelError(f"rotary={rotary!r} must be true or false")
         self.rotary = bool(rotary)
+        if not isinstance(double_acting, (bool, np.bool_)):
+            raise ModelError(f"double_acting={double_acting!r} must be true or false")
+        self.double_acting = bool(double_acting)
+        self.piston_rod_diameter = check_nonnegative(piston_rod_diameter, "piston_rod_diameter",
+                                                     error=ModelError)
+        if self.piston_rod_diameter > 0 and not self.double_acting:
+            raise ModelError("piston_rod_diameter needs double_acting=True (a trunk piston "
+                             "has no piston rod through the lower chamber)")
+        if self.double_acting and self.bore is not None \
+                and self.piston_rod_diameter >= self.bore:
+            raise ModelError(f"piston_rod_diameter={piston_rod_diameter!r} must be smaller than "
+                             f"bore={self.bore!r}")
         self._firing_order, self._firing = self._resolve_firing(firing_order, firing_angles_deg)
         self.series_order = None if series_order is None else check_int(
             series_order, "series_order", error=ModelError)
@@ -397,6 +419,30 @@ class Engine:
         """Stroke of a plain-rod cylinder, m (2r for a centred pin)."""
         r, l, e = self.crank_radius, self.rod_length, self.pin_offset
         return float(np.sqrt((l + r) ** 2 - e * e) - np.sqrt((l - r) ** 2 - e * e))
+
+    def net_gas_force(self, trace, crank_angle, crankcase_pressure=1.0e5):
+        """Gas force on one piston towards the crank, N, at ``crank_angle`` from that
+        cylinder's firing TDC (rad): ``(p − p_cc) A`` for a trunk piston; for double-acting
+        cylinders minus the lower chamber's ``(p(ψ − cycle/2) − p_cc)(A − A_rod)``.
+
+        Examples
+        --------
+        >>> from crankbench.predict.pressure import PressureTrace
+        >>> e = Engine(crank_angles_deg=[0], crank_radius=0.1, rod_length=0.4,
+        ...            reciprocating_mass=1.0, bore=0.2, cycle=2, double_acting=True,
+        ...            piston_rod_diameter=0.05)
+        >>> tr = PressureTrace.from_measured(np.linspace(0, 2 * np.pi, 5)[:-1],
+        ...                                  [5e6, 1e5, 1e5, 1e5], cycle=2)
+        >>> round(float(e.net_gas_force(tr, np.pi)))   # lower chamber firing: −(5e6 − 1e5)(A − a)
+        -144317
+        """
+        ang = np.asarray(crank_angle, float)
+        area = self.piston_area
+        force = (trace.at(ang) - crankcase_pressure) * area
+        if self.double_acting:
+            lower = area - np.pi * self.piston_rod_diameter ** 2 / 4
+            force = force - (trace.at(ang - self.cycle_angle / 2) - crankcase_pressure) * lower
+        return force
 
     @property
     def piston_area(self) -> float:
@@ -775,6 +821,8 @@ class Engine:
             rod_inertia_correction=masses("rod_inertia_correction", 0.0, low=None),
             series_order=t.integer("series_order", None, minimum=1),
             rotary=t.raw("rotary", False),
+            double_acting=t.raw("double_acting", False),
+            piston_rod_diameter=t.number("piston_rod_diameter", 0.0, low=0.0),
             lambda_terms=t.integer("lambda_terms", None, minimum=1),
             articulated=arts,
             source=str(path),

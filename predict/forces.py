@@ -62,7 +62,8 @@ def _traces(engine, pressure):
 
 
 def gas_force(engine, crank_angle, pressure, *, crankcase_pressure=CRANKCASE_PRESSURE):
-    """Gas force on one piston, (p − p_cc)·A, N, positive towards the crank.
+    """Gas force on one piston, (p − p_cc)·A, N, positive towards the crank (double-acting
+    cylinders: minus the lower chamber's, see :meth:`Engine.net_gas_force`).
 
     Parameters
     ----------
@@ -93,7 +94,7 @@ def gas_force(engine, crank_angle, pressure, *, crankcase_pressure=CRANKCASE_PRE
     trace = as_trace(pressure, cycle=engine.cycle)
     pcc = check_nonnegative(crankcase_pressure, "crankcase_pressure", error=ModelError)
     ang = check_finite_array(crank_angle, "crank_angle", error=ModelError)
-    return (trace.at(ang) - pcc) * engine.piston_area
+    return engine.net_gas_force(trace, ang, pcc)
 
 
 def inertia_force(engine, theta, *, omega):
@@ -361,9 +362,8 @@ def engine_torque(engine, theta, *, omega, pressure=None,
     if traces is not None:
         pcc = check_nonnegative(crankcase_pressure, "crankcase_pressure", error=ModelError)
         fire = np.deg2rad(engine.firing_angles_deg())
-        area = engine.piston_area
         for i, tr in enumerate(traces):
-            force[i] += (tr.at(flat - fire[i]) - pcc) * area
+            force[i] += engine.net_gas_force(tr, flat - fire[i], pcc)
     parts = force * -dx
     if getattr(engine, "rotary", False):
         parts = parts - engine.reciprocating_mass[:, None] * w * w * x * dx

@@ -114,7 +114,12 @@ def torque_harmonics(engine, *, pressure, orders, omega=0.0, points=None):
     period = np.pi * engine.cycle
     n = points or max(720, len(pressure.angle))
     psi = np.arange(n) * period / n
-    t = tangential_torque(engine, psi, omega=omega, pressure=pressure.at(psi))
+    if getattr(engine, "double_acting", False):
+        from ..forces import cylinder_torque
+
+        t = cylinder_torque(engine, psi, omega=omega, pressure=pressure)
+    else:
+        t = tangential_torque(engine, psi, omega=omega, pressure=pressure.at(psi))
     return _series(t, period, orders)
 
 

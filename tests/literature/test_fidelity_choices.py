@@ -82,3 +82,30 @@ def test_stodola_iterates_one_by_one():
     assert np.all(np.diff(err) <= 1e-15)                      # never worse than before
     assert np.all(it.lower <= ref * (1 + 1e-12)) and np.all(it.upper >= ref * (1 - 1e-12))
     assert err.iloc[0] < 1e-2                                 # one iterate: within 1 %
+
+
+def test_double_acting_cylinder_with_and_without_the_piston_rod_area():
+    """Double-acting cylinder (both chambers fire, half a cycle apart): the force is
+    (p(ψ) − p_cc)A − (p(ψ − π) − p_cc)(A − a) for a 2-stroke; neglecting the rod (a = 0, the
+    textbook lower fidelity) makes it antisymmetric, F(ψ + π) = −F(ψ), and costs p_bottom·a."""
+    from crankbench.predict.forces import gas_force
+    from crankbench.predict.pressure import synthetic_pressure
+    from crankbench.predict.torsion.excitation import engine_excitation
+
+    kw = dict(crank_angles_deg=[0], crank_radius=0.3, rod_length=1.2, reciprocating_mass=900.0,
+              bore=0.5, cycle=2, compression_ratio=12.0, double_acting=True)
+    with_rod = Engine(piston_rod_diameter=0.18, **kw)
+    no_rod = Engine(piston_rod_diameter=0.0, **kw)
+    p = synthetic_pressure(Engine(**{**kw, "double_acting": False}), imep=8e5)
+    psi = np.linspace(0, 2 * np.pi, 361)[:-1]
+    f0 = gas_force(no_rod, psi, p)
+    np.testing.assert_allclose(gas_force(no_rod, psi + np.pi, p), -f0, atol=1e-6 * np.abs(f0).max())
+    f1 = gas_force(with_rod, psi, p)
+    rod = np.pi * 0.18 ** 2 / 4
+    np.testing.assert_allclose(f1 - f0, (p.at(psi - np.pi) - 1e5) * rod, rtol=1e-12, atol=1e-6)
+    # the torsional excitation follows the engine's turning moment (second method: FFT)
+    exc = engine_excitation(with_rod, pressure=p, orders=[1.0, 2.0, 3.0], points=1440)
+    n = 1440
+    th = np.arange(n) * 2 * np.pi / n
+    spec = np.fft.rfft(engine_torque(with_rod, th, omega=0.0, pressure=p)) / n * 2
+    np.testing.assert_allclose(exc.gas, spec[1:4], rtol=1e-9, atol=1e-6 * np.abs(spec).max())
