@@ -41,7 +41,8 @@ import numpy as np
 from ._validate import check_finite_array, check_int, check_option, check_positive
 from .errors import ModelError
 
-__all__ = ["BearingLoads", "bearing_loads", "continuous_beam_reactions", "BEAM_MODELS"]
+__all__ = ["BearingLoads", "bearing_loads", "continuous_beam_reactions", "BEAM_MODELS",
+           "web_stresses"]
 
 BEAM_MODELS = ("determinate", "continuous")
 
@@ -260,3 +261,49 @@ def bearing_loads(engine, *, omega, bearing_positions, pressure=None, model="con
     return BearingLoads(angle=angle, bearing_positions=zb.copy(), loads=loads, pin_forces=f,
                         pin_moments=mom, pin_moment_radial=radial, journal_torque=tq,
                         model=model, omega=w)
+
+
+def web_stresses(*, bending_moment, radial_force, web_width, web_thickness, bending_scf=1.0):
+    """Nominal and fillet stresses of a crank web from its bending moment and radial force.
+
+    The web is a rectangular section of width b (across the shaft) and thickness h (along it):
+    ``σ_b = M / (b h²/6)``, ``σ_q = F / (b h)`` (IACS UR M53 §2.2: W_eqw = B W²/6,
+    F = B W), the fillet stress ``α_B σ_b + σ_q`` with α_B the journal/pin fillet factor.
+
+    Parameters
+    ----------
+    bending_moment : array_like
+        Bending moment in the web from the radial forces (e.g. ``BearingLoads.pin_moment_radial``
+        carried to the web centre), N·m.
+    radial_force : array_like
+        Radial force through the web (positive outwards, tension), N.
+    web_width, web_thickness : float
+        b and h, m.
+    bending_scf : float
+        α_B ≥ 1.
+
+    Returns
+    -------
+    dict
+        ``bending``, ``axial`` and ``fillet`` stress arrays, Pa, and ``fillet_alternating``,
+        ``fillet_mean``.
+
+    Examples
+    --------
+    >>> r = web_stresses(bending_moment=[0.0, 600.0], radial_force=[0.0, 12000.0],
+    ...                  web_width=0.12, web_thickness=0.03, bending_scf=2.0)
+    >>> round(r["fillet_alternating"] / 1e6, 3)
+    18.333
+    """
+    m = check_finite_array(bending_moment, "bending_moment", error=ModelError)
+    f = check_finite_array(radial_force, "radial_force", error=ModelError)
+    b = check_positive(web_width, "web_width", error=ModelError)
+    h = check_positive(web_thickness, "web_thickness", error=ModelError)
+    a = float(bending_scf)
+    if not a >= 1:
+        raise ModelError(f"bending_scf={bending_scf!r} must be >= 1")
+    sb = m / (b * h * h / 6)
+    sq = f / (b * h)
+    fil = a * sb + sq
+    return dict(bending=sb, axial=sq, fillet=fil, fillet_alternating=float(np.ptp(fil) / 2),
+                fillet_mean=float((fil.max() + fil.min()) / 2))

@@ -137,3 +137,15 @@ def test_fillet_stresses_are_nominal_times_scf():
     z = np.pi * (0.08 ** 4 - 0.02 ** 4) / (32 * 0.08)
     assert r["bending_alternating"] == pytest.approx(2.5 * 1000.0 / z, rel=1e-12)
     assert r["torsion_mean"] == pytest.approx(1.8 * 600.0 / (2 * z), rel=1e-12)
+
+
+def test_web_stresses_rectangular_section():
+    from crankbench.predict.crankshaft import web_stresses
+
+    r = web_stresses(bending_moment=[-200.0, 900.0], radial_force=[-5e3, 2e4], web_width=0.15,
+                     web_thickness=0.035, bending_scf=2.4)
+    z = 0.15 * 0.035 ** 2 / 6
+    a = 0.15 * 0.035
+    hi, lo = 2.4 * 900 / z + 2e4 / a, 2.4 * -200 / z - 5e3 / a
+    assert r["fillet_alternating"] == pytest.approx((hi - lo) / 2, rel=1e-12)
+    assert r["fillet_mean"] == pytest.approx((hi + lo) / 2, rel=1e-12)
