@@ -293,7 +293,7 @@ def web_stresses(*, bending_moment, radial_force, web_width, web_thickness, bend
     >>> r = web_stresses(bending_moment=[0.0, 600.0], radial_force=[0.0, 12000.0],
     ...                  web_width=0.12, web_thickness=0.03, bending_scf=2.0)
     >>> round(r["fillet_alternating"] / 1e6, 3)
-    18.333
+    35.0
     """
     m = check_finite_array(bending_moment, "bending_moment", error=ModelError)
     f = check_finite_array(radial_force, "radial_force", error=ModelError)
