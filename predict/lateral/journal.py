@@ -49,6 +49,7 @@ References
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -60,6 +61,11 @@ __all__ = ["JournalBearing", "BearingCoefficients", "BEARING_MODELS",
            "ocvirk_load", "ocvirk_attitude"]
 
 BEARING_MODELS = ("short", "finite")
+
+
+@functools.lru_cache(maxsize=4)
+def _gauss(n):
+    return np.polynomial.legendre.leggauss(n)
 
 
 def ocvirk_load(eccentricity, *, diameter, length, radial_clearance, viscosity, omega):
@@ -230,7 +236,7 @@ class JournalBearing:
         if amp == 0:
             return 0.0, 0.0
         phase = np.arctan2(b, a)                  # G = amp cos(θ − phase) < 0 on half a turn
-        nodes, weights = np.polynomial.legendre.leggauss(200)
+        nodes, weights = _gauss(200)
         th = phase + np.pi / 2 + (nodes + 1) * np.pi / 2
         wts = weights * np.pi / 2
         h = self.radial_clearance - x * np.cos(th) - y * np.sin(th)
