@@ -65,10 +65,10 @@ def test_articulated_rods_break_the_cancellation_of_minor_orders():
 def test_radial_shaftline_row_on_one_node_and_its_major_orders():
     s = pt.from_toml(DATA / "shaftlines/radial5.toml")
     assert set(s.cylinder_nodes) == {s.node_names.index("crank throw")}
-    crit = s.critical_speeds([1.0, 1.5, 2.5, 5.0], (500, 3000))
-    assert set(crit[crit.major].order) <= {2.5, 5.0}
+    crit = s.critical_speeds([1.0, 1.5, 2.5, 3.0, 5.0, 7.5], (500, 8000))
+    assert len(crit) >= 3 and set(crit[crit.major].order) == {2.5, 5.0, 7.5}
     assert np.allclose(crit[crit.major].vector_sum, 5.0)
-    r = s.forced_response(np.linspace(900, 2500, 5), orders=[2.5, 5.0])
+    r = s.forced_response(np.linspace(900, 2500, 5), orders=[2.5, 5.0, 7.5])
     assert np.all(np.isfinite(r.angle_total)) and r.angle_total.max() > 0
 
 
