@@ -41,6 +41,7 @@ from crankbench.predict._validate import (
     check_range,
 )
 from crankbench.predict.errors import AnalysisError
+from crankbench.predict._deprecate import renamed
 
 __all__ = ["ZoneBoundaries", "ISO_10816_1_CLASSES", "zone_boundaries", "LimitCheck",
            "vibration_severity", "check_vibration_severity", "check_torsional_stress",
@@ -215,7 +216,8 @@ class LimitCheck:
         return fig
 
 
-def vibration_severity(x, *, fs, rpm=None, quantity="velocity", band_hz=(10.0, 1000.0),
+@renamed(rpm="speed_rpm")
+def vibration_severity(x, *, fs, speed_rpm=None, quantity="velocity", band_hz=(10.0, 1000.0),
                        window_s=1.0, overlap=0.5):
     """Broadband velocity rms in consecutive windows (the vibration severity).
 
@@ -225,7 +227,7 @@ def vibration_severity(x, *, fs, rpm=None, quantity="velocity", band_hz=(10.0, 1
         Vibration signal: velocity (m/s) or acceleration (m/s²).
     fs : float
         Sample rate, Hz.
-    rpm : array_like, optional
+    speed_rpm : array_like, optional
         Speed per sample, rpm; the mean per window is returned as ``speed_rpm``.
     quantity : {'velocity', 'acceleration'}
         What ``x`` is; acceleration is integrated in the frequency domain (division by iω).
@@ -273,10 +275,10 @@ def vibration_severity(x, *, fs, rpm=None, quantity="velocity", band_hz=(10.0, 1
     if n > x.size:
         raise AnalysisError(f"window_s={window_s!r} ({n} samples) is longer than the signal "
                             f"({x.size} samples)")
-    if rpm is not None:
-        rpm = check_finite_array(rpm, "rpm", ndim=1, error=AnalysisError)
-        if rpm.size != x.size:
-            raise AnalysisError(f"rpm has {rpm.size} samples, x has {x.size}; expected equal")
+    if speed_rpm is not None:
+        speed_rpm = check_finite_array(speed_rpm, "speed_rpm", ndim=1, error=AnalysisError)
+        if speed_rpm.size != x.size:
+            raise AnalysisError(f"speed_rpm has {speed_rpm.size} samples, x has {x.size}; expected equal")
     step = max(1, int(round(n * (1 - overlap))))
     starts = np.arange(0, x.size - n + 1, step)
     win = np.hanning(n)
@@ -296,7 +298,7 @@ def vibration_severity(x, *, fs, rpm=None, quantity="velocity", band_hz=(10.0, 1
         weight[-1] = 1.0
     rms = np.sqrt(np.sum(weight[inband] * np.abs(spec[:, inband]) ** 2, axis=1)) / n
     t = (starts + n / 2) / fs
-    speed = (np.array([rpm[s:s + n].mean() for s in starts]) if rpm is not None
+    speed = (np.array([speed_rpm[s:s + n].mean() for s in starts]) if speed_rpm is not None
              else np.full(starts.size, np.nan))
     return xr.Dataset({"velocity_rms": ("time", rms, {"units": "m/s", "amplitude": "rms"})},
                       coords={"time": ("time", t, {"units": "s"}),
@@ -503,7 +505,7 @@ def check_residual_unbalance(residual, *, rotor_mass, speed_rpm, grade=6.3, plan
     from crankbench.predict.rotor_balance import grade_check
 
     speed = check_positive(speed_rpm, "speed_rpm", error=AnalysisError)
-    g = grade_check(residual, rotor_mass=rotor_mass, max_speed=speed * np.pi / 30.0,
+    g = grade_check(residual, rotor_mass=rotor_mass, max_omega=speed * np.pi / 30.0,
                     grade=grade, plane_shares=plane_shares)
     ratio = g.residual / g.permissible
     k = int(np.argmax(ratio))

@@ -370,9 +370,10 @@ def _track(x, fs, rpm, orders, *, method, bandwidth_orders, revolutions):
     from .orders import order_track
 
     if method == "vkf":
-        return order_track(x, fs=fs, rpm=rpm, orders=orders, method="vkf",
+        return order_track(x, fs=fs, speed_rpm=rpm, orders=orders, method="vkf",
                            bandwidth_orders=bandwidth_orders)
-    return order_track(x, fs=fs, rpm=rpm, orders=orders, method="cot", revolutions=revolutions,
+    return order_track(x, fs=fs, speed_rpm=rpm, orders=orders, method="cot",
+                       revolutions=revolutions,
                        overlap=0.9)
 
 
@@ -632,7 +633,7 @@ def _balance(rec, system, lo, hi, orders=(1.0, 2.0)):
         fs = float(v.attrs["sample_rate"])
         rpm = speed_reference(rec, str(name))
         x = np.nan_to_num(np.asarray(v.values, float))
-        track = order_track(x, fs=fs, rpm=np.nan_to_num(rpm, nan=float(np.nanmedian(rpm))),
+        track = order_track(x, fs=fs, speed_rpm=np.nan_to_num(rpm, nan=float(np.nanmedian(rpm))),
                             orders=list(orders), revolutions=8, overlap=0.5)
         rows = []
         live = []
@@ -722,7 +723,7 @@ def _limit_checks(rec, system, track, grid, pred_stress, response, orders, chann
             band = (2.0, 1000.0) if (rpm is not None and np.nanmax(rpm) <= 600) else (10.0, 1000.0)
             band = (band[0], min(band[1], 0.45 * fs))
             window = min(1.0, v.size / fs)
-            sev = vibration_severity(np.asarray(v.values, float), fs=fs, rpm=rpm, quantity=q,
+            sev = vibration_severity(np.asarray(v.values, float), fs=fs, speed_rpm=rpm, quantity=q,
                                      band_hz=band, window_s=window)
             checks.append(check_vibration_severity(
                 sev, machine_class=machine_class,

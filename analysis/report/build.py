@@ -34,9 +34,9 @@ def _order_map_figure(result):
     rpm = speed_reference(rec, result.channel, speed_channel=result.speed_channel)
     x = np.nan_to_num(np.asarray(var.values, float))
     top = float(max(result.predicted["order"].max() if len(result.predicted) else 6.0, 6.0))
-    m = order_map(x, fs=fs, rpm=np.nan_to_num(rpm, nan=float(np.nanmedian(rpm))),
+    m = order_map(x, fs=fs, speed_rpm=np.nan_to_num(rpm, nan=float(np.nanmedian(rpm))),
                   revolutions=8, samples_per_rev=64, max_order=min(16.0, top + 1.0),
-                  rpm_bins=120)
+                  speed_bins_rpm=120)
     fig, ax = plt.subplots(figsize=(7.5, 5.0))
     plot_order_map(m, ax=ax)
     p = result.predicted
@@ -69,8 +69,8 @@ def _campbell_figure(result):
     nat = result.comparison.natural_frequencies
     f_top = float(max(nat["frequency_hz_predicted"].max() * 1.5 if len(nat) else 80.0, 40.0))
     nperseg = int(2 ** np.ceil(np.log2(fs * 1.0)))  # ≈ 1 Hz resolution
-    c = campbell_map(x, fs=fs, rpm=np.nan_to_num(rpm, nan=float(np.nanmedian(rpm))),
-                     nperseg=nperseg, max_frequency=min(f_top, fs / 2.5), rpm_bins=120,
+    c = campbell_map(x, fs=fs, speed_rpm=np.nan_to_num(rpm, nan=float(np.nanmedian(rpm))),
+                     nperseg=nperseg, max_frequency=min(f_top, fs / 2.5), speed_bins_rpm=120,
                      orders=sorted(set(float(o) for o in result.track["order"].values)))
     fig, ax = plt.subplots(figsize=(7.5, 5.0))
     plot_campbell(c, ax=ax, critical_frequencies_hz=[f for f in nat["frequency_hz_predicted"]

@@ -1,7 +1,7 @@
 """Speed-dependent natural frequencies (centrifugal pendulums) and their Campbell data.
 
 A centrifugal pendulum absorber is a spring whose stiffness grows with the square of the
-crankshaft speed Ω (``edge_stiffness_speed2``), so the modes it takes part in move with speed:
+crankshaft speed Ω (``edge_stiffness_omega2``), so the modes it takes part in move with speed:
 at Ω its node joins the eigen-analysis with stiffness ``k + k₂ Ω²``. At standstill the pendulum
 has no restoring stiffness at all, which is why the speed-free eigen-analysis leaves it out.
 
@@ -32,7 +32,7 @@ TWO_PI = 2.0 * np.pi
 
 def has_speed_dependence(system) -> bool:
     """True when some spring stiffness depends on speed (centrifugal pendulums)."""
-    return bool(np.any(system.edge_stiffness_speed2 != 0))
+    return bool(np.any(system.edge_stiffness_omega2 != 0))
 
 
 def system_at_speed(system, speed_rpm: float):
@@ -55,7 +55,7 @@ def system_at_speed(system, speed_rpm: float):
     if not np.isfinite(rpm) or rpm < 0:
         raise ModelError(f"speed_rpm={speed_rpm!r} must be finite and >= 0")
     w = rpm * TWO_PI / 60.0
-    k2 = system.edge_stiffness_speed2
+    k2 = system.edge_stiffness_omega2
     k = system.stiffnesses + k2 * w * w
     mask = system.eigen_nodes
     e = system.edges
@@ -63,7 +63,7 @@ def system_at_speed(system, speed_rpm: float):
         moving = k2 != 0
         mask[e[moving, 1]] = True
         mask[e[moving & (e[:, 0] >= 0), 0]] = True
-    return system.replace(stiffnesses=k, edge_stiffness_speed2=np.zeros_like(k),
+    return system.replace(stiffnesses=k, edge_stiffness_omega2=np.zeros_like(k),
                           eigen_nodes=mask)
 
 

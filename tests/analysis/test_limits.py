@@ -61,7 +61,7 @@ def test_severity_speed_per_window_and_check():
     t = np.arange(0, 10, 1 / fs)
     rpm = 600 + 60 * t
     v = (1e-3 + 6e-4 * t) * np.sqrt(2) * np.sin(2 * np.pi * 40 * t)
-    sev = vibration_severity(v, fs=fs, rpm=rpm, window_s=1.0, overlap=0.0)
+    sev = vibration_severity(v, fs=fs, speed_rpm=rpm, window_s=1.0, overlap=0.0)
     # mean speed over each window's samples (the window centre lies half a sample later)
     np.testing.assert_allclose(sev.speed_rpm, 600 + 60 * (np.arange(10) + 0.5), atol=0.02)
     check = check_vibration_severity(sev, machine_class="III")

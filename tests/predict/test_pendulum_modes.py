@@ -50,4 +50,4 @@ def test_mode_shapes_at_speed_include_the_pendulum():
     s = _line()
     m = s.mode_shapes(speed_rpm=1500.0)
     assert m.shapes.shape == (3, 3) and np.all(np.abs(m.shapes[2, 1:]) > 0)
-    assert system_at_speed(s, 1500.0).edge_stiffness_speed2.max() == 0.0
+    assert system_at_speed(s, 1500.0).edge_stiffness_omega2.max() == 0.0
