@@ -124,7 +124,7 @@ def _shaft_rows(quick, timer):
         err = float(np.max(np.abs(w - exact) / exact))
         t = timer(lambda s=system: s.replace().natural_frequencies())
         base = base or t
-        bound = 1.05 * float(np.max(lumping_error(exact, length=length, wave_speed=c,
+        bound = 1.05 * float(np.max(lumping_error(exact, length=length, wave_velocity=c,
                                                   elements=n)))
         rows.append(Row(SUITE, "heavy shaft (distributed inertia)", f"elements={n}", err,
                         "max rel (modes 1-3)", "exact uniform shaft mπc/L", t,

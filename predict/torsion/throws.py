@@ -248,7 +248,7 @@ def throw_stiffness(throw: CrankThrow, *, method: str = "wilson",
 # -------------------------------------------------------------------------------------------
 # distributed inertia
 # -------------------------------------------------------------------------------------------
-def lumping_error(omega, *, length, wave_speed, elements):
+def lumping_error(omega, *, length, wave_velocity, elements):
     """Relative frequency error of a uniform shaft lumped into ``elements`` equal pieces.
 
     The lumped chain's dispersion ω_N = (2c/h) sin(κh/2) against the continuum's ω = cκ gives
@@ -261,7 +261,7 @@ def lumping_error(omega, *, length, wave_speed, elements):
         Vibration frequency of the continuum mode, rad/s.
     length : float
         Shaft length L, m.
-    wave_speed : float
+    wave_velocity : float
         Torsional wave speed c = √(G/ρ), m/s.
     elements : int
         N.
@@ -269,12 +269,12 @@ def lumping_error(omega, *, length, wave_speed, elements):
     Examples
     --------
     >>> c = (80e9 / 7850) ** 0.5
-    >>> round(float(lumping_error(np.pi * c / 2.0, length=2.0, wave_speed=c, elements=10)), 6)
+    >>> round(float(lumping_error(np.pi * c / 2.0, length=2.0, wave_velocity=c, elements=10)), 6)
     0.004107
     """
     n = check_int(elements, "elements", minimum=1, error=ModelError)
     length = check_positive(length, "length", error=ModelError)
-    c = check_positive(wave_speed, "wave_speed", error=ModelError)
+    c = check_positive(wave_velocity, "wave_velocity", error=ModelError)
     x = np.asarray(omega, float) * length / (2 * n * c)
     if np.any(x >= np.pi / 2):
         raise ModelError(f"omega is beyond the cut-off 2Nc/L = {2 * n * c / length:.6g} rad/s "
@@ -282,21 +282,21 @@ def lumping_error(omega, *, length, wave_speed, elements):
     return 1.0 - np.sinc(x / np.pi)
 
 
-def elements_for_tolerance(omega, *, length, wave_speed, tol=1e-3) -> int:
+def elements_for_tolerance(omega, *, length, wave_velocity, tol=1e-3) -> int:
     """Fewest equal elements whose :func:`lumping_error` at ``omega`` is ≤ ``tol``.
 
     Examples
     --------
     >>> c = (80e9 / 7850) ** 0.5
-    >>> elements_for_tolerance(np.pi * c / 2.0, length=2.0, wave_speed=c, tol=1e-3)
+    >>> elements_for_tolerance(np.pi * c / 2.0, length=2.0, wave_velocity=c, tol=1e-3)
     21
     """
     tol = check_positive(tol, "tol", error=ModelError)
     length = check_positive(length, "length", error=ModelError)
-    c = check_positive(wave_speed, "wave_speed", error=ModelError)
+    c = check_positive(wave_velocity, "wave_velocity", error=ModelError)
     w = check_positive(omega, "omega", error=ModelError)
     n = max(1, int(np.ceil(w * length / (2 * c * np.sqrt(6 * tol)))))
-    while lumping_error(w, length=length, wave_speed=c, elements=n) > tol:
+    while lumping_error(w, length=length, wave_velocity=c, elements=n) > tol:
         n += 1
     return n
 

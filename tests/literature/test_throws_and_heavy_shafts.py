@@ -87,7 +87,7 @@ def test_free_free_heavy_shaft_error_is_the_stated_sinc(n):
                    elements=n)
     w = line.build().natural_frequencies("rad/s")[1:4]
     exact = uniform_shaft_frequencies(length=length, shear_modulus=G, density=RHO)
-    stated = lumping_error(exact, length=length, wave_speed=C, elements=n)
+    stated = lumping_error(exact, length=length, wave_velocity=C, elements=n)
     np.testing.assert_allclose(1 - w / exact, stated, rtol=1e-6, atol=1e-12)
 
 
@@ -111,7 +111,7 @@ def test_shaft_with_disk_against_timoshenko_transcendental_equation():
         errors.append(1 - w / exact)
         # the lumped model is low, of the order of the shaft's own-wave error (the half element
         # at the disk adds a boundary term of the same order: within twice it here)
-        bound = lumping_error(exact, length=length, wave_speed=C, elements=n)
+        bound = lumping_error(exact, length=length, wave_velocity=C, elements=n)
         assert np.all(errors[-1] > 0) and np.all(errors[-1] < 2.0 * bound)
     errors = np.array(errors)
     np.testing.assert_allclose(errors[:-1, 0] / errors[1:, 0], 4.0, rtol=0.02)   # O(1/N²)
@@ -119,6 +119,6 @@ def test_shaft_with_disk_against_timoshenko_transcendental_equation():
 
 def test_automatic_element_count_meets_its_tolerance():
     w = np.pi * C / 2.0
-    n = elements_for_tolerance(w, length=2.0, wave_speed=C, tol=1e-4)
-    assert lumping_error(w, length=2.0, wave_speed=C, elements=n) <= 1e-4
-    assert lumping_error(w, length=2.0, wave_speed=C, elements=n - 1) > 1e-4
+    n = elements_for_tolerance(w, length=2.0, wave_velocity=C, tol=1e-4)
+    assert lumping_error(w, length=2.0, wave_velocity=C, elements=n) <= 1e-4
+    assert lumping_error(w, length=2.0, wave_velocity=C, elements=n - 1) > 1e-4
