@@ -25,7 +25,7 @@ from .._validate import check_finite_array
 from ..errors import ModelError
 
 __all__ = ["system_at_speed", "has_speed_dependence", "campbell_frequencies",
-           "speed_dependent_criticals"]
+           "speed_dependent_criticals", "plot_branches"]
 
 TWO_PI = 2.0 * np.pi
 
@@ -135,3 +135,11 @@ def speed_dependent_criticals(system, orders, lo: float, hi: float, *, grid: int
                 rows.append((m, float(q), float(root), float(w / TWO_PI), float(vs),
                              bool(major[j])))
     return rows
+
+
+def plot_branches(system, ax, lo: float, hi: float, points: int = 60):
+    """Draw every mode's frequency against speed (rpm) on ``ax``; returns the figure."""
+    camp = campbell_frequencies(system, np.linspace(max(lo, 1e-3), hi, points))
+    for m, grp in camp.groupby("mode"):
+        ax.plot(grp.speed_rpm, grp.frequency_hz, color="0.5", lw=0.8)
+    return ax.figure

@@ -630,8 +630,13 @@ class TorsionalSystem:
         omega, numbers = self._values[:2]
         f = omega / TWO_PI
         shown = [i for i in np.flatnonzero(numbers > 0) if modes is None or numbers[i] in modes]
-        for i in shown:
-            ax.axhline(f[i], color="0.5", lw=0.8)
+        from .campbell import has_speed_dependence, plot_branches
+
+        if has_speed_dependence(self):      # pendulum modes move with speed: draw the curves
+            plot_branches(self, ax, max(lo, 1e-3), hi)
+        else:
+            for i in shown:
+                ax.axhline(f[i], color="0.5", lw=0.8)
         rpm = np.array([lo, hi])
         for q in orders:
             ax.plot(rpm, rpm * q / 60.0, color="C0" if self.major_orders([q])[0] else "C1",

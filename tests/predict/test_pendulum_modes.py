@@ -51,3 +51,12 @@ def test_mode_shapes_at_speed_include_the_pendulum():
     m = s.mode_shapes(speed_rpm=1500.0)
     assert m.shapes.shape == (3, 3) and np.all(np.abs(m.shapes[2, 1:]) > 0)
     assert system_at_speed(s, 1500.0).edge_stiffness_omega2.max() == 0.0
+
+
+def test_campbell_plot_draws_the_moving_branches():
+    s = _line()
+    fig = s.plot_campbell([1.0, 2.0], (100, 3000))
+    curves = [ln for ln in fig.axes[0].lines if len(ln.get_xdata()) > 2]
+    assert len(curves) == 2          # one line per mode branch, not horizontal lines
+    ys = curves[0].get_ydata()
+    assert ys[-1] > 5 * ys[0]        # the pendulum branch rises with speed
