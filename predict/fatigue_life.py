@@ -270,7 +270,8 @@ def fillet_stresses(*, bending_moment, torque, diameter, bore=0.0, bending_scf=1
     s = ab * 32 * k * m
     tau = at * 16 * k * t
     return dict(bending=s, torsion=tau,
-                bending_alternating=float(np.ptp(s) / 2), bending_mean=float((s.max() + s.min()) / 2),
+                bending_alternating=float(np.ptp(s) / 2),
+                bending_mean=float((s.max() + s.min()) / 2),
                 torsion_alternating=float(np.ptp(tau) / 2),
                 torsion_mean=float((tau.max() + tau.min()) / 2))
 

@@ -236,7 +236,8 @@ def tuned_absorber_response(frequency, *, mass_ratio, frequency_ratio, damping_r
     Den Hartog (1956) §3.3: with g = ω/ω_n (forcing over main-system frequency), f = ω_a/ω_n,
     μ = J_a/J and ζ = c/(2 J_a ω_n),
 
-    ``|x/x_st| = √[(2ζg)² + (g² − f²)²] / √[(2ζg)² (g² − 1 + μg²)² + (μf²g² − (g² − 1)(g² − f²))²]``.
+    ``|x/x_st| = √[(2ζg)² + (g² − f²)²]
+    / √[(2ζg)² (g² − 1 + μg²)² + (μf²g² − (g² − 1)(g² − f²))²]``.
 
     Parameters
     ----------
@@ -257,7 +258,8 @@ def tuned_absorber_response(frequency, *, mass_ratio, frequency_ratio, damping_r
     z = check_nonnegative(damping_ratio, "damping_ratio", error=ModelError)
     g2 = g * g
     num = (2 * z * g) ** 2 + (g2 - f * f) ** 2
-    den = (2 * z * g) ** 2 * (g2 - 1 + mu * g2) ** 2 + (mu * f * f * g2 - (g2 - 1) * (g2 - f * f)) ** 2
+    den = ((2 * z * g) ** 2 * (g2 - 1 + mu * g2) ** 2
+           + (mu * f * f * g2 - (g2 - 1) * (g2 - f * f)) ** 2)
     out = np.sqrt(num / den)
     return float(out) if out.ndim == 0 else out
 
