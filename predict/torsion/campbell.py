@@ -25,7 +25,7 @@ from .._validate import check_finite_array
 from ..errors import ModelError
 
 __all__ = ["system_at_speed", "has_speed_dependence", "campbell_frequencies",
-           "speed_dependent_criticals", "plot_branches"]
+           "speed_dependent_criticals"]
 
 TWO_PI = 2.0 * np.pi
 
@@ -137,7 +137,7 @@ def speed_dependent_criticals(system, orders, lo: float, hi: float, *, grid: int
     return rows
 
 
-def plot_branches(system, ax, lo: float, hi: float, points: int = 60):
+def _draw_branches(system, ax, lo: float, hi: float, points: int = 60):
     """Draw every mode's frequency against speed (rpm) on ``ax``; returns the figure."""
     camp = campbell_frequencies(system, np.linspace(max(lo, 1e-3), hi, points))
     for m, grp in camp.groupby("mode"):

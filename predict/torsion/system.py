@@ -630,10 +630,10 @@ class TorsionalSystem:
         omega, numbers = self._values[:2]
         f = omega / TWO_PI
         shown = [i for i in np.flatnonzero(numbers > 0) if modes is None or numbers[i] in modes]
-        from .campbell import has_speed_dependence, plot_branches
+        from .campbell import has_speed_dependence, _draw_branches
 
         if has_speed_dependence(self):      # pendulum modes move with speed: draw the curves
-            plot_branches(self, ax, max(lo, 1e-3), hi)
+            _draw_branches(self, ax, max(lo, 1e-3), hi)
         else:
             for i in shown:
                 ax.axhline(f[i], color="0.5", lw=0.8)
