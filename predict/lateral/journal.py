@@ -57,7 +57,7 @@ import numpy as np
 from .._validate import check_int, check_option, check_positive
 from ..errors import AnalysisError, ModelError
 
-__all__ = ["JournalBearing", "BearingCoefficients", "BEARING_MODELS",
+__all__ = ["JournalBearing", "BearingCoefficients", "BEARING_MODELS", "journal_campbell",
            "ocvirk_load", "ocvirk_attitude"]
 
 BEARING_MODELS = ("short", "finite")
@@ -402,3 +402,71 @@ class JournalBearing:
         # the load on the journal is −F; angle from the load line to the line of centres (+x)
         att = np.degrees(abs(np.arctan2(-fy, -fx)))
         return float(s), float(att)
+
+
+def journal_campbell(rotor, journals, speed_rpm, *, n_modes=4):
+    """Whirl frequencies and damping of a rotor whose journal-bearing coefficients change with
+    speed (re-evaluated at every speed), and the onset of instability (oil whirl).
+
+    Parameters
+    ----------
+    rotor : predict.lateral.fe.Rotor
+        The rotor; its bearings at the journal positions are replaced at every speed.
+    journals : sequence of (position, JournalBearing, load)
+        Journal position (m), bearing, static load on the journal (Fx, Fy) in N.
+    speed_rpm : array_like
+        Spin speeds, rpm (> 0).
+    n_modes : int
+
+    Returns
+    -------
+    pandas.DataFrame
+        ``speed_rpm``, ``mode``, ``frequency_hz``, ``damping_ratio``, ``whirl``; attrs
+        ``onset_speed_rpm``: the lowest speed at which a mode's damping ratio turns negative
+        (linear interpolation between the speeds given; NaN if none).
+    """
+    import pandas as pd
+
+    from .._validate import check_finite_array
+
+    rpm = check_finite_array(speed_rpm, "speed_rpm", ndim=1, min_length=1, error=ModelError)
+    if np.any(rpm <= 0):
+        raise ModelError("speed_rpm must be > 0")
+    spec = [(float(p), b, tuple(map(float, load))) for p, b, load in journals]
+    if not spec:
+        raise ModelError("journals must list at least one (position, JournalBearing, load)")
+    at = {round(p, 9) for p, _, _ in spec}
+    others = [b for b in rotor.bearings if round(b.position, 9) not in at]
+    from dataclasses import replace
+
+    rows = []
+    for r in rpm:
+        w = r * np.pi / 30
+        cache = {}                      # identical journals under identical loads: solve once
+        bearings = list(others)
+        for p, b, load in spec:
+            key = (b, load)
+            if key not in cache:
+                cache[key] = b.coefficients(load=load, omega=w)
+            bearings.append(cache[key].bearing(p))
+
+        modes = replace(rotor, bearings=tuple(bearings)).natural_frequencies(
+            w, n_modes=n_modes, error_estimate=False)
+        for k in range(modes.omega.size):
+            rows.append((float(r), k + 1, float(modes.omega[k] / (2 * np.pi)),
+                         float(modes.damping_ratio[k]), modes.whirl[k]))
+    frame = pd.DataFrame(rows, columns=["speed_rpm", "mode", "frequency_hz", "damping_ratio",
+                                        "whirl"])
+    onset = np.nan
+    zmin = frame.groupby("speed_rpm").damping_ratio.min()
+    neg = np.flatnonzero(zmin.to_numpy() < 0)
+    if neg.size:
+        i = int(neg[0])
+        if i == 0:
+            onset = float(zmin.index[0])
+        else:
+            s0, s1 = zmin.index[i - 1], zmin.index[i]
+            z0, z1 = zmin.iloc[i - 1], zmin.iloc[i]
+            onset = float(s0 + (s1 - s0) * z0 / (z0 - z1))
+    frame.attrs["onset_speed_rpm"] = onset
+    return frame

@@ -82,3 +82,40 @@ def test_toml_journal_bearing_is_the_api_coefficients():
     b = m.rotor.bearings[1]
     np.testing.assert_allclose([[b.kxx, b.kxy], [b.kyx, b.kyy]], co.stiffness, rtol=1e-12)
     np.testing.assert_allclose([[b.cxx, b.cxy], [b.cyx, b.cyy]], co.damping, rtol=1e-12)
+
+
+def test_speed_dependent_journals_in_the_campbell_data_and_the_whirl_onset():
+    """Rigid rotor on two short bearings, coefficients re-evaluated at every speed: the FE
+    rotor's translational modes match the 4-state model, and the onset of instability
+    (damping ratio through zero) is the 4-state model's, found here by root finding; at the
+    onset the rotor whirls near half the spin speed (oil whirl, Newkirk & Taylor 1925)."""
+    from scipy.optimize import brentq
+
+    from crankbench.predict.lateral.elements import Bearing
+    from crankbench.predict.lateral.journal import journal_campbell
+
+    m = 20.0
+    light = Material(youngs_modulus=2e14, density=1.0, poisson_ratio=0.3)
+    rotor = Rotor(shaft=[ShaftSection(length=0.4, outer_diameter=0.12, material=light)],
+                  disks=[Disk(0.2, mass=m, diametral_inertia=1e-3, polar_inertia=1e-3)],
+                  bearings=[Bearing(0.0, 1e7), Bearing(0.4, 1e7)], theory="euler-bernoulli")
+    b = JournalBearing(diameter=0.05, length=0.02, radial_clearance=5e-5, viscosity=0.01,
+                       model="short")
+    load = (0.0, -m * 9.81 / 2)
+    speeds = np.linspace(2000, 20000, 10)
+    camp = journal_campbell(rotor, [(0.0, b, load), (0.4, b, load)], speeds, n_modes=4)
+
+    def four_state(rpm):
+        co = b.coefficients(load=load, omega=rpm * np.pi / 30)
+        k, c = 2 * co.stiffness, 2 * co.damping
+        s = np.linalg.eigvals(np.block([[np.zeros((2, 2)), np.eye(2)], [-k / m, -c / m]]))
+        s = s[s.imag > 0]
+        i = int(np.argmin(-s.real / np.abs(s)))
+        return -s[i].real / abs(s[i]), s[i].imag
+
+    z, _ = four_state(2000.0)
+    assert np.min(np.abs(camp[camp.speed_rpm == 2000.0].damping_ratio - z)) < 1e-4
+    onset = brentq(lambda r: four_state(r)[0], 2000.0, 20000.0, xtol=1.0)
+    assert camp.attrs["onset_speed_rpm"] == pytest.approx(onset, rel=0.01)
+    ratio = four_state(onset)[1] / (onset * np.pi / 30)
+    assert 0.4 < ratio < 0.55
