@@ -42,7 +42,7 @@ from ._validate import check_finite_array, check_int, check_option, check_positi
 from .errors import ModelError
 
 __all__ = ["BearingLoads", "bearing_loads", "continuous_beam_reactions", "BEAM_MODELS",
-           "web_stresses"]
+           "web_stresses", "bearing_loads_from_toml"]
 
 BEAM_MODELS = ("determinate", "continuous")
 
@@ -307,3 +307,47 @@ def web_stresses(*, bending_moment, radial_force, web_width, web_thickness, bend
     fil = a * sb + sq
     return dict(bending=sb, axial=sq, fillet=fil, fillet_alternating=float(np.ptp(fil) / 2),
                 fillet_mean=float((fil.max() + fil.min()) / 2))
+
+
+def bearing_loads_from_toml(path, *, omega, pressure=None, points=720) -> BearingLoads:
+    """Main-bearing loads of the engine in a model file with a ``[crankshaft]`` table.
+
+    Keys: ``bearing_positions`` (m, in the frame of the cylinder positions), ``model``
+    ("continuous" default, or "determinate"), ``bending_stiffness`` (N·m², one value or one
+    per span; default uniform)::
+
+        [crankshaft]
+        bearing_positions = [-0.076, 0.076, 0.228, 0.38, 0.532, 0.684, 0.836]
+        model = "continuous"
+
+    Parameters
+    ----------
+    path : str or Path
+    omega : float
+        rad/s.
+    pressure : PressureTrace, optional
+        Default: the engine's synthetic trace (``[engine.combustion]``).
+    points : int
+    """
+    from ._toml import load_toml
+    from .engine import Engine
+    from .pressure import synthetic_pressure
+
+    doc = load_toml(path)
+    t = doc.table("crankshaft", None)
+    if t is None:
+        raise ModelError(f"{path}: has no [crankshaft] table (bearing_positions, model)")
+    positions = t.numbers("bearing_positions")
+    model = t.string("model", "continuous", options=BEAM_MODELS)
+    raw = t.raw("bending_stiffness", 1.0)
+    ei = (t.numbers("bending_stiffness", low=0.0, strict_low=True) if isinstance(raw, list)
+          else t.positive("bending_stiffness", 1.0))
+    t.check_unknown(["description"])
+    engine = Engine.from_toml(path)
+    if pressure is None and engine.bore is not None and engine.compression_ratio is not None:
+        pressure = synthetic_pressure(engine)
+    try:
+        return bearing_loads(engine, omega=omega, bearing_positions=positions, pressure=pressure,
+                             model=model, bending_stiffness=ei, points=points)
+    except ModelError as exc:
+        raise ModelError(f"{t.where()} {exc}") from None
