@@ -15,6 +15,7 @@ from pathlib import Path
 import numpy as np
 
 __all__ = ["settings_key", "document_from_result", "document_from_error", "record_identity",
+           "store_result",
            "reference_speeds"]
 
 _IDENTITY_ATTRS = ("start_time", "test_id", "engine_id", "build")
@@ -237,3 +238,25 @@ def document_from_error(*, record_path, run_id: str, error: str, settings: dict,
             "elapsed_s": elapsed_s, "software_version": crankbench_version(),
             "analysed_at": _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds")}
     return {"runs": [runs]}
+
+
+def store_result(store_path, result, *, record_path, model_path, settings: dict,
+                 report_path=None, elapsed_s: float | None = None) -> str:
+    """Write one analysed record into a campaign store (created if missing); return its
+    run_id. A run with the same record and settings is replaced, never duplicated."""
+    from crankbench.analysis._output import to_jsonable
+    from crankbench.analysis.report import file_sha256
+
+    from .store import Store, run_id_for
+
+    model_sha = file_sha256(model_path)
+    settings = {**to_jsonable(settings), "model": Path(model_path).name}
+    key = settings_key(settings, model_sha)
+    record_sha = getattr(result, "record_sha256", None) or file_sha256(record_path)
+    run_id = run_id_for(record_sha, key)
+    document = document_from_result(result, record_path=record_path, run_id=run_id,
+                                    settings=settings, model_path=model_path,
+                                    model_sha256=model_sha, settings_key_=key,
+                                    report_path=report_path, elapsed_s=elapsed_s)
+    with Store(store_path, create=True) as store:
+        return store.put(document)

@@ -282,3 +282,21 @@ def test_trend_spec_errors_name_what_is_missing():
         TrendSpec.parse("order amplitude order 6")
     with pytest.raises(StoreError, match="starts with none of"):
         TrendSpec.parse("natural frequency mode 1")
+
+
+def test_compare_store_writes_one_run_and_replaces_it(campaign, tmp_path):
+    folder, records, nominal, truth = campaign
+    store = tmp_path / "one.duckdb"
+    cmd = [sys.executable, "-m", "crankbench", "compare", str(records[1]), str(nominal),
+           "--store", str(store), "--json"]
+    for _ in range(2):
+        done = subprocess.run(cmd, capture_output=True, text=True, timeout=300)
+        assert done.returncode == 0, done.stderr
+    with Store(store, read_only=True) as s:
+        runs = s.table("runs")
+        assert len(runs) == 1 and runs["build"][0] == "B2"
+        crit = s.table("criticals", "mode = 3 AND \"order\" = 6")
+        assert float(crit["speed_rpm_measured"][0]) == pytest.approx(truth[2.4e4], rel=0.01)
+    refused = subprocess.run(cmd[:-3] + ["--store", str(records[1])], capture_output=True,
+                             text=True)
+    assert refused.returncode == 2 and "one of the inputs" in refused.stderr
