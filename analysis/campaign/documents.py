@@ -108,47 +108,17 @@ def _frame_rows(frame, columns: dict, run_id: str, extra: dict | None = None) ->
 
 
 def _checks(result, run_id: str) -> list[dict]:
-    """Every verdict of the result (``verdicts`` when the result has them, else its limit
-    checks with their pass/fail)."""
+    """Every verdict of the result, with the value, limit and units of the limit checks."""
+    limits = {c.name: c for c in getattr(result, "limits", ()) or ()}
     rows = []
-    verdicts = getattr(result, "verdicts", None)
-    if verdicts:
-        for v in verdicts:
-            d = v.as_dict()
-            rows.append({"run_id": run_id, "check": d["check"], "verdict": d["verdict"],
-                         "rule": d.get("rule"), "basis": d.get("basis"),
-                         "reason": d.get("reason"), "value": d.get("value"),
-                         "limit": d.get("limit"), "units": d.get("units")})
-        return rows
-    for c in getattr(result, "limits", ()) or ():
-        d = c.as_dict()
-        rows.append({"run_id": run_id, "check": d["check"],
-                     "verdict": "pass" if d["passed"] else "fail", "rule": d.get("source"),
-                     "basis": d.get("quantity"), "reason": d.get("detail"),
-                     "value": d.get("value"), "limit": d.get("limit"), "units": d.get("units")})
+    for v in getattr(result, "verdicts", ()) or ():
+        d = v.as_dict()
+        check = limits.get(d["check"])
+        rows.append({"run_id": run_id, "check": d["check"], "verdict": d["verdict"],
+                     "rule": d.get("rule"), "basis": d.get("basis"), "reason": d.get("reason"),
+                     "value": getattr(check, "value", None), "limit": getattr(check, "limit", None),
+                     "units": getattr(check, "units", None)})
     return rows
-
-
-def _overall(result, checks: list[dict]) -> tuple[str, str]:
-    """Overall verdict and reason: the result's own when it has one, else combined from the
-    checks and the model agreement (three states; nothing assessed is inconclusive)."""
-    verdict = getattr(result, "verdict", None)
-    if verdict is not None and hasattr(verdict, "status"):
-        return verdict.status, verdict.reason
-    from crankbench.analysis.verdict import Verdict, combine
-
-    parts = [Verdict(c["check"], c["verdict"], c.get("rule") or "", c.get("basis") or "-",
-                     c.get("reason") or ("" if c["verdict"] == "pass" else "limit exceeded"))
-             for c in checks]
-    comparison = getattr(result, "comparison", None)
-    if comparison is not None and len(getattr(comparison, "matched", ())):
-        parts.append(Verdict.from_bool(
-            "measured criticals against prediction", bool(comparison.agrees),
-            rule=f"critical speed within ±{comparison.tolerance:.0%} of predicted",
-            basis=f"{len(comparison.matched)} matched criticals",
-            reason="; ".join(comparison.flags)))
-    v = combine(parts)
-    return v.status, v.reason
 
 
 def document_from_result(result, *, record_path, run_id: str, settings: dict,
@@ -181,14 +151,14 @@ def document_from_result(result, *, record_path, run_id: str, settings: dict,
     units = getattr(result, "units", None)
     lo, hi = getattr(result, "speed_range_rpm", (np.nan, np.nan))
     checks = _checks(result, run_id)
-    verdict, reason = _overall(result, checks)
+    overall = result.verdict
     summary = result.summary() if hasattr(result, "summary") else {}
     runs = {"run_id": run_id, **record_identity(record_path, attrs),
             "record_sha256": getattr(result, "record_sha256", None),
             "settings_key": settings_key_, "settings": settings,
             "model_path": None if model_path is None else str(Path(model_path).resolve()),
             "model_sha256": model_sha256, "channel": getattr(result, "channel", None),
-            "status": "ok", "error": None, "verdict": verdict, "verdict_reason": reason,
+            "status": "ok", "error": None, "verdict": overall.status, "verdict_reason": overall.reason,
             "speed_min_rpm": lo, "speed_max_rpm": hi,
             "sweep_rate_rpm_per_s": getattr(result, "sweep_rate_rpm_per_s", None),
             "resonances": summary.get("resonances"), "matched": summary.get("matched"),
@@ -212,7 +182,7 @@ def document_from_result(result, *, record_path, run_id: str, settings: dict,
         "confidence": "confidence"}, run_id, {"units": units})
     speeds = (reference_speeds((lo, hi)) if reference_speeds_rpm is None
               else np.asarray(reference_speeds_rpm, float)) if np.isfinite(lo) else []
-    steady = getattr(result, "steady", None)
+    steady = getattr(result, "steady_orders", None)   # steady-state order table, if any
     steady_frame = steady.to_frame() if hasattr(steady, "to_frame") else steady
     steady_rows = _frame_rows(steady_frame, {
         "order": "order", "speed_rpm": "speed_rpm", "amplitude": "amplitude",
