@@ -92,7 +92,7 @@ def test_clean_bench_record_matches_its_truth(clean_run):
 
 def test_measured_excitation_reproduces_predicted_harmonics(clean_run):
     """Fed the model's own pressure through a record, the gas-torque harmonics equal those of
-    predict.torsion.excitation.engine_excitation within 0.5 % of the largest (measured 0.05 %)."""
+    predict.torsion.excitation.engine_excitation within 0.5 % of the largest (measured 0.012 %)."""
     from crankbench.predict.torsion.excitation import engine_excitation
 
     engine = clean_run.scene.engine
