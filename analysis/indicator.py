@@ -442,11 +442,20 @@ class TdcCheck:
         """δ, deg."""
         return float(np.rad2deg(self.offset))
 
+    @property
+    def plausible(self) -> bool:
+        """The fit describes a polytropic compression (1.15 ≤ n ≤ 1.5) and pins δ to better
+        than 1°; otherwise the check is inconclusive (a compression that is not polytropic,
+        a window holding combustion, too few or too noisy cycles)."""
+        return bool(1.15 <= self.exponent <= 1.5 and np.isfinite(self.standard_error)
+                    and self.standard_error < DEG)
+
     def to_dict(self) -> dict:
         return {"offset_deg": self.offset_deg,
                 "standard_error_deg": float(np.rad2deg(self.standard_error)),
                 "method": self.method, "motored": bool(self.motored),
                 "exponent": float(self.exponent), "note": self.note,
+                "plausible": self.plausible,
                 "motored_peak_offset_deg": float(np.rad2deg(self.motored_peak_offset))}
 
 

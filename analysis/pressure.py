@@ -303,9 +303,19 @@ def _peg(engine, psi, cycles, cylinder, *, peg, peg_pressure, window_deg, expone
                                 exponent=exponent)
     off = np.asarray(fit["offset"], float)
     where = f"{window_deg[0]:g}..{window_deg[1]:g} deg"
+    plausible = 1.15 <= fit["exponent"] <= 1.5
     if peg == "polytropic":
         return {"method": "polytropic", "offset": off, "exponent": fit["exponent"],
-                "note": f"p + dp = C V^-n fitted over {where}, n = {fit['exponent']:.4f}"}, None
+                "note": f"p + dp = C V^-n fitted over {where}, n = {fit['exponent']:.4f}"}, (
+            None if plausible else f"polytropic peg: n = {fit['exponent']:.3f} over {where} is "
+                                   "not a compression's (1.15..1.5); the offset is doubtful")
+    if not plausible:
+        return {"method": "none", "offset": np.zeros(len(cycles)), "exponent": fit["exponent"],
+                "note": f"level kept as recorded: the compression over {where} is not "
+                        f"polytropic (n = {fit['exponent']:.3f})"}, (
+            f"pressure level not checked: the compression over {where} does not fit a "
+            f"polytropic (n = {fit['exponent']:.3f}); give the intake pressure (peg_pressure= / "
+            "--peg-pressure-bar) for the BDC peg")
     # auto: keep an absolute level that the polytropic compression confirms
     mean_off = float(np.mean(off))
     p_bdc = float(np.mean(cycles[:, np.abs(psi + np.pi) <= 10 * DEG]))
@@ -524,12 +534,23 @@ def indicator_analysis(record, engine, *, channel=None, cylinder=None, angle_cha
                                          window_deg=window, loss_angle_deg=loss_angle_deg,
                                          search_deg=scan)
         if k < len(passes) - 1:
+            if not check.plausible:
+                if not has_tdc:
+                    warnings.append("TDC from the pressure is inconclusive (the compression "
+                                    "does not fit a polytropic): the zero is the highest mean "
+                                    "pressure, i.e. after TDC by the combustion's lag")
+                break
             base = base + check.offset
             applied += check.offset_deg
     if peg_warn:
         warnings.append(peg_warn)
-    big = check is not None and abs(check.offset_deg) > 1.0 and not (
-        np.isfinite(check.standard_error) and abs(check.offset) < 3 * check.standard_error)
+    big = check is not None and check.plausible and abs(check.offset_deg) > 1.0 and \
+        abs(check.offset) > 3 * check.standard_error
+    if check is not None and not check.plausible and has_tdc:
+        warnings.append(f"TDC check inconclusive: the compression over {tdc_window_deg[0]:g}.."
+                        f"{tdc_window_deg[1]:g} deg does not pin the TDC (n = "
+                        f"{check.exponent:.3f}, standard error "
+                        f"{np.rad2deg(check.standard_error):.2g} deg)")
     if big and not tdc_correction:
         warnings.append(f"TDC check ({check.method}): the thermodynamic TDC lies "
                         f"{check.offset_deg:+.2f} deg from the reference; check the TDC mark "

@@ -79,7 +79,8 @@ def _lines(s):
     if chk is not None:
         se = chk["standard_error_deg"]
         out.append(f"  TDC check          {chk['offset_deg']:+.2f} deg"
-                   + ("" if se != se else f" ± {se:.2f}") + f" ({chk['method']}); applied "
+                   + ("" if se != se else f" ± {se:.2f}") + f" ({chk['method']}"
+                   + ("" if chk["plausible"] else ", inconclusive") + "); applied "
                    f"{s['tdc']['applied_correction_deg']:+.2f} deg")
     hr = s["heat_release"]
     if hr is not None:

@@ -270,3 +270,20 @@ def test_a_sampled_crank_angle_channel_is_an_angle_source(smooth):
     assert "crank-angle channel 'CA'" in r.tdc["reference"]
     assert abs(np.rad2deg(r.mean["peak_angle"]) - ref["angle_deg"]) < 0.02
     assert abs(np.mean(r.imep_net) / ref["imep_net"] - 1) < 1e-3
+
+
+def test_a_diagram_without_a_polytropic_compression_is_not_pegged_or_tdc_corrected():
+    """A bare Gaussian pulse (1 + 49 bar at 12 deg, no compression stroke): the polytropic peg
+    and the TDC check have nothing to fit; the level is kept, both are said inconclusive and
+    the peak stays exact."""
+    def bump(theta):
+        phi = np.mod(np.asarray(theta) + 2 * np.pi, 4 * np.pi) - 2 * np.pi
+        return 1e5 + 49e5 * np.exp(-((phi - np.radians(12.0)) / np.radians(25.0)) ** 2)
+
+    r = indicator_analysis(pc.record(bump, duration=0.5), pc.engine())
+    assert r.peg["method"] == "none" and not r.tdc["check"].plausible
+    assert any("pressure level not checked" in w for w in r.warnings)
+    assert any("TDC check inconclusive" in w for w in r.warnings)
+    assert not any("thermodynamic TDC lies" in w for w in r.warnings)
+    assert abs(np.rad2deg(r.mean["peak_angle"]) - 12.0) < 0.01
+    assert abs(r.mean["peak_pressure"] / 50e5 - 1) < 1e-4
