@@ -30,7 +30,7 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
-from crankbench.predict.errors import CrankbenchError, RecordError
+from crankbench.predict.errors import ConfigError, CrankbenchError, RecordError
 
 from ._atomic import atomic_path, check_overwrite
 from .readers import EXTENSIONS, format_of_magic, module_for
@@ -43,7 +43,7 @@ log = logging.getLogger("crankbench")
 
 _HASH_CACHE: dict[tuple, str] = {}
 _FORMAT_EXT = {"hdf5": ".h5", "mdf": ".mf4", "tdms": ".tdms", "wav": ".wav", "uff": ".uff",
-               "csv": ".csv"}
+               "csv": ".csv", "xlsx": ".xlsx"}
 
 
 def sha256_of(path) -> str:
@@ -167,15 +167,22 @@ def _flag_clipping(ds: xr.Dataset, path: Path) -> None:
         var.attrs["clipped_spans_s"] = np.asarray(flat)
 
 
-def read(path, *, channels=None, allow_nonfinite: bool = False) -> xr.Dataset:
+def read(path, *, channels=None, allow_nonfinite: bool = False, map=None) -> xr.Dataset:  # noqa: A002
     """Read a record file into a validated Record, by extension.
 
     Parameters
     ----------
     path : path-like
-        ``.csv .h5 .hdf5 .nc .mf4 .mdf .tdms .uff .unv .wav`` (WAV with its ``.wav.json``).
+        ``.h5 .hdf5 .nc .mf4 .mdf .tdms .uff .unv .wav`` (WAV with its ``.wav.json``), delimited
+        text ``.csv .txt .tsv .tab .asc .dat`` of any common dialect, ``.xlsx`` workbooks.
     channels : list of str, optional
         Load only these channels (an unknown name is an error suggesting the close one).
+    map : path-like, dict or ChannelMap, optional
+        A channel map (:mod:`measure.channelmap`): which column is which channel, its units,
+        calibration and sensor metadata, raw pulse signals to decode (``role`` "wheel" or
+        "tdc"), the file's dialect and time axis. The Record then keeps its provenance in attrs
+        ``raw_source``, ``raw_sha256``, ``channel_map`` (the map's text) and
+        ``channel_map_sha256``.
     allow_nonfinite : bool
         Accept NaN/inf dropouts: they are masked as NaN, listed in the channel attr
         ``masked_spans_s`` (start, end pairs in s) and reported by a :class:`RecordWarning`
@@ -214,11 +221,23 @@ def read(path, *, channels=None, allow_nonfinite: bool = False) -> xr.Dataset:
     m/s^2 9.80665 r.h5
     """
     path, module = _check_input(path)
+    cmap = None
+    if map is not None:
+        from .channelmap import load_map
+
+        cmap = load_map(map)
     # hash on a second thread while the reader parses (hashlib releases the GIL)
     with ThreadPoolExecutor(max_workers=1) as pool:
         digest = pool.submit(sha256_of, path)
         try:
-            ds = module.read(path, channels=channels)
+            if cmap is None:
+                ds = module.read(path, channels=channels)
+            else:
+                ds = _read_mapped(path, module, cmap, channels, allow_nonfinite)
+        except ConfigError as exc:  # the map's fault: name the map and the data file
+            if cmap is None:
+                raise
+            raise ConfigError(f"{cmap.origin} (for {path.name}): {exc}") from None
         except CrankbenchError as exc:
             raise _named(path, exc) from None
         except (MemoryError, KeyboardInterrupt):
@@ -235,6 +254,21 @@ def read(path, *, channels=None, allow_nonfinite: bool = False) -> xr.Dataset:
         _flag_clipping(ds, path)
         ds.attrs["source"] = path.name
         ds.attrs["sha256"] = digest.result()
+        if cmap is not None:
+            ds.attrs.update(raw_source=path.name, raw_sha256=ds.attrs["sha256"],
+                            channel_map=cmap.text, channel_map_source=Path(cmap.origin).name,
+                            channel_map_sha256=cmap.sha256)
+    return ds
+
+
+def _read_mapped(path, module, cmap, channels, allow_nonfinite):
+    from .channelmap import read_mapped
+
+    ds = read_mapped(path, module, cmap, allow_nonfinite=allow_nonfinite)
+    if channels is not None:
+        from .readers._common import select
+
+        ds = ds[select([str(n) for n in ds.data_vars], channels, file=path.name)]
     return ds
 
 

@@ -94,9 +94,10 @@ ERRORS = {
     # CSV / WAV specifics
     "no_time_column.csv": r"no time column; expected a first column named 'time \[s\]' \(found "
                           r"columns \['acc \[g\]', 'vel \[mm/s\]'\]\)",
-    "non_numeric.csv": r"CSV contains a non-numeric value \(.*'overload'\); expected numbers in "
-                       r"every data cell",
-    "header_only.csv": r"CSV has a header but no data rows",
+    "non_numeric.csv": r"line 3, column 2: 'overload' is not a number \(read as comma-separated, "
+                       r"decimal point\); expected numbers in every data cell",
+    "header_only.csv": r"the table has a header but no data rows \(1 line\(s\), the last "
+                       r"'time \[s\],acc \[g\]'\)",
     "no_unit.csv": r"column 'acc' names no unit; expected 'acc \[unit\]', e.g. 'acc \[g\]'",
     "bad_sidecar_json.wav": r"bad_sidecar_json.wav.json: sidecar is not valid JSON .*expected "
                             r"the schema in measure.readers.wav",
