@@ -235,12 +235,12 @@ def _node_of(record, channel, system):
     return system.node_names[0]
 
 
-def _load_record(record):
+def _load_record(record, channel_map=None):
     if isinstance(record, (str, Path)):
         from crankbench import measure
 
         path = Path(record)
-        return measure.read(path), str(path)
+        return measure.read(path, map=channel_map), str(path)
     if hasattr(record, "data_vars"):
         return record, str(record.attrs.get("source", "record"))
     raise RecordError(f"record must be a path or an xarray.Dataset Record, got "
@@ -380,7 +380,7 @@ def analyse(record, model, *, channel=None, speed_channel=None, orders=None, max
             method="vkf", bandwidth_orders=None, revolutions=4, load=None, gate=0.15,
             tolerance=0.03, amplitude_tolerance=0.5, machine_class="III",
             operating_range_rpm=None, base_points=1500, order_fraction=0.05, max_tracked=8,
-            resonance_options=None, progress=None) -> PipelineResult:
+            resonance_options=None, progress=None, channel_map=None) -> PipelineResult:
     """Run the chain on one record against one shaft-line model.
 
     Parameters
@@ -426,6 +426,8 @@ def analyse(record, model, *, channel=None, speed_channel=None, orders=None, max
         Passed to :func:`analysis.find_resonances`.
     progress : callable, optional
         ``progress(step_name)`` called before each step (CLI progress bars).
+    channel_map : path-like, dict or ChannelMap, optional
+        Channel map for a record file (:mod:`measure.channelmap`).
 
     Returns
     -------
@@ -463,7 +465,7 @@ def analyse(record, model, *, channel=None, speed_channel=None, orders=None, max
         timings[name] = time.perf_counter() - timings[name]
 
     step("read")
-    rec, source = _load_record(record)
+    rec, source = _load_record(record, channel_map)
     system, model_path = _load_model(model)
     load = LoadCase.from_any(load, getattr(system, "engine", None))
     channel = torsional_channel(rec, channel)

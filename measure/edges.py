@@ -148,7 +148,7 @@ def _vertices(x, sign):
     Smooth: the parabola through the maximum and its neighbours also predicts the samples two
     away within its curvature ``d = 2 x_p - x_{p-1} - x_{p+1}`` (a sampled sine: within 0.58 d
     at 8 samples per period, 0.99 d at 6; the corner of a square wave, which a 3-point parabola
-    would overshoot, misses by about 2 d).
+    would overshoot, misses by about 2 d), and the signal falls on both sides of it.
     """
     a, b, c = x[1:-3], x[2:-2], x[3:-1]
     peak = np.flatnonzero((b > a) & (b > c)) + 2
@@ -159,6 +159,10 @@ def _vertices(x, sign):
     pred_lo = b - (c - a) - 2.0 * d
     pred_hi = b + (c - a) - 2.0 * d
     smooth = (np.abs(pred_lo - x[peak - 2]) < d) & (np.abs(pred_hi - x[peak + 2]) < d)
+    # both flanks fall comparably (a sine: within 2.4 : 1 at 8 samples per period; the corner
+    # of a pulse, ramped by a sample of partial coverage, falls on one side only)
+    left, right = b - x[peak - 2], b - x[peak + 2]
+    smooth &= (left > 0) & (right > 0) & (np.maximum(left, right) < 4.0 * np.minimum(left, right))
     if not smooth.any():
         return x
     out = x.copy()
@@ -250,8 +254,28 @@ def _cubic_crossing(x, j, frac, level):
     return u
 
 
-def _runts(x, lo, swing, sigma, switch_on, upper):
-    """Pulses that rise off the local low level but never reach the switching level."""
+def _typical_levels(x, mid, width):
+    """Median of the samples below and above the mid level, per block of ``width`` samples
+    (the baseline a pulse rises from, unmoved by ringing and over/undershoots)."""
+    n = x.size
+    width = int(max(8, min(width, n)))
+    starts = np.arange(0, n, width)
+    lo = np.empty(starts.size)
+    hi = np.empty(starts.size)
+    for k, a in enumerate(starts):
+        seg, m = x[a:a + width], mid[a:a + width]
+        below, above = seg[seg < m], seg[seg >= m]
+        lo[k] = np.median(below) if below.size else seg.min()
+        hi[k] = np.median(above) if above.size else seg.max()
+    centres = starts + 0.5 * np.minimum(width, n - starts)
+    idx = np.arange(n)
+    return np.interp(idx, centres, lo), np.interp(idx, centres, hi)
+
+
+def _runts(x, mid, width, sigma, switch_on, upper):
+    """Pulses that rise off the baseline but never reach the switching level."""
+    lo, hi = _typical_levels(x, mid, width)
+    swing = np.maximum(hi - lo, 0.0)
     rise = np.maximum(6.0 * sigma, 0.04 * swing)
     on, off = _schmitt(x, lo + rise, lo + 0.5 * rise, swing > 0)
     if on.size == 0:
@@ -399,7 +423,7 @@ def _detect(x, fs, width, sigma, floor, level, hysteresis, slope, interpolation)
         runt_t = runt_h = np.empty(0)
     else:
         edges = _crossings(x, mid, mid - h, on, interpolation) / fs
-        runt_t, runt_h = _runts(x, lo, swing, sigma, on, upper)
+        runt_t, runt_h = _runts(x, mid, width, sigma, on, upper)
         runt_t = runt_t / fs
     info = dict(runt_times=runt_t, runt_heights=runt_h,
                 swing=float(np.median(swing[valid])), hysteresis=float(np.median(h[valid])))

@@ -111,7 +111,8 @@ def _named(path: Path, exc: CrankbenchError) -> CrankbenchError:
 
 
 def _mask_nonfinite(ds: xr.Dataset, path: Path) -> xr.Dataset:
-    for name, var in ds.data_vars.items():
+    for name in list(ds.data_vars):
+        var = ds.variables[name]  # a Variable: ds[name] would cost O(channels) each
         if var.dtype.kind != "f" or var.chunks is not None:
             continue
         values = var.values
@@ -123,7 +124,7 @@ def _mask_nonfinite(ds: xr.Dataset, path: Path) -> xr.Dataset:
         if var.attrs.get("quantity") == "pulse_times":
             raise RecordError(f"{path}: pulse-time channel {name!r} has NaN/inf edge times; "
                               "expected finite times in s (cannot be masked)")
-        t = ds[var.dims[0]].values if var.dims[0] in ds.coords else None
+        t = ds.variables[var.dims[0]].values if var.dims[0] in ds.coords else None
         flat = []
         text = []
         for a, b in spans:
@@ -143,7 +144,8 @@ def _mask_nonfinite(ds: xr.Dataset, path: Path) -> xr.Dataset:
 
 
 def _flag_clipping(ds: xr.Dataset, path: Path) -> None:
-    for name, var in ds.data_vars.items():
+    for name in ds.data_vars:
+        var = ds.variables[name]
         if (var.dtype.kind != "f" or var.chunks is not None
                 or var.attrs.get("quantity") not in CLIP_QUANTITIES):
             continue
@@ -151,7 +153,7 @@ def _flag_clipping(ds: xr.Dataset, path: Path) -> None:
         if not spans:
             continue
         values = var.values
-        t = ds[var.dims[0]].values
+        t = ds.variables[var.dims[0]].values
         flat = []
         for a, b in spans:
             flat += [float(t[a]), float(t[b - 1])]
@@ -349,7 +351,7 @@ def read_truth(path) -> xr.Dataset:
 
 
 def open(path, *, chunk_seconds: float = 10.0, channels=None,  # noqa: A001
-         allow_nonfinite: bool = False) -> xr.Dataset:
+         allow_nonfinite: bool = False, map=None) -> xr.Dataset:  # noqa: A002
     """Open a record lazily: a Record whose channels are dask arrays of ``chunk_seconds``.
 
     Parameters
@@ -362,6 +364,8 @@ def open(path, *, chunk_seconds: float = 10.0, channels=None,  # noqa: A001
         Target chunk length per clock, s (> 0).
     channels : list of str, optional
         Only these channels.
+    map : path-like, dict or ChannelMap, optional
+        A channel map (see :func:`read`): the file is read through it (whole), then chunked.
     allow_nonfinite : bool
         Keep NaN/inf samples. By default every block is checked as it is computed, and one
         holding NaN/inf raises :class:`RecordError` naming the file, the channel and the time
@@ -395,6 +399,9 @@ def open(path, *, chunk_seconds: float = 10.0, channels=None,  # noqa: A001
     from crankbench.predict._validate import check_positive
 
     chunk_seconds = check_positive(chunk_seconds, "chunk_seconds", error=RecordError)
+    if map is not None:
+        ds = read(path, channels=channels, allow_nonfinite=allow_nonfinite, map=map)
+        return ds.chunk(_chunks_of(ds, chunk_seconds))
     path, module = _check_input(path)
     try:
         if hasattr(module, "open"):
@@ -403,11 +410,7 @@ def open(path, *, chunk_seconds: float = 10.0, channels=None,  # noqa: A001
             log.debug("%s: %s cannot be read in parts; loading it whole", path.name,
                      module.FORMAT)
             ds = module.read(path, channels=channels)
-            chunks = {}
-            for var in ds.data_vars.values():
-                fs = var.attrs.get("sample_rate")
-                chunks[var.dims[0]] = max(1, int(round(chunk_seconds * float(fs)))) if fs else -1
-            ds = ds.chunk(chunks)
+            ds = ds.chunk(_chunks_of(ds, chunk_seconds))
     except CrankbenchError as exc:
         raise _named(path, exc) from None
     except (MemoryError, KeyboardInterrupt):
@@ -423,16 +426,29 @@ def open(path, *, chunk_seconds: float = 10.0, channels=None,  # noqa: A001
     return ds if allow_nonfinite else _guard_finite(ds, path)
 
 
+def _chunks_of(ds: xr.Dataset, chunk_seconds: float) -> dict:
+    """Chunk length per dim: ``chunk_seconds`` of samples, a pulse train whole."""
+    chunks = {}
+    for name in ds.data_vars:
+        var = ds.variables[name]
+        fs = var.attrs.get("sample_rate")
+        chunks[var.dims[0]] = max(1, int(round(chunk_seconds * float(fs)))) if fs else -1
+    return chunks
+
+
 def _guard_finite(ds: xr.Dataset, path: Path) -> xr.Dataset:
     """Wrap each lazy float channel so a block with NaN/inf raises RecordError when computed."""
     import dask.array as da
 
-    for name, var in ds.data_vars.items():
+    guarded = {}
+    for name in ds.data_vars:
+        var = ds.variables[name]
         data = var.data
         if not isinstance(data, da.Array) or data.dtype.kind != "f" or data.ndim != 1:
             continue
         fs = var.attrs.get("sample_rate")
-        t0 = float(ds[var.dims[0]][0]) if fs and var.dims[0] in ds.coords and var.size else 0.0
+        t0 = float(ds.variables[var.dims[0]][0].values) if fs and var.dims[0] in ds.coords \
+            and var.size else 0.0
 
         def check(block, block_info=None, _name=name, _fs=fs, _t0=t0):
             bad = ~np.isfinite(block)
@@ -446,8 +462,11 @@ def _guard_finite(ds: xr.Dataset, path: Path) -> xr.Dataset:
                     "samples (open(..., allow_nonfinite=True) keeps them)")
             return block
 
-        ds[name] = var.copy(data=data.map_blocks(check, dtype=data.dtype))
-    return ds
+        # a name from the input's (unique) name: dask would otherwise pickle ``check`` to hash it
+        guarded[name] = var.copy(data=data.map_blocks(check, dtype=data.dtype,
+                                                      name=f"crankbench-finite-{data.name}"))
+    # one assignment for all channels: one merge per channel made this quadratic in their number
+    return ds.assign(guarded) if guarded else ds
 
 
 def iter_blocks(record: xr.Dataset, name: str):

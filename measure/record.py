@@ -271,7 +271,11 @@ def validate(record: xr.Dataset, *, allow_nonfinite: bool = False,
             raise RecordError(f"record attr start_time={start!r} is not ISO 8601 "
                               "(expected e.g. '2026-01-31T12:00:00+00:00')") from None
     checked_dims: set[str] = set()
-    for name, var in record.data_vars.items():
+    variables = record.variables  # Variables, not DataArrays: record[name] costs O(channels)
+    coords = set(record.coords)
+    ends: dict[str, tuple] = {}
+    for name in record.data_vars:
+        var = variables[name]
         name = str(name)
         if var.ndim != 1:
             raise RecordError(f"channel {name!r} has dims {var.dims}; expected one dim "
@@ -314,30 +318,31 @@ def validate(record: xr.Dataset, *, allow_nonfinite: bool = False,
         if fs is None:
             raise RecordError(f"channel {name!r} has no 'sample_rate' attr; expected Hz > 0")
         fs = _rate(name, fs)
-        if dim not in record.coords:
+        if dim not in coords:
             raise RecordError(f"channel {name!r}: dim {dim!r} has no time coordinate; expected "
                               "s from record start")
         if dim not in checked_dims:
-            coord = record[dim]
+            coord = variables[dim]
             units_t = coord.attrs.get("units", "s")
             if units_t != "s":
                 raise RecordError(f"time coordinate {dim!r} has units {units_t!r}; expected 's'")
+            ends[dim] = _ends(coord)
             if dim in _regular_dims or _lazy_index(record, dim):
                 # built as start + i / sample_rate by a reader: strictly increasing and
                 # evenly spaced by construction; only the rate needs checking
-                _check_time_axis_rate_only(name, coord, fs, dim)
+                _check_time_axis_rate_only(name, ends[dim], fs, dim)
             else:
                 _check_time_axis(name, coord.values, fs, dim)
             checked_dims.add(dim)
         else:
-            _check_time_axis_rate_only(name, record[dim], fs, dim)
+            _check_time_axis_rate_only(name, ends[dim], fs, dim)
         if not _is_lazy(var) and not allow_nonfinite and var.dtype.kind == "f":
             spans = nonfinite_spans(var.values)
             if spans:
                 n_bad = sum(b - a for a, b in spans)
                 raise RecordError(
                     f"channel {name!r} has {n_bad} NaN/inf sample(s) in {len(spans)} run(s): "
-                    f"{_describe_spans(spans, record[dim].values)}; expected finite values "
+                    f"{_describe_spans(spans, variables[dim].values)}; expected finite values "
                     "(read with allow_nonfinite=True to mask them)")
     return record
 
@@ -347,11 +352,17 @@ def _lazy_index(record: xr.Dataset, dim: str) -> bool:
     return index is not None and type(index).__name__ == "RangeIndex"
 
 
-def _check_time_axis_rate_only(name, coord, fs, dim) -> None:
+def _ends(coord) -> tuple[int, float, float]:
     n = coord.size
     if n < 2:
+        return n, 0.0, 0.0
+    return n, float(coord[0]), float(coord[-1])
+
+
+def _check_time_axis_rate_only(name, ends, fs, dim) -> None:
+    n, t0, t1 = ends
+    if n < 2:
         return
-    t0, t1 = float(coord[0]), float(coord[-1])
     mean_step = (t1 - t0) / (n - 1)
     if abs(mean_step * fs - 1.0) > RATE_RTOL:
         raise RecordError(

@@ -63,6 +63,7 @@ __all__ = [
     "SpeedTrace",
     "angle_from_pulses",
     "AngleTrace",
+    "pulse_channel_speed",
 ]
 
 log = logging.getLogger("crankbench")
@@ -657,3 +658,48 @@ def angle_from_pulses(edge_times, *, pulses_per_rev, missing_teeth=0, reference_
     return AngleTrace(time=pc.edge_times, angle=angle - tdc_offset,
                       pulses_per_rev=pc.pulses_per_rev, reference=reference,
                       tdc_offset=float(tdc_offset))
+
+
+def pulse_channel_speed(var, *, window_revs=1.0, smoothing_revs=1.0):
+    """Crankshaft speed from a Record's pulse-train channel, its attrs read for the layout.
+
+    ``pulses_per_rev`` and ``missing_teeth`` (None/absent: 0) describe the wheel; ``speed_ratio``
+    (default 1) is the turns of the pulse source per crankshaft turn — 0.5 for a mark once per
+    four-stroke cycle, which turns with the camshaft — and divides the wheel's speed.
+
+    Parameters
+    ----------
+    var : xarray.DataArray
+        Edge times (s) with the attrs above.
+    window_revs, smoothing_revs : float
+        As in :func:`speed_from_pulses`.
+
+    Returns
+    -------
+    SpeedTrace
+        Crankshaft speed (rad/s) at the window mid times.
+
+    Examples
+    --------
+    >>> import numpy as np, xarray as xr
+    >>> marks = xr.DataArray(np.arange(40) * 0.1, dims="pulse",
+    ...                      attrs={"pulses_per_rev": 1, "speed_ratio": 0.5})
+    >>> round(float(pulse_channel_speed(marks, smoothing_revs=0).speed_rpm[0]), 6)
+    1200.0
+    """
+    ppr = var.attrs.get("pulses_per_rev")
+    if ppr is None:
+        raise AnalysisError(f"pulse channel {var.name!r} has no 'pulses_per_rev' attr")
+    missing = var.attrs.get("missing_teeth", 0)
+    ratio = float(var.attrs.get("speed_ratio", 1.0))
+    if not np.isfinite(ratio) or ratio <= 0:
+        raise AnalysisError(f"pulse channel {var.name!r}: speed_ratio={ratio!r}; expected > 0")
+    trace = speed_from_pulses(np.asarray(var.values, dtype=float), pulses_per_rev=int(ppr),
+                              missing_teeth=None if missing is None else int(missing),
+                              window_revs=window_revs, smoothing_revs=smoothing_revs)
+    if ratio == 1.0:
+        return trace
+    return SpeedTrace(time=trace.time, omega=trace.omega / ratio,
+                      window_pitches=trace.window_pitches,
+                      timing_error_s=trace.timing_error_s, error_rpm=trace.error_rpm / ratio,
+                      method=trace.method + f", divided by speed_ratio {ratio:g}")

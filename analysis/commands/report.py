@@ -102,6 +102,9 @@ def run(args) -> int:
         bar.close()
     params = {"channel": result.channel, "method": args.method, "gate": args.gate,
               "tolerance": args.tolerance, "machine class": args.machine_class}
+    if args.map:
+        params["channel map"] = (f"{args.map} (sha256 "
+                                 f"{result.record.attrs.get('channel_map_sha256', '')})")
     bench_rows = None
     if args.bench:
         from crankbench.analysis.bench import run_suites

@@ -27,13 +27,6 @@ __all__ = ["EXTENSIONS", "FORMAT_MODULES", "module_for", "format_of_magic"]
 #: File extension -> format module name (inside ``measure.readers``).
 EXTENSIONS = {
     ".csv": "csv",
-    ".txt": "csv",
-    ".tsv": "csv",
-    ".tab": "csv",
-    ".asc": "csv",
-    ".dat": "csv",
-    ".xlsx": "xlsx",
-    ".xlsm": "xlsx",
     ".h5": "hdf5",
     ".hdf5": "hdf5",
     ".nc": "netcdf",
@@ -43,6 +36,13 @@ EXTENSIONS = {
     ".uff": "uff",
     ".unv": "uff",
     ".wav": "wav",
+    ".txt": "csv",
+    ".tsv": "csv",
+    ".tab": "csv",
+    ".asc": "csv",
+    ".dat": "csv",
+    ".xlsx": "xlsx",
+    ".xlsm": "xlsx",
 }
 
 #: Format module names, in the order files are probed by magic bytes.

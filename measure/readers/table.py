@@ -238,10 +238,10 @@ def open_table(path, module_name, *, source=None) -> Table:
     return TextTable(path, **hints)
 
 
-def _time_from(table, index, unit, file):
+def _time_from(table, index, unit, file, t):
+    """Check and convert the time column ``t`` (values as read)."""
     from ..units import to_si
 
-    t = table.read([index])[0]
     finite = np.flatnonzero(np.isfinite(t))
     n = int(finite[-1]) + 1 if finite.size else 0
     t = t[:n]
@@ -307,14 +307,7 @@ def table_record(table: Table, *, channels=None):
     headers = [str(h) for h in table.names]
     time_idx = next((i for i, (name, _) in enumerate(parsed)
                      if name and name.strip().lower() in TIME_NAMES), None)
-    if time_idx is not None:
-        t = _time_from(table, time_idx, parsed[time_idx][1], file)
-        span = t[-1] - t[0]
-        fs = (t.size - 1) / span if np.isfinite(span) and span > 0 else float("nan")
-    elif table.sample_rate:
-        fs = float(table.sample_rate)
-        t = None
-    else:
+    if time_idx is None and not table.sample_rate:
         raise RecordError(f"{file}: no time column; expected a first column named 'time [s]' "
                           f"(found columns {headers}), or a sample rate: give a channel map "
                           "with [source] sample_rate (Hz) or time_column")
@@ -327,7 +320,16 @@ def table_record(table: Table, *, channels=None):
             raise RecordError(f"{file}: column {headers[i]!r} names no unit; expected "
                               f"'{name} [unit]', e.g. '{name} [g]', or a channel map giving its "
                               "units")
-    data = table.read(idx) if idx else np.empty((0, 0))
+    both = table.read(([time_idx] if time_idx is not None else []) + idx)  # one pass
+    t = None
+    if time_idx is not None:
+        t = _time_from(table, time_idx, parsed[time_idx][1], file, both[0])
+        span = t[-1] - t[0]
+        fs = (t.size - 1) / span if np.isfinite(span) and span > 0 else float("nan")
+        data = both[1:]
+    else:
+        fs = float(table.sample_rate)
+        data = both
     if t is None:
         n = data.shape[1] if data.size else 0
         from ..record import time_coordinate

@@ -189,11 +189,11 @@ def _longest_run(lines, delimiter, decimal) -> tuple[int, int, int]:
     return best
 
 
-def _header_fields(line, delimiter, k):
+def _header_fields(line, delimiter, k, trailing=False):
     fields = _split(line, delimiter)
     if delimiter not in (None, "") and len(fields) == k + 1 and fields[-1].strip() == "":
         fields = fields[:-1]
-    if delimiter not in (None, "") and len(fields) == k - 1 and k >= 2:
+    if trailing and len(fields) == k - 1:
         fields = fields + [""]  # data rows end with a delimiter, the header does not
     if len(fields) != k and delimiter is None:
         fields = [f for f in re.split(r"\t|\s{2,}", line.strip())]
@@ -392,7 +392,7 @@ def sniff(path, *, delimiter=..., decimal=None, header_rows=None, skip_rows=None
             line = lines[j]
             if not line.strip() or (comment and line.startswith(comment)):
                 break
-            fields = _header_fields(line, delim, k)
+            fields = _header_fields(line, delim, k, trailing)
             if fields is None or all(_number(f, dec) for f in fields):
                 break
             head_lines.insert(0, line)
@@ -411,7 +411,7 @@ def sniff(path, *, delimiter=..., decimal=None, header_rows=None, skip_rows=None
                     f"{'comma' if dec == ',' else 'point'}); expected numbers in every data "
                     "cell")
     names, units = (), ()
-    parsed = [_header_fields(h, delim, k) for h in head_lines]
+    parsed = [_header_fields(h, delim, k, trailing) for h in head_lines]
     parsed = [p for p in parsed if p is not None]
     if parsed:
         unit_rows = [p for p in parsed if _looks_like_units(p)]
