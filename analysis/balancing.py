@@ -154,7 +154,7 @@ def first_order_phasors(record, channels, *, speed_channel: str | None = None,
         if clock not in speeds:
             speeds[clock] = speed_reference(record, ch, speed_channel=speed_channel)
         rpm = speeds[clock]
-        track = order_track(record[ch], rpm=rpm, orders=[1], revolutions=revolutions)
+        track = order_track(record[ch], speed_rpm=rpm, orders=[1], revolutions=revolutions)
         amp = track.amplitude.values[0]
         phase = track.phase.values[0]
         t_blk = track.time.values

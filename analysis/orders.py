@@ -65,9 +65,11 @@ import logging
 
 import numpy as np
 
-from crankbench.predict._validate import (check_finite_array, check_int, check_option, check_positive,
+from crankbench.predict._validate import (check_finite_array, check_int, check_option,
+                                          check_positive,
                                check_range)
 from crankbench.predict.errors import AnalysisError
+from crankbench.predict._deprecate import renamed
 
 from .resample import INTERPOLATIONS, _as_rpm, _as_signal, angle_resample
 
@@ -175,7 +177,7 @@ def _angle_blocks(x, fs, rpm, samples_per_rev, revolutions, overlap, interpolati
     overlap = check_range(overlap, "overlap", 0.0, 1.0, inclusive=(True, False),
                           error=AnalysisError)
     check_option(interpolation, "interpolation", INTERPOLATIONS, error=AnalysisError)
-    y = angle_resample(x, fs=fs, rpm=rpm, samples_per_rev=samples_per_rev,
+    y = angle_resample(x, fs=fs, speed_rpm=rpm, samples_per_rev=samples_per_rev,
                        interpolation=interpolation)
     length = samples_per_rev * revolutions
     starts = _frames(y.shape[0], length, overlap)
@@ -197,7 +199,8 @@ def _block_coords(y, starts, length):
 # ---------------------------------------------------------------------------- order track
 
 
-def order_track(x, *, fs=None, rpm, orders, amplitude: str = "peak", method: str = "cot",
+@renamed(rpm="speed_rpm")
+def order_track(x, *, fs=None, speed_rpm, orders, amplitude: str = "peak", method: str = "cot",
                 samples_per_rev: int = 64, revolutions: int = 16, overlap: float = 0.5,
                 window="hann", interpolation: str = "cubic", bandwidth_hz=None,
                 bandwidth_orders=None, filter_order: int = 2):
@@ -209,7 +212,7 @@ def order_track(x, *, fs=None, rpm, orders, amplitude: str = "peak", method: str
         Signal (any SI unit); a Record channel supplies ``fs`` and ``units``.
     fs : float, optional
         Sample rate, Hz (required for a plain array).
-    rpm : float or array_like
+    speed_rpm : float or array_like
         Shaft speed, rpm, one value per sample (see :func:`analysis.speedref.speed_reference`).
     orders : sequence of float
         Orders to track (cycles per shaft revolution; 0.5 = half order of a 4-stroke).
@@ -245,7 +248,7 @@ def order_track(x, *, fs=None, rpm, orders, amplitude: str = "peak", method: str
     >>> from crankbench.analysis.resample import shaft_angle
     >>> phi = shaft_angle(rpm, fs)
     >>> x = 2.0 * np.cos(2 * phi + 0.3) + 0.5 * np.cos(0.5 * phi)
-    >>> res = order_track(x, fs=fs, rpm=rpm, orders=[0.5, 2], revolutions=8)
+    >>> res = order_track(x, fs=fs, speed_rpm=rpm, orders=[0.5, 2], revolutions=8)
     >>> np.round(res.amplitude.mean("time").values, 4)
     array([0.5, 2. ])
     >>> round(float(res.phase.sel(order=2).mean()), 4)
@@ -256,7 +259,7 @@ def order_track(x, *, fs=None, rpm, orders, amplitude: str = "peak", method: str
     orders = _check_orders(orders)
     masked = _dropout_spans(x, fs)
     if masked is not None:
-        return _track_around_dropouts(x, fs, masked, rpm=rpm, orders=orders,
+        return _track_around_dropouts(x, fs, masked, speed_rpm=speed_rpm, orders=orders,
                                       amplitude=amplitude, method=method,
                                       samples_per_rev=samples_per_rev, revolutions=revolutions,
                                       overlap=overlap, window=window,
@@ -267,7 +270,8 @@ def order_track(x, *, fs=None, rpm, orders, amplitude: str = "peak", method: str
         from .vkf import vold_kalman
 
         values, fs_, units, label = _as_signal(x, fs)
-        res = vold_kalman(values, fs=fs_, rpm=rpm, orders=orders, bandwidth_hz=bandwidth_hz,
+        res = vold_kalman(values, fs=fs_, speed_rpm=speed_rpm, orders=orders,
+                          bandwidth_hz=bandwidth_hz,
                           bandwidth_orders=bandwidth_orders, filter_order=filter_order)
         amp = np.abs(res["envelope"].values) * factor
         ds = _track_dataset(amp, np.angle(res["envelope"].values), orders,
@@ -276,8 +280,8 @@ def order_track(x, *, fs=None, rpm, orders, amplitude: str = "peak", method: str
         ds.attrs.update({"amplitude_convention": amplitude})
         return ds
     _check_order_range(float(orders.max()), check_int(samples_per_rev, "samples_per_rev",
-                                                       minimum=4, error=AnalysisError), x, fs, rpm)
-    y, starts, length = _angle_blocks(x, fs, rpm, samples_per_rev, revolutions, overlap,
+                                                       minimum=4, error=AnalysisError), x, fs, speed_rpm)
+    y, starts, length = _angle_blocks(x, fs, speed_rpm, samples_per_rev, revolutions, overlap,
                                       interpolation)
     w = get_window(window, length)
     # complex amplitude A = 2 Σ y w e^{-i o φ} / Σ w  (coherent gain, exact at any order)
@@ -385,7 +389,8 @@ def _track_dataset(amp, phase, orders, t, r, units, label):
               "time": ("time", np.asarray(t, float), {"units": "s"}),
               "rpm": ("time", np.asarray(r, float), {"units": "rpm", "long_name": "shaft speed"})}
     return xr.Dataset(
-        {"amplitude": (("order", "time"), amp, {"units": units, "long_name": f"{label} order amplitude"}),
+        {"amplitude": (("order", "time"), amp, {"units": units,
+                                                "long_name": f"{label} order amplitude"}),
          "phase": (("order", "time"), phase, {"units": "rad",
                                                "long_name": "phase of A cos(o φ + phase)"})},
         coords=coords, attrs={"channel": str(label),
@@ -426,9 +431,10 @@ def _map_values(y, starts, length, w, scaling, factor, n_orders):
     return out
 
 
-def order_map(x, *, fs=None, rpm, samples_per_rev: int = 64, revolutions: int = 16,
+@renamed(rpm="speed_rpm", rpm_bins="speed_bins_rpm")
+def order_map(x, *, fs=None, speed_rpm, samples_per_rev: int = 64, revolutions: int = 16,
               overlap: float = 0.5, window="hann", amplitude: str = "peak",
-              scaling: str = "amplitude", max_order=None, rpm_bins=None,
+              scaling: str = "amplitude", max_order=None, speed_bins_rpm=None,
               interpolation: str = "cubic"):
     """Order spectrum of each block of revolutions: the order map (time or rpm × order).
 
@@ -448,7 +454,7 @@ def order_map(x, *, fs=None, rpm, samples_per_rev: int = 64, revolutions: int = 
         Highest order kept (default ``samples_per_rev/4``, the anti-alias pass band; at most
         ``samples_per_rev/2``, the bins above ``samples_per_rev/4`` being in the filter's
         transition band).
-    rpm_bins : int or array_like, optional
+    speed_bins_rpm : int or array_like, optional
         Average the blocks in speed bins (count or edges in rpm; power average). The result then
         has dims (``rpm``, ``order``); otherwise (``time``, ``order``) with ``rpm`` along time.
 
@@ -464,7 +470,7 @@ def order_map(x, *, fs=None, rpm, samples_per_rev: int = 64, revolutions: int = 
     >>> rpm = 1200 + 100 * t
     >>> from crankbench.analysis.resample import shaft_angle
     >>> x = 0.7 * np.cos(3 * shaft_angle(rpm, fs))
-    >>> m = order_map(x, fs=fs, rpm=rpm, revolutions=8)
+    >>> m = order_map(x, fs=fs, speed_rpm=rpm, revolutions=8)
     >>> round(float(m.sel(order=3).mean()), 4), m.dims
     (0.7, ('time', 'order'))
     """
@@ -474,8 +480,8 @@ def order_map(x, *, fs=None, rpm, samples_per_rev: int = 64, revolutions: int = 
     top = spr / 4.0 if max_order is None else check_positive(max_order, "max_order",
                                                              error=AnalysisError)
     if max_order is not None:
-        _check_order_range(top, spr, x, fs, rpm, divisor=2)
-    y, starts, length = _angle_blocks(x, fs, rpm, samples_per_rev, revolutions, overlap,
+        _check_order_range(top, spr, x, fs, speed_rpm, divisor=2)
+    y, starts, length = _angle_blocks(x, fs, speed_rpm, samples_per_rev, revolutions, overlap,
                                       interpolation)
     n_orders = min(length // 2 + 1, int(np.floor(top * revolutions)) + 1)
     w = get_window(window, length)
@@ -494,13 +500,14 @@ def order_map(x, *, fs=None, rpm, samples_per_rev: int = 64, revolutions: int = 
              "overlap": overlap, "interpolation": interpolation,
              "enbw_bins": float(length * np.sum(w ** 2) / np.sum(w) ** 2)}
     order_coord = ("order", order_axis, {"units": "1", "long_name": "shaft order"})
-    if rpm_bins is None:
+    if speed_bins_rpm is None:
         return xr.DataArray(values, dims=("time", "order"), name=f"{y.name} order map",
                             coords={"time": ("time", t, {"units": "s"}),
                                     "rpm": ("time", r, {"units": "rpm"}), "order": order_coord},
                             attrs=attrs)
-    edges = (np.linspace(r.min(), r.max() * (1 + 1e-12), int(rpm_bins) + 1)
-             if np.isscalar(rpm_bins) else check_finite_array(rpm_bins, "rpm_bins", ndim=1,
+    edges = (np.linspace(r.min(), r.max() * (1 + 1e-12), int(speed_bins_rpm) + 1)
+             if np.isscalar(speed_bins_rpm) else check_finite_array(speed_bins_rpm,
+                                                                    "speed_bins_rpm", ndim=1,
                                                               min_length=2, error=AnalysisError))
     which = np.digitize(r, edges) - 1
     keep = (which >= 0) & (which < edges.shape[0] - 1)
@@ -520,7 +527,8 @@ def order_map(x, *, fs=None, rpm, samples_per_rev: int = 64, revolutions: int = 
                         attrs=attrs)
 
 
-def order_spectrum(x, *, fs=None, rpm, samples_per_rev: int = 64, revolutions=None,
+@renamed(rpm="speed_rpm")
+def order_spectrum(x, *, fs=None, speed_rpm, samples_per_rev: int = 64, revolutions=None,
                    overlap: float = 0.5, window="hann", amplitude: str = "peak",
                    scaling: str = "amplitude", max_order=None, interpolation: str = "cubic"):
     """Order spectrum at (nearly) steady speed, averaged over blocks (Welch, power average).
@@ -544,16 +552,17 @@ def order_spectrum(x, *, fs=None, rpm, samples_per_rev: int = 64, revolutions=No
     >>> t = np.arange(int(4 * fs)) / fs
     >>> from crankbench.analysis.resample import shaft_angle
     >>> x = 1.5 * np.cos(2 * shaft_angle(np.full(t.size, 1500.0), fs))
-    >>> s = order_spectrum(x, fs=fs, rpm=1500.0, revolutions=20)
+    >>> s = order_spectrum(x, fs=fs, speed_rpm=1500.0, revolutions=20)
     >>> round(float(s.sel(order=2)), 4)
     1.5
     """
     if revolutions is None:
         # whole revolutions available after resampling (the anti-alias filter trims the ends)
-        y = angle_resample(x, fs=fs, rpm=rpm, samples_per_rev=samples_per_rev,
+        y = angle_resample(x, fs=fs, speed_rpm=speed_rpm, samples_per_rev=samples_per_rev,
                            interpolation=interpolation)
         revolutions = max(1, y.shape[0] // int(samples_per_rev))
-    m = order_map(x, fs=fs, rpm=rpm, samples_per_rev=samples_per_rev, revolutions=revolutions,
+    m = order_map(x, fs=fs, speed_rpm=speed_rpm, samples_per_rev=samples_per_rev,
+                  revolutions=revolutions,
                   overlap=overlap, window=window, amplitude=amplitude, scaling=scaling,
                   max_order=max_order, interpolation=interpolation)
     if scaling == "amplitude":
@@ -597,7 +606,7 @@ def band_amplitude(power, orders, *, half_width, amplitude: str = "peak"):
     >>> t = np.arange(int(4 * fs)) / fs
     >>> from crankbench.analysis.resample import shaft_angle
     >>> x = np.cos(2.025 * shaft_angle(np.full(t.size, 1500.0), fs))   # between bins
-    >>> p = order_spectrum(x, fs=fs, rpm=1500.0, revolutions=20, scaling="power")
+    >>> p = order_spectrum(x, fs=fs, speed_rpm=1500.0, revolutions=20, scaling="power")
     >>> round(float(band_amplitude(p, [2.025], half_width=0.2)[0]), 4)
     1.0
     """
@@ -626,9 +635,10 @@ def band_amplitude(power, orders, *, half_width, amplitude: str = "peak"):
 # ---------------------------------------------------------------------------- Campbell map
 
 
-def campbell_map(x, *, fs=None, rpm, nperseg: int = 4096, overlap: float = 0.5, window="hann",
+@renamed(rpm="speed_rpm", rpm_bins="speed_bins_rpm")
+def campbell_map(x, *, fs=None, speed_rpm, nperseg: int = 4096, overlap: float = 0.5, window="hann",
                  amplitude: str = "peak", max_frequency=None, orders=(0.5, 1, 1.5, 2, 3, 4, 6),
-                 rpm_bins=None):
+                 speed_bins_rpm=None):
     """Rpm–frequency (Campbell / waterfall) map: short-time spectra in the time domain.
 
     Resonances (fixed frequencies) show as vertical lines and orders as rays through the origin;
@@ -651,7 +661,7 @@ def campbell_map(x, *, fs=None, rpm, nperseg: int = 4096, overlap: float = 0.5, 
         Highest frequency kept, Hz.
     orders : sequence of float
         Order lines recorded in attrs.
-    rpm_bins : int or array_like, optional
+    speed_bins_rpm : int or array_like, optional
         Power-average the frames in speed bins (dims become (``rpm``, ``frequency``)).
 
     Returns
@@ -664,12 +674,12 @@ def campbell_map(x, *, fs=None, rpm, nperseg: int = 4096, overlap: float = 0.5, 
     >>> fs = 2048.0
     >>> t = np.arange(int(4 * fs)) / fs
     >>> x = 0.25 * np.cos(2 * np.pi * 100.0 * t)
-    >>> c = campbell_map(x, fs=fs, rpm=1500.0, nperseg=1024)
+    >>> c = campbell_map(x, fs=fs, speed_rpm=1500.0, nperseg=1024)
     >>> round(float(c.sel(frequency=100.0).mean()), 4)
     0.25
     """
     values, fs, units, label = _as_signal(x, fs)
-    speed = _as_rpm(rpm, values.shape[0], fs)
+    speed = _as_rpm(speed_rpm, values.shape[0], fs)
     factor = amplitude_factor(amplitude)
     nperseg = check_int(nperseg, "nperseg", minimum=8, error=AnalysisError)
     overlap = check_range(overlap, "overlap", 0.0, 1.0, inclusive=(True, False),
@@ -704,10 +714,10 @@ def campbell_map(x, *, fs=None, rpm, nperseg: int = 4096, overlap: float = 0.5, 
                               "rpm": ("time", frame_rpm, {"units": "rpm"}),
                               "frequency": ("frequency", freq[:n_freq], {"units": "Hz"})},
                       attrs=attrs)
-    if rpm_bins is None:
+    if speed_bins_rpm is None:
         return da
-    edges = (np.linspace(frame_rpm.min(), frame_rpm.max() * (1 + 1e-12), int(rpm_bins) + 1)
-             if np.isscalar(rpm_bins) else np.asarray(rpm_bins, float))
+    edges = (np.linspace(frame_rpm.min(), frame_rpm.max() * (1 + 1e-12), int(speed_bins_rpm) + 1)
+             if np.isscalar(speed_bins_rpm) else np.asarray(speed_bins_rpm, float))
     which = np.digitize(frame_rpm, edges) - 1
     rows, centres = [], []
     for b in range(edges.shape[0] - 1):

@@ -41,6 +41,7 @@ import numpy as np
 
 from crankbench.predict._validate import check_finite_array, check_int, check_option, check_positive
 from crankbench.predict.errors import AnalysisError
+from crankbench.predict._deprecate import renamed
 
 __all__ = ["angle_resample", "shaft_angle", "INTERPOLATIONS"]
 
@@ -110,12 +111,13 @@ def _as_rpm(rpm, n: int, fs: float | None = None) -> np.ndarray:
     return arr
 
 
-def shaft_angle(rpm: np.ndarray, fs: float) -> np.ndarray:
+@renamed(rpm="speed_rpm")
+def shaft_angle(speed_rpm: np.ndarray, fs: float) -> np.ndarray:
     """Shaft angle (rad) at each sample from the speed (rpm), zero at the first sample.
 
     Parameters
     ----------
-    rpm : ndarray
+    speed_rpm : ndarray
         Shaft speed at each sample, rpm (> 0).
     fs : float
         Sample rate, Hz.
@@ -131,7 +133,7 @@ def shaft_angle(rpm: np.ndarray, fs: float) -> np.ndarray:
     >>> round(float(phi[-1] / (2 * np.pi)), 12)
     1.0
     """
-    omega = np.asarray(rpm, dtype=float) * (2.0 * np.pi / 60.0)
+    omega = np.asarray(speed_rpm, dtype=float) * (2.0 * np.pi / 60.0)
     phi = np.empty_like(omega)
     phi[0] = 0.0
     np.cumsum(0.5 * (omega[1:] + omega[:-1]) / fs, out=phi[1:])
@@ -220,7 +222,9 @@ def _chunk_bounds(speed: np.ndarray, chunk: int) -> np.ndarray:
 # ---------------------------------------------------------------------------- public
 
 
-def angle_resample(x, *, fs=None, rpm, samples_per_rev: int = 64, interpolation: str = "cubic",
+@renamed(rpm="speed_rpm")
+def angle_resample(x, *, fs=None, speed_rpm, samples_per_rev: int = 64,
+                   interpolation: str = "cubic",
                    antialias: bool = True, chunk: int = 1 << 18):
     """Resample a signal at constant increments of shaft angle (computed order tracking).
 
@@ -230,7 +234,7 @@ def angle_resample(x, *, fs=None, rpm, samples_per_rev: int = 64, interpolation:
         Signal (any SI unit). A Record channel supplies ``fs`` (``sample_rate``) and ``units``.
     fs : float, optional
         Sample rate, Hz (required for a plain array).
-    rpm : float or array_like
+    speed_rpm : float or array_like
         Shaft speed, rpm, one value per sample of ``x`` (a scalar for a steady speed); > 0.
     samples_per_rev : int
         Angle samples per revolution (the angle-domain "sample rate"); orders up to
@@ -259,14 +263,14 @@ def angle_resample(x, *, fs=None, rpm, samples_per_rev: int = 64, interpolation:
     >>> t = np.arange(20000) / fs
     >>> rpm = 600 + 300 * t                       # run-up 600 -> 1800 rpm
     >>> phi = shaft_angle(rpm, fs)
-    >>> y = angle_resample(np.cos(3 * phi), fs=fs, rpm=rpm, samples_per_rev=32)
+    >>> y = angle_resample(np.cos(3 * phi), fs=fs, speed_rpm=rpm, samples_per_rev=32)
     >>> err = np.abs(y.values - np.cos(3 * y.angle.values)).max()
     >>> bool(err < 1e-4)
     True
     """
     values, fs, units, label = _as_signal(x, fs)
     n = values.shape[0]
-    speed = _as_rpm(rpm, n, fs)
+    speed = _as_rpm(speed_rpm, n, fs)
     samples_per_rev = check_int(samples_per_rev, "samples_per_rev", minimum=4, error=AnalysisError)
     interpolation = check_option(interpolation, "interpolation", INTERPOLATIONS,
                                  error=AnalysisError)

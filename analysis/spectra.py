@@ -37,6 +37,7 @@ import numpy as np
 
 from crankbench.predict._validate import check_int, check_option, check_positive, check_range
 from crankbench.predict.errors import AnalysisError
+from crankbench.predict._deprecate import renamed
 
 from .orders import _frame_batches, _frames, _scale_spectrum, amplitude_factor, get_window
 from .resample import _as_signal, angle_resample
@@ -149,7 +150,8 @@ def spectrum(x, *, fs=None, window="hann", nperseg=None, overlap: float = 0.5,
                                "resolution_hz": fs / nperseg, "enbw_hz": enbw * fs / nperseg})
 
 
-def synchronous_average(x, *, fs=None, rpm, revolutions_per_cycle: int = 1,
+@renamed(rpm="speed_rpm")
+def synchronous_average(x, *, fs=None, speed_rpm, revolutions_per_cycle: int = 1,
                         samples_per_rev: int = 256, interpolation: str = "cubic"):
     """Time-synchronous average over shaft cycles (angle domain).
 
@@ -183,14 +185,14 @@ def synchronous_average(x, *, fs=None, rpm, revolutions_per_cycle: int = 1,
     >>> rpm = np.full(t.size, 1200.0)
     >>> rng = np.random.default_rng(0)
     >>> x = np.cos(shaft_angle(rpm, fs)) + rng.normal(0, 1.0, t.size)
-    >>> avg = synchronous_average(x, fs=fs, rpm=rpm, samples_per_rev=64)
+    >>> avg = synchronous_average(x, fs=fs, speed_rpm=rpm, samples_per_rev=64)
     >>> err = np.abs(avg.values - np.cos(avg.angle.values)).max()
     >>> bool(err < 5 * avg.attrs["noise_rms_estimate"]), avg.attrs["cycles"] > 190
     (True, True)
     """
     rpc = check_int(revolutions_per_cycle, "revolutions_per_cycle", minimum=1,
                     error=AnalysisError)
-    y = angle_resample(x, fs=fs, rpm=rpm, samples_per_rev=samples_per_rev,
+    y = angle_resample(x, fs=fs, speed_rpm=speed_rpm, samples_per_rev=samples_per_rev,
                        interpolation=interpolation)
     spr = y.attrs["samples_per_rev"]
     per_cycle = spr * rpc

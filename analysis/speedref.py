@@ -22,6 +22,7 @@ from __future__ import annotations
 import logging
 
 import numpy as np
+import xarray as xr
 
 from crankbench.predict._validate import check_positive, suggest
 from crankbench.predict.errors import AnalysisError, RecordError
@@ -90,7 +91,8 @@ def _pulse_speed(var, name):
     return np.asarray(t, float), np.asarray(omega, float)
 
 
-def speed_reference(record, channel: str, *, speed_channel: str | None = None) -> np.ndarray:
+def speed_reference(record, channel: str, *,
+                    speed_channel: str | None = None) -> xr.DataArray:
     """Shaft speed in rpm at each time sample of ``channel``.
 
     Parameters
@@ -106,8 +108,10 @@ def speed_reference(record, channel: str, *, speed_channel: str | None = None) -
 
     Returns
     -------
-    ndarray
-        Speed, rpm, one value per sample of ``channel``.
+    xarray.DataArray
+        Speed, rpm (``attrs["units"]``), one value per sample of ``channel``, on that channel's
+        time coordinate (s); ``attrs["source"]`` names where it came from. Pass it as
+        ``speed_rpm=`` to the order trackers.
 
     Examples
     --------
@@ -118,8 +122,9 @@ def speed_reference(record, channel: str, *, speed_channel: str | None = None) -
     ...      "n": ("time_tacho", np.full(3, 2 * np.pi * 25.0), {"quantity": "rotational_speed",
     ...                                                         "units": "rad/s"})},
     ...     coords={"time": t, "time_tacho": [0.0, 0.2, 0.4]})
-    >>> speed_reference(rec, "acc")
-    array([1500., 1500., 1500., 1500., 1500.])
+    >>> n = speed_reference(rec, "acc")
+    >>> n.values, n.attrs["units"], n.attrs["source"]
+    (array([1500., 1500., 1500., 1500., 1500.]), 'rpm', "speed channel 'n'")
     """
     if channel not in record.data_vars:
         raise RecordError(f"record has no channel {channel!r}"
@@ -163,4 +168,7 @@ def speed_reference(record, channel: str, *, speed_channel: str | None = None) -
                     "constant beyond its ends", source, t_in[0], t_in[-1], channel, t_out[0],
                     t_out[-1])
     check_positive(rev_time, "revolution time", error=AnalysisError)
-    return rpm
+    dim = record[channel].dims[0]
+    return xr.DataArray(rpm, dims=(dim,), coords={dim: (dim, t_out, {"units": "s"})},
+                        name="speed_rpm", attrs={"units": "rpm", "long_name": "shaft speed",
+                                                 "source": source, "channel": channel})

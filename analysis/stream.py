@@ -51,6 +51,7 @@ import numpy as np
 
 from crankbench.predict._validate import check_int, check_option, check_positive, check_range
 from crankbench.predict.errors import AnalysisError, RecordError
+from crankbench.predict._deprecate import renamed
 
 __all__ = ["SpanSpeed", "decimate_stream", "order_map_stream", "order_track_stream"]
 
@@ -86,12 +87,15 @@ class SpanSpeed:
     [12.0, 18.0]
     """
 
-    def __init__(self, n, fs, t0, *, rpm=None, t_in=None, omega=None):
+    @renamed(rpm="speed_rpm")
+    def __init__(self, n, fs, t0, *, speed_rpm=None, t_in=None, omega=None):
         self.n, self.fs, self.t0 = int(n), float(fs), float(t0)
-        if rpm is None or hasattr(rpm, "compute"):      # dask: sliced per span, never whole
-            self._rpm = rpm
+        if speed_rpm is None or hasattr(speed_rpm,
+                                        "compute"):      # dask: sliced per span, never whole
+            self._rpm = speed_rpm
         else:
-            self._rpm = np.asarray(rpm, float) if not np.isscalar(rpm) else float(rpm)
+            self._rpm = np.asarray(speed_rpm,
+                                   float) if not np.isscalar(speed_rpm) else float(speed_rpm)
         self._t_in, self._omega = t_in, omega
 
     def __call__(self, a: int, b: int) -> np.ndarray:
@@ -108,16 +112,16 @@ class SpanSpeed:
         return np.interp(t, self._t_in, self._omega) * (60.0 / _TWO_PI)
 
 
-def _speed_for(record, channel, var, *, rpm, speed_channel) -> SpanSpeed:
+def _speed_for(record, channel, var, *, speed_rpm, speed_channel) -> SpanSpeed:
     from .speedref import _is_pulses, _pulse_speed, _times, find_speed_channel
 
     n, fs = var.shape[0], float(var.attrs["sample_rate"])
     t0 = _first_time(record, var)
-    if rpm is not None:
-        if not np.isscalar(rpm) and np.shape(rpm)[0] != n:
-            raise AnalysisError(f"rpm has {np.shape(rpm)[0]} samples but channel {channel!r} has "
+    if speed_rpm is not None:
+        if not np.isscalar(speed_rpm) and np.shape(speed_rpm)[0] != n:
+            raise AnalysisError(f"speed_rpm has {np.shape(speed_rpm)[0]} samples but channel {channel!r} has "
                                 f"{n}; give one speed per sample, a constant, or speed_channel")
-        return SpanSpeed(n, fs, t0, rpm=rpm)
+        return SpanSpeed(n, fs, t0, speed_rpm=speed_rpm)
     name = speed_channel or find_speed_channel(record, channel)
     if name not in record.data_vars:
         raise RecordError(f"record has no speed channel {name!r}")
@@ -129,7 +133,7 @@ def _speed_for(record, channel, var, *, rpm, speed_channel) -> SpanSpeed:
             raise RecordError(f"speed channel {name!r} has units {sv.attrs.get('units')!r}; "
                               "expected 'rad/s'")
         if sv.dims == var.dims:       # same clock: read the span of the speed channel itself
-            return SpanSpeed(n, fs, t0, rpm=sv.data * (60.0 / _TWO_PI))
+            return SpanSpeed(n, fs, t0, speed_rpm=sv.data * (60.0 / _TWO_PI))
         rate = sv.attrs.get("sample_rate")
         if rate is not None and sv.dims[0] in record.coords:   # regular clock: t0 + i/rate
             t_in = _first_time(record, sv) + np.arange(sv.shape[0]) / float(rate)
@@ -352,7 +356,7 @@ class _Framer:
         return out
 
 
-def _cot_blocks(record, channel, *, orders, rpm, speed_channel, samples_per_rev, revolutions,
+def _cot_blocks(record, channel, *, orders, speed_rpm, speed_channel, samples_per_rev, revolutions,
                 overlap, window, interpolation, segment_seconds, chunk, per_frames):
     """Run the streamed angle resampling and call ``per_frames(frames, phi0, t, r)``."""
     from .orders import get_window
@@ -369,7 +373,7 @@ def _cot_blocks(record, channel, *, orders, rpm, speed_channel, samples_per_rev,
     check_option(interpolation, "interpolation", INTERPOLATIONS, error=AnalysisError)
     segment_seconds = check_positive(segment_seconds, "segment_seconds", error=AnalysisError)
     chunk = check_int(chunk, "chunk", minimum=1024, error=AnalysisError)
-    speed = _speed_for(record, channel, var, rpm=rpm, speed_channel=speed_channel)
+    speed = _speed_for(record, channel, var, speed_rpm=speed_rpm, speed_channel=speed_channel)
     if orders is not None:          # before any work: the top order below the Nyquist frequency
         top = float(np.max(orders)) * _chunk_plan(speed, chunk)[3] / 60.0
         if top >= 0.5 * speed.fs:
@@ -403,7 +407,8 @@ def _cot_blocks(record, channel, *, orders, rpm, speed_channel, samples_per_rev,
     return var, speed, w, length
 
 
-def order_track_stream(record, channel: str, *, orders, rpm=None, speed_channel=None,
+@renamed(rpm="speed_rpm")
+def order_track_stream(record, channel: str, *, orders, speed_rpm=None, speed_channel=None,
                        segment_seconds: float = 20.0, amplitude: str = "peak",
                        method: str = "cot", samples_per_rev: int = 64, revolutions: int = 16,
                        overlap: float = 0.5, window="hann", interpolation: str = "cubic",
@@ -419,7 +424,7 @@ def order_track_stream(record, channel: str, *, orders, rpm=None, speed_channel=
         Channel to analyse (needs ``sample_rate``).
     orders : sequence of float
         Orders to track.
-    rpm : float or array_like, optional
+    speed_rpm : float or array_like, optional
         Speed per sample (rpm) or a constant; default: from ``speed_channel`` (a
         ``rotational_speed`` channel on its own clock, or a pulse train), found in the record
         when not given — interpolated only over the span being processed.
@@ -453,7 +458,7 @@ def order_track_stream(record, channel: str, *, orders, rpm=None, speed_channel=
     >>> rpm = 1200.0 + 60.0 * t
     >>> rec = make_record({"acc": dict(data=0.5 * np.cos(2 * shaft_angle(rpm, fs)),
     ...                                sample_rate=fs, units="m/s^2")})
-    >>> res = order_track_stream(rec.chunk({"time": 3000}), "acc", orders=[2], rpm=rpm,
+    >>> res = order_track_stream(rec.chunk({"time": 3000}), "acc", orders=[2], speed_rpm=rpm,
     ...                          revolutions=8, segment_seconds=1.0, chunk=2048)
     >>> round(float(res.amplitude.mean()), 4)
     0.5
@@ -464,7 +469,8 @@ def order_track_stream(record, channel: str, *, orders, rpm=None, speed_channel=
     factor = amplitude_factor(amplitude)
     orders = _check_orders(orders)
     if method == "vkf":
-        return _vkf_stream(record, channel, orders=orders, rpm=rpm, speed_channel=speed_channel,
+        return _vkf_stream(record, channel, orders=orders, speed_rpm=speed_rpm,
+                           speed_channel=speed_channel,
                            segment_seconds=segment_seconds, amplitude=amplitude,
                            bandwidth_hz=bandwidth_hz, bandwidth_orders=bandwidth_orders,
                            filter_order=filter_order, vkf_overlap=vkf_overlap)
@@ -493,7 +499,7 @@ def order_track_stream(record, channel: str, *, orders, rpm=None, speed_channel=
         parts["r"].append(r)
 
     var, speed, w, length = _cot_blocks(
-        record, channel, orders=orders, rpm=rpm, speed_channel=speed_channel,
+        record, channel, orders=orders, speed_rpm=speed_rpm, speed_channel=speed_channel,
         samples_per_rev=spr, revolutions=revolutions, overlap=overlap, window=window,
         interpolation=interpolation, segment_seconds=segment_seconds, chunk=chunk,
         per_frames=per_frames)
@@ -517,7 +523,8 @@ def order_track_stream(record, channel: str, *, orders, rpm=None, speed_channel=
     return ds
 
 
-def order_map_stream(record, channel: str, *, rpm=None, speed_channel=None,
+@renamed(rpm="speed_rpm")
+def order_map_stream(record, channel: str, *, speed_rpm=None, speed_channel=None,
                      segment_seconds: float = 20.0, samples_per_rev: int = 64,
                      revolutions: int = 16, overlap: float = 0.5, window="hann",
                      amplitude: str = "peak", scaling: str = "amplitude", max_order=None,
@@ -541,7 +548,7 @@ def order_map_stream(record, channel: str, *, rpm=None, speed_channel=None,
     >>> rpm = np.full(12000, 1500.0)
     >>> rec = make_record({"acc": dict(data=0.7 * np.cos(3 * shaft_angle(rpm, fs)),
     ...                                sample_rate=fs, units="m/s^2")})
-    >>> m = order_map_stream(rec, "acc", rpm=1500.0, revolutions=8, chunk=2048)
+    >>> m = order_map_stream(rec, "acc", speed_rpm=1500.0, revolutions=8, chunk=2048)
     >>> round(float(m.sel(order=3).mean()), 4)
     0.7
     """
@@ -569,7 +576,7 @@ def order_map_stream(record, channel: str, *, rpm=None, speed_channel=None,
         parts["r"].append(r)
 
     var, _, w, length = _cot_blocks(
-        record, channel, orders=None, rpm=rpm, speed_channel=speed_channel,
+        record, channel, orders=None, speed_rpm=speed_rpm, speed_channel=speed_channel,
         samples_per_rev=spr, revolutions=revolutions, overlap=overlap, window=window,
         interpolation=interpolation, segment_seconds=segment_seconds, chunk=chunk,
         per_frames=per_frames)
@@ -594,13 +601,13 @@ def order_map_stream(record, channel: str, *, rpm=None, speed_channel=None,
 # ---------------------------------------------------------------------------- VKF stream
 
 
-def _vkf_stream(record, channel, *, orders, rpm, speed_channel, segment_seconds, amplitude,
+def _vkf_stream(record, channel, *, orders, speed_rpm, speed_channel, segment_seconds, amplitude,
                 bandwidth_hz, bandwidth_orders, filter_order, vkf_overlap):
     from .orders import _track_dataset, amplitude_factor
     from .vkf import vold_kalman
 
     var = _channel(record, channel)
-    speed = _speed_for(record, channel, var, rpm=rpm, speed_channel=speed_channel)
+    speed = _speed_for(record, channel, var, speed_rpm=speed_rpm, speed_channel=speed_channel)
     vkf_overlap = check_positive(vkf_overlap, "vkf_overlap", error=AnalysisError)
     n, fs = speed.n, speed.fs
     read = _reader(var)
@@ -627,7 +634,8 @@ def _vkf_stream(record, channel, *, orders, rpm, speed_channel, segment_seconds,
             phi_carry = float(np.cumsum(np.concatenate(([phi_carry],
                                                         0.5 * (om[1:] + om[:-1]) / fs)))[-1])
             pos = ra
-        res = vold_kalman(read(ra, rb), fs=fs, rpm=sp, orders=orders, bandwidth_hz=bandwidth_hz,
+        res = vold_kalman(read(ra, rb), fs=fs, speed_rpm=sp, orders=orders,
+                          bandwidth_hz=bandwidth_hz,
                           bandwidth_orders=bandwidth_orders, filter_order=filter_order)
         tr = res["time"].values + ra / fs          # s from the channel's first sample
         sel = (tr >= a / fs) & (tr < b / fs) if b < n else tr >= a / fs
@@ -649,7 +657,8 @@ def _vkf_stream(record, channel, *, orders, rpm, speed_channel, segment_seconds,
 # ---------------------------------------------------------------------------- decimation
 
 
-def decimate_stream(record, channel: str, *, max_frequency: float, rpm=None,
+@renamed(rpm="speed_rpm")
+def decimate_stream(record, channel: str, *, max_frequency: float, speed_rpm=None,
                     speed_channel=None):
     """Low-pass and decimate a (lazy) channel block by block, with the speed at the kept samples.
 
@@ -682,7 +691,7 @@ def decimate_stream(record, channel: str, *, max_frequency: float, rpm=None,
     >>> from crankbench.measure.record import make_record
     >>> rec = make_record({"x": dict(data=np.cos(2 * np.pi * 5 * np.arange(8000) / 1000.0),
     ...                              sample_rate=1000.0, units="V")})
-    >>> y, r = decimate_stream(rec, "x", max_frequency=20.0, rpm=600.0)
+    >>> y, r = decimate_stream(rec, "x", max_frequency=20.0, speed_rpm=600.0)
     >>> y.attrs["sample_rate"], round(float(np.abs(y[200:]).max()), 3), r[:2].tolist()
     (62.5, 1.0, [600.0, 600.0])
     """
@@ -693,7 +702,7 @@ def decimate_stream(record, channel: str, *, max_frequency: float, rpm=None,
 
     var = _channel(record, channel)
     max_frequency = check_positive(max_frequency, "max_frequency", error=AnalysisError)
-    speed = _speed_for(record, channel, var, rpm=rpm, speed_channel=speed_channel)
+    speed = _speed_for(record, channel, var, speed_rpm=speed_rpm, speed_channel=speed_channel)
     fs = speed.fs
     q = max(1, int(fs // (3.0 * max_frequency)))
     kept, start = [], 0

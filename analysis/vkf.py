@@ -49,6 +49,7 @@ import numpy as np
 
 from crankbench.predict._validate import check_int, check_option, check_positive
 from crankbench.predict.errors import AnalysisError
+from crankbench.predict._deprecate import renamed
 
 from .resample import _as_rpm, _as_signal, shaft_angle
 
@@ -232,7 +233,8 @@ def _solve_block(x, phase, knot_weights, p, m):
     return env, model
 
 
-def vold_kalman(x, *, fs=None, rpm, orders, bandwidth_hz=None, bandwidth_orders=None,
+@renamed(rpm="speed_rpm")
+def vold_kalman(x, *, fs=None, speed_rpm, orders, bandwidth_hz=None, bandwidth_orders=None,
                 filter_order: int = 2, decimate: bool = True, block: int = 1 << 15,
                 knots_per_bandwidth: float | None = 40.0):
     """Vold–Kalman filter: complex envelopes of several orders, solved jointly.
@@ -243,7 +245,7 @@ def vold_kalman(x, *, fs=None, rpm, orders, bandwidth_hz=None, bandwidth_orders=
         Signal (any SI unit); a Record channel supplies ``fs`` and ``units``.
     fs : float, optional
         Sample rate, Hz (required for a plain array).
-    rpm : float, array_like (N,) or (K, N)
+    speed_rpm : float, array_like (N,) or (K, N)
         Shaft speed per sample, rpm; a 2-D array gives each order its own speed reference
         (orders of different shafts, which may cross).
     orders : sequence of float
@@ -285,7 +287,7 @@ def vold_kalman(x, *, fs=None, rpm, orders, bandwidth_hz=None, bandwidth_orders=
     >>> rpm = 600 + 200 * t
     >>> phi = shaft_angle(rpm, fs)
     >>> x = 1.0 * np.cos(2 * phi) + 0.2 * np.cos(3 * phi)
-    >>> res = vold_kalman(x, fs=fs, rpm=rpm, orders=[2, 3], bandwidth_hz=2.0)
+    >>> res = vold_kalman(x, fs=fs, speed_rpm=rpm, orders=[2, 3], bandwidth_hz=2.0)
     >>> amp = np.abs(res.envelope.isel(time=slice(200, -200)))
     >>> np.round(amp.mean("time").values, 4)
     array([1. , 0.2])
@@ -299,14 +301,14 @@ def vold_kalman(x, *, fs=None, rpm, orders, bandwidth_hz=None, bandwidth_orders=
     p = check_int(filter_order, "filter_order", minimum=1, error=AnalysisError)
     check_option(p, "filter_order", (1, 2), error=AnalysisError)
     block = check_int(block, "block", minimum=256, error=AnalysisError)
-    rpm_arr = np.asarray(rpm.values if hasattr(rpm, "dims") else rpm, dtype=float)
+    rpm_arr = np.asarray(speed_rpm.values if hasattr(speed_rpm, "dims") else speed_rpm, dtype=float)
     if rpm_arr.ndim == 2:
         if rpm_arr.shape != (k, n):
             raise AnalysisError(f"a 2-D rpm must have shape (len(orders), len(x)) = ({k}, {n}), "
                                 f"got {rpm_arr.shape}")
         speeds = np.stack([_as_rpm(r, n, fs) for r in rpm_arr])
     else:
-        speeds = np.tile(_as_rpm(rpm, n, fs), (k, 1))
+        speeds = np.tile(_as_rpm(speed_rpm, n, fs), (k, 1))
     if bandwidth_hz is not None and bandwidth_orders is not None:
         raise AnalysisError("give bandwidth_hz or bandwidth_orders, not both")
     if bandwidth_hz is None and bandwidth_orders is None:

@@ -33,6 +33,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from crankbench.predict._deprecate import renamed
+
 from ._validate import check_finite_array, check_positive, check_range
 from .errors import AnalysisError, ModelError
 
@@ -354,7 +356,8 @@ def two_plane(initial, trial_runs, trial_masses, **options) -> BalanceResult:
     return influence_balance(v0, runs, trial_masses, **options)
 
 
-def permissible_unbalance(grade, *, rotor_mass, max_speed) -> float:
+@renamed(max_speed="max_omega")
+def permissible_unbalance(grade, *, rotor_mass, max_omega) -> float:
     """Permissible residual unbalance U_per = G · m / Ω (ISO 21940-11 §5), kg·m.
 
     Parameters
@@ -363,7 +366,7 @@ def permissible_unbalance(grade, *, rotor_mass, max_speed) -> float:
         Balance grade G, mm/s (6.3 for G 6.3).
     rotor_mass : float
         kg.
-    max_speed : float
+    max_omega : float
         Maximum service speed Ω, rad/s.
 
     Returns
@@ -373,12 +376,12 @@ def permissible_unbalance(grade, *, rotor_mass, max_speed) -> float:
 
     Examples
     --------
-    >>> round(permissible_unbalance(6.3, rotor_mass=100.0, max_speed=3000 * np.pi / 30) * 1e6)
+    >>> round(permissible_unbalance(6.3, rotor_mass=100.0, max_omega=3000 * np.pi / 30) * 1e6)
     2005
     """
     g = check_positive(grade, "grade", error=ModelError)
     m = check_positive(rotor_mass, "rotor_mass", error=ModelError)
-    w = check_positive(max_speed, "max_speed", error=ModelError)
+    w = check_positive(max_omega, "max_omega", error=ModelError)
     return g * 1e-3 * m / w
 
 
@@ -435,7 +438,8 @@ class GradeCheck:
         return fig
 
 
-def grade_check(residual, *, rotor_mass, max_speed, grade=6.3, plane_shares=None) -> GradeCheck:
+@renamed(max_speed="max_omega")
+def grade_check(residual, *, rotor_mass, max_omega, grade=6.3, plane_shares=None) -> GradeCheck:
     """Compare residual unbalances with the permissible unbalance of a balance grade.
 
     Parameters
@@ -444,7 +448,7 @@ def grade_check(residual, *, rotor_mass, max_speed, grade=6.3, plane_shares=None
         Residual unbalance per correction plane, kg·m (complex or magnitudes).
     rotor_mass : float
         kg.
-    max_speed : float
+    max_omega : float
         Maximum service speed, rad/s.
     grade : float
         Required grade G, mm/s.
@@ -459,7 +463,7 @@ def grade_check(residual, *, rotor_mass, max_speed, grade=6.3, plane_shares=None
 
     Examples
     --------
-    >>> g = grade_check([1.0e-3, 0.8e-3], rotor_mass=100.0, max_speed=314.159, grade=6.3)
+    >>> g = grade_check([1.0e-3, 0.8e-3], rotor_mass=100.0, max_omega=314.159, grade=6.3)
     >>> g.passed, g.smallest_grade
     (True, 6.3)
     """
@@ -467,7 +471,7 @@ def grade_check(residual, *, rotor_mass, max_speed, grade=6.3, plane_shares=None
     if not np.all(np.isfinite(res)):
         raise ModelError("residual contains NaN/inf")
     m = check_positive(rotor_mass, "rotor_mass", error=ModelError)
-    w = check_positive(max_speed, "max_speed", error=ModelError)
+    w = check_positive(max_omega, "max_omega", error=ModelError)
     g = check_positive(grade, "grade", error=ModelError)
     if plane_shares is None:
         shares = np.full(res.size, 1.0 / res.size)
@@ -481,5 +485,5 @@ def grade_check(residual, *, rotor_mass, max_speed, grade=6.3, plane_shares=None
     needed = float(np.max(res / shares) / m * w * 1e3)
     smallest = next((s for s in ISO_GRADES if s >= needed * (1 - 1e-12)), math.inf)
     return GradeCheck(residual=res, permissible=shares * permissible_unbalance(
-        g, rotor_mass=m, max_speed=w), achieved_grade=achieved, smallest_grade=smallest,
+        g, rotor_mass=m, max_omega=w), achieved_grade=achieved, smallest_grade=smallest,
         grade=g)

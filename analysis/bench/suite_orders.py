@@ -110,16 +110,16 @@ def _method_track(case, method, kwargs):
     x, fs, rpm, o = case["x"], case["fs"], case["rpm"], case["order"]
     if method == "map":
         r = kwargs["revolutions"]
-        m = order_map(x, fs=fs, rpm=rpm, revolutions=r, overlap=0.9, scaling="power",
+        m = order_map(x, fs=fs, speed_rpm=rpm, revolutions=r, overlap=0.9, scaling="power",
                       max_order=o + 3.0 / r)
         amp = band_amplitude(m, [o], half_width=2.0 / r)[0]
         return m["rpm"].values, amp.values
     if method == "tracks (COT)":
-        tr = order_track(x, fs=fs, rpm=rpm, orders=[o], revolutions=kwargs["revolutions"],
+        tr = order_track(x, fs=fs, speed_rpm=rpm, orders=[o], revolutions=kwargs["revolutions"],
                          overlap=0.9)
     else:
         bw = kwargs["bw_factor"] * case["half_power_bandwidth_hz"]
-        tr = order_track(x, fs=fs, rpm=rpm, orders=[o], method="vkf", bandwidth_hz=bw,
+        tr = order_track(x, fs=fs, speed_rpm=rpm, orders=[o], method="vkf", bandwidth_hz=bw,
                          filter_order=kwargs["filter_order"])
     return tr["rpm"].values, tr["amplitude"].values[0]
 
@@ -216,8 +216,8 @@ def run(quick: bool) -> list[Row]:
 
     # order map throughput (error: order bins against truth, noise-free copy)
     _, _, clean, _ = _runup(duration=duration, noise=0.0)
-    t_map = median_time(lambda: order_map(x, fs=fs, rpm=rpm), repeats=5)
-    m = order_map(clean, fs=fs, rpm=rpm)
+    t_map = median_time(lambda: order_map(x, fs=fs, speed_rpm=rpm), repeats=5)
+    m = order_map(clean, fs=fs, speed_rpm=rpm)
     sel = ((m["time"] > lo) & (m["time"] < hi)).values
     err_map = max(float(np.abs(m.sel(order=o).values[sel] / a - 1).max()) for o, a in truth.items())
     rows.append(Row(SUITE, "order_map", "spr=64, 16 rev, hann, cubic", err_map, "max rel",
@@ -259,7 +259,8 @@ def run(quick: bool) -> list[Row]:
     order_hi = 12.0                                  # up to 600 Hz at 3000 rpm: h = 0.19
     tone = np.cos(order_hi * phi)
     for interp in ("linear", "cubic", "bandlimited"):
-        fn = lambda: angle_resample(tone, fs=fs, rpm=rpm_i, interpolation=interp, antialias=False)
+        fn = lambda: angle_resample(tone, fs=fs, speed_rpm=rpm_i, interpolation=interp,
+                                    antialias=False)
         tm = median_time(fn, repeats=3)
         y = fn()
         err = float(np.abs(y.values - np.cos(order_hi * y["angle"].values)).max())

@@ -38,7 +38,8 @@ def _orders(text: str) -> list[float]:
 
 
 def configure(parser) -> None:
-    parser.add_argument("record", metavar="RECORD", help="record file (any format measure.read knows)")
+    parser.add_argument("record", metavar="RECORD",
+                        help="record file (any format measure.read knows)")
     parser.add_argument("--map", metavar="MAP.toml", default=None,
                         help="channel map: columns, units, calibration, raw pulse roles")
     parser.add_argument("--channel", required=True, help="channel to analyse")
@@ -138,7 +139,7 @@ def run(args) -> int:
     else:
         rpm = speed_reference(record, args.channel, speed_channel=args.speed_channel)
         channel = channel.load() if hasattr(channel, "load") else channel
-        tracks = order_track(channel, rpm=rpm, **kwargs)
+        tracks = order_track(channel, speed_rpm=rpm, **kwargs)
     summary = _summary(tracks)
     units = tracks["amplitude"].attrs.get("units", "")
     if args.json:
@@ -184,11 +185,11 @@ def run(args) -> int:
             log.info("Campbell map of the streamed record at %.6g Hz (decimated by %d)", fs,
                      channel.attrs["decimation"])
         else:
-            omap = order_map(channel, rpm=rpm, samples_per_rev=args.samples_per_rev,
+            omap = order_map(channel, speed_rpm=rpm, samples_per_rev=args.samples_per_rev,
                              revolutions=args.revolutions, amplitude=args.amplitude)
         nperseg = int(2 ** np.clip(np.round(np.log2(fs)), 8, 16))
         top = max(args.orders) * float(np.max(rpm)) / 60.0 * 1.5
-        camp = campbell_map(channel, rpm=rpm, nperseg=min(nperseg, channel.shape[0]),
+        camp = campbell_map(channel, speed_rpm=rpm, nperseg=min(nperseg, channel.shape[0]),
                             orders=args.orders, max_frequency=min(top, fs / 2),
                             amplitude=args.amplitude)
         figures = [plot_order_map(omap), plot_campbell(camp), plot_order_tracks(tracks)]

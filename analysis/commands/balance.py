@@ -326,7 +326,7 @@ def run(args) -> int:
             "angle_deg": np.degrees(np.mod(np.angle(res), 2 * np.pi))})
         if None not in (args.radius, args.rotor_mass, args.max_speed):
             g = grade_check(res * args.radius, rotor_mass=args.rotor_mass,
-                            max_speed=args.max_speed * np.pi / 30, grade=args.grade)
+                            max_omega=args.max_speed * np.pi / 30, grade=args.grade)
             out["iso_21940_11"] = dict(grade=args.grade, passed=g.passed,
                                        achieved_e_omega_mm_s=g.achieved_grade,
                                        smallest_grade_met=g.smallest_grade, planes=g.to_frame())

@@ -191,7 +191,7 @@ def synthesize(scene, *, method="split", integration_rate=None):
         psi = psi0 + prof.angle(tg)
         spd = prof.speed(tg)
         load_fn = lambda w: scene.load.scale(w / RPM)  # noqa: E731 - gas scale vs speed
-        modal = ModalModel.from_system(system, speed=float(np.mean(spd)))
+        modal = ModalModel.from_system(system, omega=float(np.mean(spd)))
         gas, inertia = order_forcing(system, excitation, orders)
         node_names = sorted({s.params["node"] for s in tors}, key=system.node_names.index)
         nodes = [modal.node_index(nm) for nm in node_names]
@@ -235,7 +235,8 @@ def synthesize(scene, *, method="split", integration_rate=None):
                                  v_tot[i] * ratio[i] if quantity == "angle" else None)
                 data = _read_out(data, ts, s.imperfections, rng, s, quantity)
                 channels[s.name] = dict(data=data, sample_rate=fs, units=units,
-                                        quantity=quantity, attrs=_instrument_attrs(s),
+                                        quantity=quantity,
+                                        attrs={**_instrument_attrs(s), "node": s.params["node"]},
                                         location=s.params.get("location", s.params["node"]),
                                         direction="torsional")
                 truth_rows.append((s.name, units, s.kind, amp, ph, st))

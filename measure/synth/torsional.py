@@ -49,6 +49,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from crankbench.predict.errors import ConfigError, ModelError
+from crankbench.predict._deprecate import renamed
 
 __all__ = ["ModalModel", "equivalent_viscous_system", "order_forcing"]
 
@@ -177,13 +178,14 @@ class ModalModel:
     regularised: bool = False
 
     @classmethod
-    def from_system(cls, system, *, speed=None):
+    @renamed(speed="omega")
+    def from_system(cls, system, *, omega=None):
         """Diagonalise the equivalent viscous model of ``system``.
 
         Parameters
         ----------
         system : predict.torsion.TorsionalSystem
-        speed : float, optional
+        omega : float, optional
             Crankshaft speed (rad/s) for speed-dependent springs (centrifugal pendulums); their
             stiffness is frozen at this speed.
 
@@ -204,7 +206,7 @@ class ModalModel:
         """
         visc = equivalent_viscous_system(system)
         j = np.asarray(visc.inertias, float)
-        k = visc.stiffness_matrix(speed)
+        k = visc.stiffness_matrix(omega)
         c = visc.damping_matrix()
         regularised = False
         if np.all(visc.node_damping == 0) and visc.is_free:
@@ -285,7 +287,8 @@ class ModalModel:
                               f"{', '.join(self.node_names)}")
         return self.node_names.index(name)
 
-    def respond(self, time, psi, order, gas, inertia, speed, *, load=None, nodes,
+    @renamed(speed="omega")
+    def respond(self, time, psi, order, gas, inertia, omega, *, load=None, nodes,
                 method="split", margin=6.0, grid_points=1000):
         """Complex response of ``nodes`` to one order of excitation along a run.
 
@@ -298,7 +301,7 @@ class ModalModel:
         order : float
         gas, inertia : numpy.ndarray (n_nodes,), complex
             Nodal forcing of this order (:func:`order_forcing`).
-        speed : numpy.ndarray (T,)
+        omega : numpy.ndarray (T,)
             Crankshaft speed, rad/s.
         load : callable, optional
             Gas-torque scale factor as a function of speed (rad/s), vectorised; default 1.
@@ -329,7 +332,7 @@ class ModalModel:
 
         h = float(time[1] - time[0])
         qpsi = order * psi
-        omega = np.diff(qpsi) / h                       # exact phase increment per step
+        w_step = np.diff(qpsi) / h                       # exact phase increment per step
         carrier = _cis(qpsi)
         load_fn = (lambda w: np.ones_like(w)) if load is None else load
         b_gas = self.modal_input @ gas                  # (m,)
@@ -343,7 +346,7 @@ class ModalModel:
         if method == "full":
             resonant = active & ~zero
         else:
-            hi = order * speed.max()
+            hi = order * omega.max()
             width = np.maximum(margin * np.abs(lam_all.real), 0.05 * np.abs(lam_all))
             # modes at or below the swept band (free vibration they pick up lingers), not the
             # stiff modes above it, nor the negative-frequency halves of the pairs
@@ -354,8 +357,8 @@ class ModalModel:
         out_v = np.zeros((len(nodes), time.size), complex)
         if quasi.any():
             lamq = lam_all[quasi]
-            single = np.ptp(speed) == 0
-            g = np.linspace(speed.min(), speed.max(), 1 if single else grid_points)
+            single = np.ptp(omega) == 0
+            g = np.linspace(omega.min(), omega.max(), 1 if single else grid_points)
             inv = 1.0 / (1j * order * g[None, :] - lamq[:, None])        # (mq, G)
             force = b_gas[quasi, None] * load_fn(g)[None, :] + b_in[quasi, None] * g**2
             resp = force * inv
@@ -366,15 +369,15 @@ class ModalModel:
                     if single:
                         out[r] += carrier * table[r, 0]
                     else:
-                        out[r] += carrier * (np.interp(speed, g, table[r].real)
-                                             + 1j * np.interp(speed, g, table[r].imag))
+                        out[r] += carrier * (np.interp(omega, g, table[r].real)
+                                             + 1j * np.interp(omega, g, table[r].imag))
         idx = np.flatnonzero(resonant)
         if idx.size:
-            step = _cis(omega * h)                      # e^{i omega h}, shared by all modes
-            iw = 1j * omega
-            mid = 0.5 * (speed[1:] + speed[:-1])
+            step = _cis(w_step * h)                      # e^{i omega h}, shared by all modes
+            iw = 1j * w_step
+            mid = 0.5 * (omega[1:] + omega[:-1])
             c_gas = carrier[:-1] * load_fn(mid)
-            c_in = carrier[:-1] * (0.5 * (speed[1:] ** 2 + speed[:-1] ** 2))
+            c_in = carrier[:-1] * (0.5 * (omega[1:] ** 2 + omega[:-1] ** 2))
             ax = self.angle_output[nodes, :]
             av = self.velocity_output[nodes, :]
             for jm in idx:
@@ -391,8 +394,8 @@ class ModalModel:
                     gain = (step - e) / den
                 drive = (b_gas[jm] * c_gas + b_in[jm] * c_in) * gain
                 # steady state of the initial speed: no start-up transient
-                z0 = (b_gas[jm] * load_fn(speed[:1])[0] + b_in[jm] * speed[0] ** 2) \
-                    * carrier[0] / (1j * order * speed[0] - lam)
+                z0 = (b_gas[jm] * load_fn(omega[:1])[0] + b_in[jm] * omega[0] ** 2) \
+                    * carrier[0] / (1j * order * omega[0] - lam)
                 z = np.empty(time.size, complex)
                 z[0] = z0
                 z[1:] = lfilter([1.0], [1.0, -e], drive, zi=[e * z0])[0]

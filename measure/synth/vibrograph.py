@@ -32,6 +32,7 @@ from __future__ import annotations
 import numpy as np
 
 from crankbench.predict.errors import ConfigError
+from crankbench.predict._deprecate import renamed
 
 __all__ = ["MountChannels"]
 
@@ -64,7 +65,7 @@ class MountChannels:
         Orders of the cycle to model.
     points : numpy.ndarray (p, 3)
         Sensor points, m.
-    speed_grid : numpy.ndarray
+    omega_grid : numpy.ndarray
         Crankshaft speeds (rad/s) to tabulate the responses on.
 
     Attributes
@@ -85,14 +86,14 @@ class MountChannels:
     (True, 0.0)
     """
 
-    def __init__(self, mounted, engine, excitation, orders, points, speed_grid):
+    def __init__(self, mounted, engine, excitation, orders, points, omega_grid):
         from crankbench.predict.balance import unbalance
         from crankbench.predict.mounts import excitation_from_unbalance
 
         self.orders = np.asarray(orders, float)
         self.points = np.atleast_2d(np.asarray(points, float))
-        self.speed_grid = np.asarray(speed_grid, float)
-        n_o, n_p, n_g = self.orders.size, self.points.shape[0], self.speed_grid.size
+        self.omega_grid = np.asarray(omega_grid, float)
+        n_o, n_p, n_g = self.orders.size, self.points.shape[0], self.omega_grid.size
         self.gas = np.zeros((n_o, n_p, 3, n_g), complex)
         self.inertia = np.zeros((n_o, n_p, 3, n_g), complex)
         theta_f = float(engine.firing_tdc_shaft_angle)
@@ -129,7 +130,7 @@ class MountChannels:
         keep_in = size_in > 1e-9 * max(size_in.max(), 1e-300)
         keep_gas = size_gas > 1e-9 * max(size_gas.max(), 1e-300)
         for i, q in enumerate(self.orders):
-            freq = q * self.speed_grid / TWO_PI
+            freq = q * self.omega_grid / TWO_PI
             if keep_in[i]:
                 r = mounted.response(np.broadcast_to(exc_f[i], (n_g, 3)),
                                      np.broadcast_to(exc_m[i], (n_g, 3)), freq,
@@ -150,7 +151,7 @@ class MountChannels:
         """
         axis = _AXIS[direction]
         q = self.orders[order_index]
-        grid = self.speed_grid
+        grid = self.omega_grid
         load = np.ones_like(grid) if load_fn is None else load_fn(grid)
         disp = load * self.gas[order_index, point_index, axis] + \
             grid**2 * self.inertia[order_index, point_index, axis]
@@ -160,7 +161,8 @@ class MountChannels:
                               "'displacement'")
         return disp * (1j * q * grid) ** power
 
-    def transfer(self, order_index, point_index, direction, quantity, speed, load):
+    @renamed(speed="omega")
+    def transfer(self, order_index, point_index, direction, quantity, omega, load):
         """Complex amplitude of one point's motion along the run (quasi-steady).
 
         Returns ``A(t)`` such that the signal is ``Re[A(t) e^{i q psi(t)}]``, SI units of the
@@ -170,14 +172,14 @@ class MountChannels:
         q = self.orders[order_index]
         g = self.gas[order_index, point_index, axis]
         h = self.inertia[order_index, point_index, axis]
-        grid = self.speed_grid
+        grid = self.omega_grid
         if grid.size == 1:
-            disp = load * g[0] + speed**2 * h[0]
+            disp = load * g[0] + omega**2 * h[0]
         else:
-            disp = (load * (np.interp(speed, grid, g.real) + 1j * np.interp(speed, grid, g.imag))
-                    + speed**2 * (np.interp(speed, grid, h.real)
-                                  + 1j * np.interp(speed, grid, h.imag)))
-        w = q * speed
+            disp = (load * (np.interp(omega, grid, g.real) + 1j * np.interp(omega, grid, g.imag))
+                    + omega**2 * (np.interp(omega, grid, h.real)
+                                  + 1j * np.interp(omega, grid, h.imag)))
+        w = q * omega
         if quantity == "displacement":
             return disp
         if quantity == "velocity":

@@ -45,6 +45,8 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 import scipy.linalg
 
+from crankbench.predict._deprecate import renamed
+
 from .._validate import check_finite_array, check_int, check_option, check_positive
 from ..errors import ModelError
 from .elements import STEEL, Bearing, Disk, Material, ShaftSection, element_matrices
@@ -407,13 +409,14 @@ class Rotor:
         vec = self._circularise(omega[order], self._full(model, scale[:, None] * vec[:, order]))
         return omega[order][:n_modes], zeta[order][:n_modes], vec[:, :n_modes]
 
-    def natural_frequencies(self, speed: float = 0.0, *, n_modes: int = 6,
+    @renamed(speed="spin_omega")
+    def natural_frequencies(self, spin_omega: float = 0.0, *, n_modes: int = 6,
                             error_estimate: bool = True) -> LateralModes:
         """Damped natural frequencies and whirl directions at spin speed ``speed``.
 
         Parameters
         ----------
-        speed : float
+        spin_omega : float
             Spin speed Ω, rad/s.
         n_modes : int
             Number of lowest modes returned (an isotropic rotor at rest gives each frequency
@@ -435,25 +438,25 @@ class Rotor:
         >>> r = Rotor(shaft=[ShaftSection(length=1.0, outer_diameter=0.05)],
         ...           bearings=[Bearing(0.0, 1e7), Bearing(1.0, 1e7)],
         ...           disks=[Disk(0.5, mass=20.0, diametral_inertia=0.1, polar_inertia=0.2)])
-        >>> m = r.natural_frequencies(speed=300.0, n_modes=2)
+        >>> m = r.natural_frequencies(spin_omega=300.0, n_modes=2)
         >>> m.whirl
         ('backward', 'forward')
         """
-        speed = float(check_finite_array(speed, "speed", ndim=0, error=ModelError))
+        spin_omega = float(check_finite_array(spin_omega, "spin_omega", ndim=0, error=ModelError))
         n_modes = check_int(n_modes, "n_modes", minimum=1, error=ModelError)
         model = self._assemble()
-        omega, zeta, vec = self._eig(model, speed, n_modes)
+        omega, zeta, vec = self._eig(model, spin_omega, n_modes)
         index, labels = self._whirl(vec)
         err = np.full(omega.size, np.nan)
         if error_estimate:
-            coarse = self._eig(self._assemble(coarsen=2), speed, n_modes)[0]
+            coarse = self._eig(self._assemble(coarsen=2), spin_omega, n_modes)[0]
             k = min(coarse.size, omega.size)
             rate = 4 if self.theory == "euler-bernoulli" else 2
             err[:k] = np.abs(omega[:k] - coarse[:k]) / (2**rate - 1)
         shapes = np.stack([vec[0::4].T, vec[1::4].T], axis=-1)
         peak = np.abs(shapes).reshape(shapes.shape[0], -1).max(axis=1)
         shapes = shapes / np.where(peak > 0, peak, 1.0)[:, None, None]
-        return LateralModes(speed=speed, omega=omega, damping_ratio=zeta,
+        return LateralModes(speed=spin_omega, omega=omega, damping_ratio=zeta,
                             whirl=tuple(labels.tolist()), whirl_index=index, error_estimate=err,
                             positions=model.positions, shapes=shapes, theory=self.theory,
                             n_elements=model.n_elements)
@@ -548,12 +551,13 @@ class Rotor:
             om, labels = om[inside], labels[inside]
         return [(k, w, o) for o, w in zip(om[:n_modes], labels[:n_modes])]
 
-    def campbell(self, speeds, *, n_modes: int = 6, orders=(1.0,)) -> CampbellDiagram:
+    @renamed(speeds="spin_omega")
+    def campbell(self, spin_omega, *, n_modes: int = 6, orders=(1.0,)) -> CampbellDiagram:
         """Campbell diagram: natural frequencies and whirl at each spin speed.
 
         Parameters
         ----------
-        speeds : array_like
+        spin_omega : array_like
             Spin speeds, rad/s (>= 0).
         n_modes : int
             Modes per speed.
@@ -573,25 +577,27 @@ class Rotor:
         >>> c.omega.shape
         (2, 2)
         """
-        speeds = check_finite_array(speeds, "speeds", ndim=1, min_length=1, error=ModelError)
-        if np.any(speeds < 0):
+        spin_omega = check_finite_array(spin_omega, "spin_omega", ndim=1, min_length=1,
+                                        error=ModelError)
+        if np.any(spin_omega < 0):
             raise ModelError("speeds must be >= 0 rad/s")
         n_modes = check_int(n_modes, "n_modes", minimum=1, error=ModelError)
         model = self._assemble()
-        omega = np.full((speeds.size, n_modes), np.nan)
-        whirl = np.full((speeds.size, n_modes), "mixed", dtype=object)
-        for i, s in enumerate(speeds):
+        omega = np.full((spin_omega.size, n_modes), np.nan)
+        whirl = np.full((spin_omega.size, n_modes), "mixed", dtype=object)
+        for i, s in enumerate(spin_omega):
             w, _, vec = self._eig(model, float(s), n_modes)
             omega[i, :w.size] = w
             whirl[i, :w.size] = self._whirl(vec)[1]
         crit = self.critical_speeds(orders, n_modes=n_modes,
-                                    speed_range_rpm=(speeds.min() * 30 / np.pi,
-                                                     speeds.max() * 30 / np.pi))
-        return CampbellDiagram(speeds=speeds, omega=omega, whirl=whirl.astype(str),
+                                    speed_range_rpm=(spin_omega.min() * 30 / np.pi,
+                                                     spin_omega.max() * 30 / np.pi))
+        return CampbellDiagram(speeds=spin_omega, omega=omega, whirl=whirl.astype(str),
                                orders=tuple(float(o) for o in np.atleast_1d(orders)),
                                criticals=crit)
 
-    def unbalance_response(self, speeds, unbalances, *, probes=None) -> UnbalanceResponse:
+    @renamed(speeds="spin_omega")
+    def unbalance_response(self, spin_omega, unbalances, *, probes=None) -> UnbalanceResponse:
         """Synchronous steady-state response to rotating unbalances.
 
         Solves (K − Ω² M + iΩ (C + Ω G)) q = f with f = m e Ω² e^{iβ} (1, −i) on (u, v) of
@@ -599,7 +605,7 @@ class Rotor:
 
         Parameters
         ----------
-        speeds : array_like
+        spin_omega : array_like
             Spin speeds, rad/s.
         unbalances : sequence of (position, magnitude, angle)
             Axial position (m), unbalance m·e (kg·m) and angle β (rad) from the x axis.
@@ -623,7 +629,8 @@ class Rotor:
         >>> res.response.shape
         (1, 1, 2)
         """
-        speeds = check_finite_array(speeds, "speeds", ndim=1, min_length=1, error=ModelError)
+        spin_omega = check_finite_array(spin_omega, "spin_omega", ndim=1, min_length=1,
+                                        error=ModelError)
         model = self._assemble()
         z = model.positions
         force = np.zeros(4 * z.size, dtype=complex)
@@ -643,10 +650,10 @@ class Rotor:
                                           error=ModelError))
         nodes = [self._node(z, float(p), "probes") for p in probes]
         f = force[model.free]
-        out = np.empty((speeds.size, len(nodes), 2), dtype=complex)
+        out = np.empty((spin_omega.size, len(nodes), 2), dtype=complex)
         with _small_blas(model.K.shape[0]):
-            self._solve_response(model, speeds, f, nodes, out)
-        return UnbalanceResponse(speeds=speeds, positions=np.asarray(probes, dtype=float),
+            self._solve_response(model, spin_omega, f, nodes, out)
+        return UnbalanceResponse(speeds=spin_omega, positions=np.asarray(probes, dtype=float),
                                  response=out)
 
     def _solve_response(self, model, speeds, f, nodes, out):

@@ -75,7 +75,7 @@ def add_pendulum_absorber(line, node: str, *, mass: float, pivot_radius: float, 
     pend = name or f"{node} pendulum n={np.sqrt(big_r / r):.3g}"
     _, ratio = line._port(node)
     line.add_mass(pend, j_a, ratio=ratio, eigen=False)
-    line.add_spring(node, pend, stiffness=0.0, speed2=j_a * big_r / r,
+    line.add_spring(node, pend, stiffness=0.0, stiffness_omega2=j_a * big_r / r,
                     damping=check_nonnegative(damping, "damping", error=ModelError),
                     name=f"{pend} link")
     return pend

@@ -20,6 +20,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from crankbench.predict._deprecate import renamed
+
 from .._validate import check_nonnegative, check_positive
 from ..errors import ModelError
 from .system import TorsionalSystem
@@ -327,13 +329,14 @@ class ShaftLine:
                                     ratio=rb, d_out=np.nan, d_in=np.nan,
                                     name=name or f"mesh {driver}-{driven}"))
 
+    @renamed(speed2="stiffness_omega2")
     def add_spring(self, a: str, b: str, *, stiffness: float = 0.0, damping: float = 0.0,
-                   loss_factor: float = 0.0, speed2: float = 0.0, name=None) -> None:
+                   loss_factor: float = 0.0, stiffness_omega2: float = 0.0, name=None) -> None:
         """Generic link (used by dampers): stiffness N·m/rad (0 allowed), relative viscous
         damping N·m·s/rad, hysteretic η, speed-proportional stiffness N·m·s²/rad."""
         k = check_nonnegative(stiffness, "stiffness", error=ModelError)
         self._spring(a, b, stiffness=k, damping=damping, loss_factor=loss_factor,
-                     speed2=speed2, name=name)
+                     speed2=stiffness_omega2, name=name)
 
     # ---------------------------------------------------------------- build -------------
     def _check_connected(self, nodes, edges) -> None:
@@ -389,7 +392,7 @@ class ShaftLine:
             node_names=[n["name"] for n in nodes], edge_names=[d["name"] for d in edges],
             node_damping=[n["damping"] for n in nodes],
             edge_damping=[d["c"] for d in edges], edge_loss_factor=[d["eta"] for d in edges],
-            edge_stiffness_speed2=[d["k2"] for d in edges],
+            edge_stiffness_omega2=[d["k2"] for d in edges],
             node_ratio=[n["ratio"] for n in nodes], edge_ratio=[d["ratio"] for d in edges],
             edge_outer_diameter=[d["d_out"] for d in edges],
             edge_inner_diameter=[d["d_in"] for d in edges],

@@ -31,6 +31,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from crankbench.predict._deprecate import renamed
+
 from .._validate import check_finite_array, check_int, check_positive
 from ..errors import ModelError
 
@@ -146,19 +148,20 @@ class Excitation:
     def describe(self) -> str:
         return self.source
 
-    def harmonics(self, speed, orders, *, misfire=None) -> np.ndarray:
+    @renamed(speed="omega")
+    def harmonics(self, omega, orders, *, misfire=None) -> np.ndarray:
         """Per-cylinder harmonics at each speed: (n_s, n_o, z) complex, N·m.
 
         Parameters
         ----------
-        speed : array_like
+        omega : array_like
             Crankshaft speeds, rad/s.
         orders : array_like
             Must be a subset of ``self.orders``.
         misfire : int, optional
             Cylinder number (1-based) whose gas torque is missing.
         """
-        speed = np.atleast_1d(np.asarray(speed, float))
+        omega = np.atleast_1d(np.asarray(omega, float))
         orders = np.atleast_1d(np.asarray(orders, float))
         idx = []
         for q in orders:
@@ -168,7 +171,7 @@ class Excitation:
                                  f"{self.orders.min():g}..{self.orders.max():g})")
             idx.append(hit[0])
         g, i = self.gas[idx], self.inertia[idx]
-        out = g[None, :, None] + (speed ** 2)[:, None, None] * i[None, :, None]
+        out = g[None, :, None] + (omega ** 2)[:, None, None] * i[None, :, None]
         out = np.repeat(out, self.n_cylinders, axis=2)
         if misfire is not None:
             c = check_int(misfire, "misfire", minimum=1, error=ModelError)

@@ -26,6 +26,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from crankbench.predict._deprecate import renamed
+
 from .._validate import check_finite_array
 from ..errors import ModelError
 
@@ -89,13 +91,14 @@ def _elimination_plan(system):
                 parent_pair=parent_pair, order=np.asarray(order, int), tree=bool(tree))
 
 
-def harmonic_solve(system, speed, orders, forcing) -> np.ndarray:
+@renamed(speed="omega")
+def harmonic_solve(system, omega, orders, forcing) -> np.ndarray:
     """Complex steady-state amplitudes for every (speed, order).
 
     Parameters
     ----------
     system : TorsionalSystem
-    speed : ndarray (n_s,)
+    omega : ndarray (n_s,)
         Crankshaft speeds Ω, rad/s.
     orders : ndarray (n_o,)
         Orders q (vibration frequency ω = qΩ).
@@ -107,19 +110,19 @@ def harmonic_solve(system, speed, orders, forcing) -> np.ndarray:
     ndarray (n_s, n_o, n_nodes), complex
         Referred angular amplitudes, rad.
     """
-    speed = np.asarray(speed, float)
+    omega = np.asarray(omega, float)
     orders = np.asarray(orders, float)
-    omega = speed[:, None] * orders[None, :]
-    ns, no = omega.shape
+    w_vib = omega[:, None] * orders[None, :]
+    ns, no = w_vib.shape
     n = system.n_nodes
     e = system.edges
     # per-edge complex stiffness (N·m/rad) at each (speed, order)
     k = system.stiffnesses
     zk = (k * (1 + 1j * system.edge_loss_factor))[None, None, :] \
-        + system.edge_stiffness_speed2[None, None, :] * (speed ** 2)[:, None, None] \
-        + 1j * omega[..., None] * system.edge_damping[None, None, :]
+        + system.edge_stiffness_omega2[None, None, :] * (omega ** 2)[:, None, None] \
+        + 1j * w_vib[..., None] * system.edge_damping[None, None, :]
     zk = zk.reshape(ns * no, -1).T  # (m, batch)
-    w = omega.reshape(-1)
+    w = w_vib.reshape(-1)
     d = (-(w ** 2)[None, :] * system.inertias[:, None]
          + 1j * w[None, :] * system.node_damping[:, None])
     plan = _elimination_plan(system)
@@ -405,7 +408,7 @@ def forced_response(system, speed_rpm, *, torque=None, orders=None, misfire=None
     xb = x[..., e[:, 1]]
     xa = np.where(e[:, 0] >= 0, x[..., np.maximum(e[:, 0], 0)], 0.0)
     zk = (system.stiffnesses * (1 + 1j * system.edge_loss_factor))[None, None, :] \
-        + system.edge_stiffness_speed2 * (speed ** 2)[:, None, None] \
+        + system.edge_stiffness_omega2 * (speed ** 2)[:, None, None] \
         + 1j * omega[..., None] * system.edge_damping
     torque_e = zk * (xb - xa) / system.edge_ratio
     angle = x * system.node_ratio

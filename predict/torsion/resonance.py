@@ -133,7 +133,7 @@ def resonance_amplitudes(system, *, torque=None, orders=None, speed_range_rpm=No
         xa = np.where(e[:, 0] >= 0, x[k, np.maximum(e[:, 0], 0)], 0.0)
         wq = best * q
         zk = (system.stiffnesses * (1 + 1j * system.edge_loss_factor)
-              + system.edge_stiffness_speed2 * best ** 2 + 1j * wq * system.edge_damping)
+              + system.edge_stiffness_omega2 * best ** 2 + 1j * wq * system.edge_damping)
         stress = np.abs(zk * (xb - xa) / system.edge_ratio) * sf
         if np.all(np.isnan(stress)):
             smax, sec = np.nan, ""

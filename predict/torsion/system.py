@@ -19,6 +19,8 @@ from __future__ import annotations
 import functools
 import numpy as np
 
+from crankbench.predict._deprecate import renamed
+
 from .._validate import check_finite_array
 from ..errors import ModelError
 from . import eigen
@@ -57,7 +59,7 @@ class TorsionalSystem:
         Relative viscous damping across each spring, N·m·s/rad.
     edge_loss_factor : array_like (m,), optional
         Hysteretic loss factor η of each spring (complex stiffness ``k(1 + iη)``).
-    edge_stiffness_speed2 : array_like (m,), optional
+    edge_stiffness_omega2 : array_like (m,), optional
         Speed-proportional stiffness coefficient, N·m·s²/rad (centrifugal pendulums):
         the spring stiffness is ``stiffness + coeff·Ω²`` at crankshaft speed Ω.
     node_ratio, edge_ratio : array_like, optional
@@ -102,9 +104,10 @@ class TorsionalSystem:
     19.4924
     """
 
+    @renamed(edge_stiffness_speed2="edge_stiffness_omega2")
     def __init__(self, inertias, edges, stiffnesses, *, node_names=None, edge_names=None,
                  node_damping=None, edge_damping=None, edge_loss_factor=None,
-                 edge_stiffness_speed2=None, node_ratio=None, edge_ratio=None,
+                 edge_stiffness_omega2=None, node_ratio=None, edge_ratio=None,
                  edge_outer_diameter=None, edge_inner_diameter=None, eigen_nodes=None,
                  cylinder_nodes=(), firing_angles_deg=None, cycle=4, engine=None, limits=None,
                  name="", operating=None):
@@ -151,7 +154,7 @@ class TorsionalSystem:
         self._node_damping = per(node_damping, "node_damping", n, 0.0)
         self._edge_damping = per(edge_damping, "edge_damping", m, 0.0)
         self._edge_eta = per(edge_loss_factor, "edge_loss_factor", m, 0.0)
-        self._k_speed2 = per(edge_stiffness_speed2, "edge_stiffness_speed2", m, 0.0)
+        self._k_speed2 = per(edge_stiffness_omega2, "edge_stiffness_omega2", m, 0.0)
         self._node_ratio = per(node_ratio, "node_ratio", n, 1.0, low=None)
         self._edge_ratio = per(edge_ratio, "edge_ratio", m, 1.0, low=None)
         self._d_out = per(edge_outer_diameter, "edge_outer_diameter", m, np.nan,
@@ -239,7 +242,7 @@ class TorsionalSystem:
         return self._edge_eta
 
     @property
-    def edge_stiffness_speed2(self) -> np.ndarray:
+    def edge_stiffness_omega2(self) -> np.ndarray:
         """Speed-proportional stiffness coefficients, N·m·s²/rad."""
         return self._k_speed2
 
@@ -263,7 +266,7 @@ class TorsionalSystem:
         args = dict(inertias=self._j, edges=self._edges, stiffnesses=self._k,
                     node_names=self.node_names, edge_names=self.edge_names,
                     node_damping=self._node_damping, edge_damping=self._edge_damping,
-                    edge_loss_factor=self._edge_eta, edge_stiffness_speed2=self._k_speed2,
+                    edge_loss_factor=self._edge_eta, edge_stiffness_omega2=self._k_speed2,
                     node_ratio=self._node_ratio, edge_ratio=self._edge_ratio,
                     edge_outer_diameter=self._d_out, edge_inner_diameter=self._d_in,
                     eigen_nodes=self._eigen_nodes, cylinder_nodes=self.cylinder_nodes,
@@ -297,16 +300,17 @@ class TorsionalSystem:
         """Diagonal inertia matrix J, kg·m² (dense (n, n) ndarray)."""
         return np.diag(self._j)
 
-    def stiffness_matrix(self, speed: float | None = None) -> np.ndarray:
+    @renamed(speed="omega")
+    def stiffness_matrix(self, omega: float | None = None) -> np.ndarray:
         """Stiffness matrix K, N·m/rad (dense, symmetric (n, n)).
 
         Parameters
         ----------
-        speed : float, optional
+        omega : float, optional
             Crankshaft speed Ω, rad/s, for speed-dependent springs (centrifugal pendulums);
             None leaves them out.
         """
-        k = self._k if speed is None else self._k + self._k_speed2 * float(speed) ** 2
+        k = self._k if omega is None else self._k + self._k_speed2 * float(omega) ** 2
         return self._laplacian(k)
 
     def damping_matrix(self, omega: float | None = None) -> np.ndarray:

@@ -21,7 +21,7 @@ def test_dropout_is_masked_with_warning_and_the_rest_is_exact(method):
     x = np.cos(2 * phi) + 0.3 * np.cos(4.5 * phi)
     x[12000:12200] = np.nan                                     # 3.0 .. 3.04975 s
     with pytest.warns(RecordWarning, match=r"x: 200 NaN/inf sample\(s\) masked at 3\.\.3\.04975 s"):
-        res = order_track(x, fs=fs, rpm=rpm, orders=[2, 4.5], method=method, revolutions=8)
+        res = order_track(x, fs=fs, speed_rpm=rpm, orders=[2, 4.5], method=method, revolutions=8)
     amp = res.amplitude.sel(order=2).values
     times = res.time.values
     masked = ~np.isfinite(amp)
@@ -35,5 +35,6 @@ def test_dropout_is_masked_with_warning_and_the_rest_is_exact(method):
 def test_all_nan_channel_is_still_an_error():
     from crankbench.predict.errors import AnalysisError
 
-    with pytest.raises(AnalysisError, match=r"x contains 4000 NaN/inf value\(s\), first at index 0"):
-        order_track(np.full(4000, np.nan), fs=4000.0, rpm=1500.0, orders=[2])
+    with pytest.raises(AnalysisError,
+                       match=r"x contains 4000 NaN/inf value\(s\), first at index 0"):
+        order_track(np.full(4000, np.nan), fs=4000.0, speed_rpm=1500.0, orders=[2])

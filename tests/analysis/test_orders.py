@@ -20,7 +20,7 @@ def test_steady_order_amplitude_within_0p1_percent():
     fs = 10_000.0
     t, rpm, phi = _runup(fs, 4.0, 1800.0, 1800.0)
     x = 0.8 * np.cos(3 * phi + 0.7) + 0.3 * np.cos(1.5 * phi - 1.0)
-    res = order_track(x, fs=fs, rpm=rpm, orders=[1.5, 3], revolutions=8)
+    res = order_track(x, fs=fs, speed_rpm=rpm, orders=[1.5, 3], revolutions=8)
     amp = res.amplitude.values
     assert np.abs(amp[0] / 0.3 - 1).max() < 1e-3
     assert np.abs(amp[1] / 0.8 - 1).max() < 1e-3
@@ -34,7 +34,7 @@ def test_steady_order_amplitude_within_0p1_percent():
 def test_amplitude_conventions(amplitude, factor):
     fs = 5000.0
     t, rpm, phi = _runup(fs, 3.0, 1200.0, 1200.0)
-    res = order_track(np.cos(2 * phi), fs=fs, rpm=rpm, orders=[2], amplitude=amplitude,
+    res = order_track(np.cos(2 * phi), fs=fs, speed_rpm=rpm, orders=[2], amplitude=amplitude,
                       revolutions=8)
     assert np.allclose(res.amplitude, factor, rtol=1e-4)
     assert res.attrs["amplitude_convention"] == amplitude
@@ -46,9 +46,9 @@ def test_parseval_power_scaling():
     rng = np.random.default_rng(4)
     x = rng.normal(size=16384)
     for window in ("boxcar", "hann", "flattop"):
-        p = order_map(x, fs=fs, rpm=1200.0, revolutions=8, window=window, scaling="power",
+        p = order_map(x, fs=fs, speed_rpm=1200.0, revolutions=8, window=window, scaling="power",
                       max_order=32, samples_per_rev=64)
-        y = angle_resample(x, fs=fs, rpm=1200.0, samples_per_rev=64)
+        y = angle_resample(x, fs=fs, speed_rpm=1200.0, samples_per_rev=64)
         from scipy.signal import get_window
         w = get_window(window, 512)
         seg = y.values[:512] * w
@@ -63,14 +63,14 @@ def test_order_exactly_between_bins_band_energy():
     revolutions = 16
     order = 2.0 + 0.5 / revolutions          # exactly between bins 32 and 33
     x = 1.0 * np.cos(order * phi)
-    p = order_spectrum(x, fs=fs, rpm=rpm, revolutions=revolutions, scaling="power")
-    a = order_spectrum(x, fs=fs, rpm=rpm, revolutions=revolutions)
+    p = order_spectrum(x, fs=fs, speed_rpm=rpm, revolutions=revolutions, scaling="power")
+    a = order_spectrum(x, fs=fs, speed_rpm=rpm, revolutions=revolutions)
     single = float(a.sel(order=order, method="nearest"))
     assert 0.80 < single < 0.90               # Hann scalloping loss (-1.42 dB = 0.849)
     band = band_amplitude(p, [order], half_width=4 / revolutions)
     assert float(band[0]) == pytest.approx(1.0, rel=1e-3)
     # the direct DFT at the order (COT track) is also exact between bins
-    res = order_track(x, fs=fs, rpm=rpm, orders=[order], revolutions=revolutions)
+    res = order_track(x, fs=fs, speed_rpm=rpm, orders=[order], revolutions=revolutions)
     assert np.abs(res.amplitude.values / 1.0 - 1).max() < 1e-3
 
 
@@ -82,7 +82,7 @@ def test_runup_orders_within_half_percent_rms():
     truth = {1.0: 1.0, 2.0: 0.5, 4.5: 0.25}
     rng = np.random.default_rng(20)
     x = sum(a * np.cos(o * phi + 0.3 * o) for o, a in truth.items()) + rng.normal(0, 0.1, t.size)
-    res = order_track(x, fs=fs, rpm=rpm, orders=list(truth), revolutions=64, window="boxcar",
+    res = order_track(x, fs=fs, speed_rpm=rpm, orders=list(truth), revolutions=64, window="boxcar",
                       overlap=0.5)
     sel = (res.time > 2.0) & (res.time < 18.0)
     for o, a in truth.items():
@@ -97,10 +97,10 @@ def test_order_map_rpm_bins_and_campbell():
     fs = 4000.0
     t, rpm, phi = _runup(fs, 8.0, 900.0, 2100.0)
     x = 0.4 * np.cos(2 * phi)
-    m = order_map(x, fs=fs, rpm=rpm, revolutions=8, rpm_bins=6)
+    m = order_map(x, fs=fs, speed_rpm=rpm, revolutions=8, speed_bins_rpm=6)
     assert m.dims == ("rpm", "order")
     assert np.allclose(m.sel(order=2), 0.4, rtol=1e-3)
-    c = campbell_map(x, fs=fs, rpm=rpm, nperseg=512, max_frequency=200)
+    c = campbell_map(x, fs=fs, speed_rpm=rpm, nperseg=512, max_frequency=200)
     assert c.dims == ("time", "frequency") and c.attrs["order_lines"]
     # the order-2 ridge follows 2·rpm/60 Hz within one bin
     ridge = c["frequency"].values[c.argmax("frequency").values]
@@ -112,30 +112,30 @@ def test_record_channel_input_takes_fs_and_units():
     t, rpm, phi = _runup(fs, 3.0, 1500.0, 1500.0)
     ch = xr.DataArray(0.02 * np.cos(phi), dims="time", name="torsio",
                       attrs={"units": "rad", "sample_rate": fs, "quantity": "angle"})
-    res = order_track(ch, rpm=rpm, orders=[1], revolutions=8)
+    res = order_track(ch, speed_rpm=rpm, orders=[1], revolutions=8)
     assert res.amplitude.attrs["units"] == "rad"
     assert np.allclose(res.amplitude, 0.02, rtol=1e-4)
 
 
 def test_errors_name_the_argument():
     with pytest.raises(AnalysisError, match="fs is required"):
-        order_track(np.zeros(1000), rpm=1000.0, orders=[1])
+        order_track(np.zeros(1000), speed_rpm=1000.0, orders=[1])
     with pytest.raises(AnalysisError, match=r"rpm has 10 samples but the signal has 1000"):
-        order_track(np.zeros(1000), fs=1000.0, rpm=np.ones(10), orders=[1])
+        order_track(np.zeros(1000), fs=1000.0, speed_rpm=np.ones(10), orders=[1])
     with pytest.raises(AnalysisError, match="method='kvf' is not one of .*did you mean 'vkf'"):
-        order_track(np.zeros(1000), fs=1000.0, rpm=600.0, orders=[1], method="kvf")
+        order_track(np.zeros(1000), fs=1000.0, speed_rpm=600.0, orders=[1], method="kvf")
     with pytest.raises(AnalysisError, match="rpm must be > 0"):
-        order_track(np.zeros(1000), fs=1000.0, rpm=np.r_[np.ones(999), -1.0], orders=[1])
+        order_track(np.zeros(1000), fs=1000.0, speed_rpm=np.r_[np.ones(999), -1.0], orders=[1])
     with pytest.raises(AnalysisError, match="fewer than one block"):
-        order_track(np.zeros(2000), fs=1000.0, rpm=600.0, orders=[1], revolutions=64)
+        order_track(np.zeros(2000), fs=1000.0, speed_rpm=600.0, orders=[1], revolutions=64)
     with pytest.raises(AnalysisError, match=r"order 20 exceeds samples_per_rev/4 = 16 .*"
                                             r"use samples_per_rev >= 80"):
-        order_track(np.zeros(20000), fs=1000.0, rpm=600.0, orders=[1, 20])
+        order_track(np.zeros(20000), fs=1000.0, speed_rpm=600.0, orders=[1, 20])
     with pytest.raises(AnalysisError, match=r"order 12 reaches 600 Hz at 3000 rpm, above the "
                                             r"Nyquist frequency 500 Hz"):
-        order_track(np.zeros(20000), fs=1000.0, rpm=3000.0, orders=[12])
+        order_track(np.zeros(20000), fs=1000.0, speed_rpm=3000.0, orders=[12])
     with pytest.raises(AnalysisError, match="window='hanning2' is not a scipy window"):
-        order_map(np.zeros(20000), fs=1000.0, rpm=600.0, window="hanning2", revolutions=2)
+        order_map(np.zeros(20000), fs=1000.0, speed_rpm=600.0, window="hanning2", revolutions=2)
 
 
 def test_chunked_resampling_equals_one_pass():
@@ -145,8 +145,8 @@ def test_chunked_resampling_equals_one_pass():
     fs = 8000.0
     t, rpm, phi = _runup(fs, 10.0, 900.0, 2400.0)
     x = np.cos(2 * phi) + 0.3 * np.sin(12 * phi)
-    one = angle_resample(x, fs=fs, rpm=rpm, chunk=1 << 22)
-    many = angle_resample(x, fs=fs, rpm=rpm, chunk=4096)
+    one = angle_resample(x, fs=fs, speed_rpm=rpm, chunk=1 << 22)
+    many = angle_resample(x, fs=fs, speed_rpm=rpm, chunk=4096)
     common = np.intersect1d(one.angle.values, many.angle.values)
     a = one.sel(angle=common).values
     b = many.sel(angle=common).values
@@ -159,7 +159,7 @@ def test_channel_time_offset_is_kept():
     t, rpm, phi = _runup(fs, 4.0, 1500.0, 1500.0)
     ch = xr.DataArray(np.cos(phi), dims="time", coords={"time": t + 100.0},
                       attrs={"units": "m", "sample_rate": fs})
-    res = order_track(ch, rpm=rpm, orders=[1], revolutions=8)
+    res = order_track(ch, speed_rpm=rpm, orders=[1], revolutions=8)
     assert 100.0 < float(res.time[0]) < 101.0
 
 
@@ -179,7 +179,7 @@ def test_sample_record_against_its_synthesis_truth(sample_data, kwargs):
     rec = measure.read(path)
     truth = read_truth(path)
     rpm = speed_reference(rec, "acc_block_z")
-    res = order_track(rec["acc_block_z"], rpm=rpm, orders=[2, 4], **kwargs)
+    res = order_track(rec["acc_block_z"], speed_rpm=rpm, orders=[2, 4], **kwargs)
     sel = (res.rpm.values > 1600) & (res.rpm.values < 2900)
     for o, tol in ((2, 0.01), (4, 0.03)):
         ref = np.interp(res.rpm.values, truth.rpm.values, truth.amplitude.sel(order=o).values)

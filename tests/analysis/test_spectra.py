@@ -96,7 +96,7 @@ def test_synchronous_average_removes_asynchronous_content():
     rpm = 1500 + 20 * np.sin(0.5 * t)
     phi = shaft_angle(rpm, fs)
     x = 0.5 * np.cos(0.5 * phi) + 1.0 * np.cos(2 * np.pi * 37.3 * t)
-    avg = synchronous_average(x, fs=fs, rpm=rpm, revolutions_per_cycle=2, samples_per_rev=64)
+    avg = synchronous_average(x, fs=fs, speed_rpm=rpm, revolutions_per_cycle=2, samples_per_rev=64)
     assert avg.sizes["angle"] == 128
     err = np.abs(avg.values - 0.5 * np.cos(0.5 * avg.angle.values)).max()
     assert err < 0.05 and avg.attrs["cycles"] > 300
@@ -110,4 +110,4 @@ def test_errors():
     with pytest.raises(AnalysisError, match=r"highpass_hz=6.0 must be below fs/2 = 5.0"):
         integrate(np.zeros(100), fs=10.0, highpass_hz=6.0)
     with pytest.raises(AnalysisError, match="need at least 2 to average"):
-        synchronous_average(np.zeros(3000), fs=1000.0, rpm=60.0, samples_per_rev=16)
+        synchronous_average(np.zeros(3000), fs=1000.0, speed_rpm=60.0, samples_per_rev=16)

@@ -46,7 +46,7 @@ def test_cot_stream_equals_in_memory(runup):
     """Every block of the streamed COT equals the in-memory one (1e-9 relative), and the phase
     is referred to the shaft angle from the record start across segments (truth 0.4, -1.0)."""
     path, full, rpm = runup
-    ref = order_track(full["acc"], rpm=rpm, orders=[0.5, 2], revolutions=8)
+    ref = order_track(full["acc"], speed_rpm=rpm, orders=[0.5, 2], revolutions=8)
     lazy = measure.open(path, chunk_seconds=10.0)
     res = order_track_stream(lazy, "acc", orders=[0.5, 2], revolutions=8, segment_seconds=30.0)
     assert res.sizes == ref.sizes
@@ -63,7 +63,7 @@ def test_cot_stream_equals_in_memory(runup):
 
 def test_order_map_stream_equals_in_memory(runup):
     path, full, rpm = runup
-    ref = order_map(full["acc"], rpm=rpm, revolutions=8, scaling="power")
+    ref = order_map(full["acc"], speed_rpm=rpm, revolutions=8, scaling="power")
     res = order_map_stream(measure.open(path), "acc", revolutions=8, scaling="power",
                            segment_seconds=50.0)
     assert res.dims == ref.dims and res.shape == ref.shape
@@ -80,8 +80,8 @@ def test_vkf_stream_matches_in_memory_interior():
     phi = shaft_angle(rpm, fs)
     x = 1.3 * np.cos(2 * phi + 0.4) + 0.2 * np.cos(0.5 * phi)
     rec = make_record({"acc": dict(data=x, sample_rate=fs, units="m/s^2")})
-    ref = order_track(rec["acc"], rpm=rpm, orders=[0.5, 2], method="vkf", bandwidth_hz=2.0)
-    res = order_track_stream(rec.chunk({"time": 5000}), "acc", rpm=rpm, orders=[0.5, 2],
+    ref = order_track(rec["acc"], speed_rpm=rpm, orders=[0.5, 2], method="vkf", bandwidth_hz=2.0)
+    res = order_track_stream(rec.chunk({"time": 5000}), "acc", speed_rpm=rpm, orders=[0.5, 2],
                              method="vkf", bandwidth_hz=2.0, segment_seconds=10.0)
     assert np.all(np.diff(res.time.values) > 0)
     e0 = ref.amplitude.values * np.exp(1j * ref.phase.values)
@@ -98,11 +98,11 @@ def test_vkf_stream_matches_in_memory_interior():
 def test_errors_name_channel():
     rec = make_record({"acc": dict(data=np.zeros(4000), sample_rate=1000.0, units="m/s^2")})
     with pytest.raises(RecordError, match="acx"):
-        order_track_stream(rec, "acx", orders=[1], rpm=1200.0)
+        order_track_stream(rec, "acx", orders=[1], speed_rpm=1200.0)
     with pytest.raises(AnalysisError, match="samples_per_rev"):
-        order_track_stream(rec, "acc", orders=[20], rpm=1200.0)
+        order_track_stream(rec, "acc", orders=[20], speed_rpm=1200.0)
     with pytest.raises(AnalysisError, match="rpm has 3 samples"):
-        order_track_stream(rec, "acc", orders=[1], rpm=[1.0, 2.0, 3.0])
+        order_track_stream(rec, "acc", orders=[1], speed_rpm=[1.0, 2.0, 3.0])
 
 
 def test_analyse_command_streams_large_files(runup, monkeypatch, capsys, tmp_path):
@@ -133,4 +133,4 @@ def test_analyse_command_streams_large_files(runup, monkeypatch, capsys, tmp_pat
 def test_order_above_nyquist_refused_before_reading():
     rec = make_record({"acc": dict(data=np.zeros(8000), sample_rate=200.0, units="m/s^2")})
     with pytest.raises(AnalysisError, match="Nyquist"):
-        order_track_stream(rec, "acc", orders=[8], rpm=1200.0)      # 160 Hz > 100 Hz
+        order_track_stream(rec, "acc", orders=[8], speed_rpm=1200.0)      # 160 Hz > 100 Hz

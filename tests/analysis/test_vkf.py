@@ -16,7 +16,8 @@ def test_minus_3db_at_half_bandwidth(filter_order):
     t = np.arange(int(40 * fs)) / fs
     rpm = np.full(t.size, 1200.0)
     x = np.cos(2 * shaft_angle(rpm, fs) + 2 * np.pi * (bw / 2) * t)
-    res = vold_kalman(x, fs=fs, rpm=rpm, orders=[2], bandwidth_hz=bw, filter_order=filter_order,
+    res = vold_kalman(x, fs=fs, speed_rpm=rpm, orders=[2], bandwidth_hz=bw,
+                      filter_order=filter_order,
                       decimate=False)
     mid = np.abs(res.envelope[0].values[10000:-10000])
     assert mid.mean() == pytest.approx(2 ** -0.5, rel=2e-3)
@@ -38,8 +39,8 @@ def test_crossing_orders_separated_only_when_solved_jointly():
     t = np.arange(int(10 * fs)) / fs
     ra, rb = 600 + 120 * t, 1800 - 120 * t
     x = np.cos(shaft_angle(ra, fs)) + 0.5 * np.cos(shaft_angle(rb, fs) + 1.0)
-    joint = vold_kalman(x, fs=fs, rpm=np.stack([ra, rb]), orders=[1, 1], bandwidth_hz=1.0)
-    alone = vold_kalman(x, fs=fs, rpm=ra, orders=[1], bandwidth_hz=1.0)
+    joint = vold_kalman(x, fs=fs, speed_rpm=np.stack([ra, rb]), orders=[1, 1], bandwidth_hz=1.0)
+    alone = vold_kalman(x, fs=fs, speed_rpm=ra, orders=[1], bandwidth_hz=1.0)
     sel = ((joint.time > 1) & (joint.time < 9)).values
     assert np.abs(np.abs(joint.envelope[0].values[sel]) - 1.0).max() < 1e-4
     assert np.abs(np.abs(joint.envelope[1].values[sel]) - 0.5).max() < 1e-4
@@ -57,7 +58,7 @@ def test_runup_orders_within_half_percent_rms_vkf():
     truth = {1.0: 1.0, 2.0: 0.5, 4.5: 0.25}
     rng = np.random.default_rng(21)
     x = sum(a * np.cos(o * phi - 0.2 * o) for o, a in truth.items()) + rng.normal(0, 0.1, t.size)
-    res = order_track(x, fs=fs, rpm=rpm, orders=list(truth), method="vkf", bandwidth_hz=0.5)
+    res = order_track(x, fs=fs, speed_rpm=rpm, orders=list(truth), method="vkf", bandwidth_hz=0.5)
     sel = ((res.time > 2) & (res.time < 18)).values
     for o, a in truth.items():
         err = res.amplitude.sel(order=o).values[sel] / a - 1
@@ -73,9 +74,9 @@ def test_blocks_give_the_same_answer_as_one_solve():
     rpm = 900 + 30 * t
     rng = np.random.default_rng(2)
     x = np.cos(3 * shaft_angle(rpm, fs)) * (1 + 0.3 * np.sin(0.5 * t)) + rng.normal(0, 0.1, t.size)
-    one = vold_kalman(x, fs=fs, rpm=rpm, orders=[3], bandwidth_hz=2.0, decimate=False,
+    one = vold_kalman(x, fs=fs, speed_rpm=rpm, orders=[3], bandwidth_hz=2.0, decimate=False,
                       block=1 << 20)
-    many = vold_kalman(x, fs=fs, rpm=rpm, orders=[3], bandwidth_hz=2.0, decimate=False,
+    many = vold_kalman(x, fs=fs, speed_rpm=rpm, orders=[3], bandwidth_hz=2.0, decimate=False,
                        block=2048)
     assert np.abs(one.envelope - many.envelope).max() < 1e-6
 
@@ -85,20 +86,20 @@ def test_narrow_bandwidth_is_stable():
     fs = 1000.0
     t = np.arange(int(200 * fs)) / fs
     x = 0.3 * np.cos(2 * shaft_angle(np.full(t.size, 600.0), fs) + 0.5)
-    res = vold_kalman(x, fs=fs, rpm=600.0, orders=[2], bandwidth_hz=0.02, decimate=False)
+    res = vold_kalman(x, fs=fs, speed_rpm=600.0, orders=[2], bandwidth_hz=0.02, decimate=False)
     assert np.abs(res.envelope[0].values - 0.3 * np.exp(0.5j)).max() < 1e-5
 
 
 def test_errors():
     x = np.zeros(4000)
     with pytest.raises(AnalysisError, match="give bandwidth_hz or bandwidth_orders, not both"):
-        vold_kalman(x, fs=1000.0, rpm=600.0, orders=[1], bandwidth_hz=1, bandwidth_orders=0.1)
+        vold_kalman(x, fs=1000.0, speed_rpm=600.0, orders=[1], bandwidth_hz=1, bandwidth_orders=0.1)
     with pytest.raises(AnalysisError, match=r"filter_order=3 is not one of 1, 2"):
-        vold_kalman(x, fs=1000.0, rpm=600.0, orders=[1], filter_order=3)
+        vold_kalman(x, fs=1000.0, speed_rpm=600.0, orders=[1], filter_order=3)
     with pytest.raises(AnalysisError, match=r"a 2-D rpm must have shape \(len\(orders\), len\(x\)\) = \(1, 4000\)"):
-        vold_kalman(x, fs=1000.0, rpm=np.ones((2, 4000)), orders=[1])
+        vold_kalman(x, fs=1000.0, speed_rpm=np.ones((2, 4000)), orders=[1])
     with pytest.raises(AnalysisError, match="above the Nyquist frequency"):
-        vold_kalman(x, fs=1000.0, rpm=6000.0, orders=[6])
+        vold_kalman(x, fs=1000.0, speed_rpm=6000.0, orders=[6])
 
 
 def test_knot_representation_matches_classical_solve():
@@ -109,9 +110,9 @@ def test_knot_representation_matches_classical_solve():
     rpm = 1200 + 20 * t
     env = 1 + 0.5 * np.sin(2 * np.pi * 0.3 * t)
     x = env * np.cos(2 * shaft_angle(rpm, fs))
-    classical = vold_kalman(x, fs=fs, rpm=rpm, orders=[2], bandwidth_hz=3.0, decimate=False,
+    classical = vold_kalman(x, fs=fs, speed_rpm=rpm, orders=[2], bandwidth_hz=3.0, decimate=False,
                             knots_per_bandwidth=None)
-    knots = vold_kalman(x, fs=fs, rpm=rpm, orders=[2], bandwidth_hz=3.0, decimate=False)
+    knots = vold_kalman(x, fs=fs, speed_rpm=rpm, orders=[2], bandwidth_hz=3.0, decimate=False)
     assert knots.attrs["knot_spacing_samples"] > 1
     mid = slice(3000, -3000)
     diff = np.abs(classical.envelope[0].values[mid] - knots.envelope[0].values[mid]).max()

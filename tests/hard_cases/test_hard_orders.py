@@ -40,7 +40,7 @@ def test_cot_through_a_2000_rpm_per_s_runup():
     fs = 20_000.0
     t, rpm, phi = _fast_runup(fs)
     x = _amp2(rpm) * np.cos(2 * phi + 0.4) + 0.3 * np.cos(4 * phi)
-    res = order_track(x, fs=fs, rpm=rpm, orders=[2, 4], revolutions=8)
+    res = order_track(x, fs=fs, speed_rpm=rpm, orders=[2, 4], revolutions=8)
     a2 = res.amplitude.sel(order=2).values
     assert a2.size >= 30
     assert np.abs(a2 / _amp2(res.rpm.values) - 1).max() < 5e-3
@@ -52,7 +52,7 @@ def test_vkf_through_a_2000_rpm_per_s_runup():
     fs = 20_000.0
     t, rpm, phi = _fast_runup(fs)
     x = _amp2(rpm) * np.cos(2 * phi + 0.4) + 0.3 * np.cos(4 * phi)
-    res = order_track(x, fs=fs, rpm=rpm, orders=[2, 4], method="vkf", bandwidth_orders=0.2)
+    res = order_track(x, fs=fs, speed_rpm=rpm, orders=[2, 4], method="vkf", bandwidth_orders=0.2)
     sel = ((res.time > 0.3) & (res.time < 2.7)).values
     a2 = res.amplitude.sel(order=2).values[sel]
     assert np.abs(a2 / _amp2(res.rpm.values[sel]) - 1).max() < 1e-3
@@ -72,7 +72,7 @@ def test_fast_runup_tracked_with_speed_from_a_60_tooth_wheel():
     inside = (t > trace.time[0]) & (t < trace.time[-1])
     assert np.abs(rpm_meas[inside] / rpm[inside] - 1).max() < 1e-6
     x = _amp2(rpm) * np.cos(2 * phi + 0.4)
-    res = order_track(x, fs=fs, rpm=rpm_meas, orders=[2], revolutions=8)
+    res = order_track(x, fs=fs, speed_rpm=rpm_meas, orders=[2], revolutions=8)
     ok = ((res.time > trace.time[0] + 0.05) & (res.time < trace.time[-1] - 0.05)).values
     a2 = res.amplitude.sel(order=2).values[ok]
     assert np.abs(a2 / _amp2(res.rpm.values[ok]) - 1).max() < 5e-3
@@ -88,12 +88,12 @@ def test_order_crossing_a_fixed_frequency_component_at_1000_rpm_per_s():
     rpm = 300.0 + 1000.0 * t
     x = np.cos(2 * shaft_angle(rpm, fs)) + 0.5 * np.cos(TWO_PI * 50.0 * t + 1.0)
     both = np.stack([rpm, np.full(t.size, 3000.0)])
-    alone = order_track(x, fs=fs, rpm=both[0], orders=[2], method="vkf", bandwidth_hz=2.0)
+    alone = order_track(x, fs=fs, speed_rpm=both[0], orders=[2], method="vkf", bandwidth_hz=2.0)
     near = np.abs(alone.rpm.values - 1500.0) < 60
     assert np.abs(alone.amplitude.values[0][near] - 1.0).max() > 0.1
     from crankbench.analysis.vkf import vold_kalman
 
-    res = vold_kalman(x, fs=fs, rpm=both, orders=[2, 1], bandwidth_hz=2.0)
+    res = vold_kalman(x, fs=fs, speed_rpm=both, orders=[2, 1], bandwidth_hz=2.0)
     sel = ((res.time > 0.3) & (res.time < 2.1)).values
     env = np.abs(res.envelope.values[:, sel])
     assert np.abs(env[0] - 1.0).max() < 1e-3
@@ -114,7 +114,7 @@ def test_cot_at_0db_snr_error_estimate_covers_the_actual_error():
     1-σ ``amplitude_noise`` and ≥ 85 % of the blocks are within 2σ (Gaussian: 95 %); the mean
     amplitude is within 3σ/√n of the truth (no bias at 0 dB)."""
     x, rpm, fs = _zero_db(0)
-    res = order_track(x, fs=fs, rpm=rpm, orders=[3], revolutions=8, overlap=0.0)
+    res = order_track(x, fs=fs, speed_rpm=rpm, orders=[3], revolutions=8, overlap=0.0)
     err = res.amplitude.values[0] - 1.0
     sigma = res.amplitude_noise.values
     assert err.size >= 60 and np.all(np.isfinite(sigma)) and np.all(sigma > 0)
@@ -130,7 +130,7 @@ def test_vkf_at_0db_snr_error_estimate_covers_the_actual_error():
     ratios = []
     for seed in range(5):
         x, rpm, fs = _zero_db(seed)
-        res = order_track(x, fs=fs, rpm=rpm, orders=[3], method="vkf", bandwidth_hz=1.0)
+        res = order_track(x, fs=fs, speed_rpm=rpm, orders=[3], method="vkf", bandwidth_hz=1.0)
         sel = ((res.time > 1) & (res.time < 19)).values
         err = res.amplitude.values[0][sel] - 1.0
         ratios.append(np.sqrt(np.mean(err ** 2)) / res.attrs["amplitude_std_estimate"][0])
@@ -146,7 +146,7 @@ def test_vkf_refuses_a_zero_speed_segment_by_name():
     rpm[12000:14000] = 0.0
     x = np.cos(2 * np.cumsum(rpm) / 60 * TWO_PI / fs)
     with pytest.raises(AnalysisError, match=r"rpm must be > 0 throughout.* at sample 12000"):
-        order_track(x, fs=fs, rpm=rpm, orders=[2], method="vkf")
+        order_track(x, fs=fs, speed_rpm=rpm, orders=[2], method="vkf")
 
 
 def test_zero_speed_message_is_plain_numbers():
@@ -155,7 +155,7 @@ def test_zero_speed_message_is_plain_numbers():
     rpm = np.full(32000, 1500.0)
     rpm[12000:14000] = 0.0
     with pytest.raises(AnalysisError) as info:
-        order_track(np.zeros(32000), fs=fs, rpm=rpm, orders=[2])
+        order_track(np.zeros(32000), fs=fs, speed_rpm=rpm, orders=[2])
     assert "np.float64" not in str(info.value)
     assert "3 s" in str(info.value) or "t = 3" in str(info.value)
 
@@ -170,7 +170,7 @@ def test_crawling_speed_dip_gives_finite_accurate_orders_or_clear_error(method):
     x = np.cos(2 * shaft_angle(rpm, fs))
     try:
         kw = {"revolutions": 4} if method == "cot" else {}
-        res = order_track(x, fs=fs, rpm=rpm, orders=[2], method=method, **kw)
+        res = order_track(x, fs=fs, speed_rpm=rpm, orders=[2], method=method, **kw)
     except AnalysisError as exc:
         assert "rpm" in str(exc) and method == "cot"
         return

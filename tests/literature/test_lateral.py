@@ -92,9 +92,9 @@ def test_iso_21940_11_grade_definition():
     """ISO 21940-11:2016 §5.2: G = e_per Ω. G 6.3 at 3000 rpm → e_per = 20 µm (Figure 2
     reading); G 2.5 at 3000 rpm → 8 µm."""
     omega = 3000 * np.pi / 30
-    assert permissible_unbalance(6.3, rotor_mass=1.0, max_speed=omega) == pytest.approx(
+    assert permissible_unbalance(6.3, rotor_mass=1.0, max_omega=omega) == pytest.approx(
         20e-6, rel=0.01)
-    assert permissible_unbalance(2.5, rotor_mass=1.0, max_speed=omega) == pytest.approx(
+    assert permissible_unbalance(2.5, rotor_mass=1.0, max_omega=omega) == pytest.approx(
         8e-6, rel=0.01)
 
 

@@ -224,7 +224,7 @@ def test_marine_runup_truth_recovered_by_order_tracking(marine_run):
     for ch in ("tv_flywheel", "tv_free_end"):
         x = rec[ch]
         t = x[x.dims[0]].values
-        res = analysis.order_track(x, rpm=sp.at(t) * 60 / TWO_PI, orders=[1.5, 3.0, 4.5, 6.0],
+        res = analysis.order_track(x, speed_rpm=sp.at(t) * 60 / TWO_PI, orders=[1.5, 3.0, 4.5, 6.0],
                                    revolutions=8)
         tt = res["time"].values
         for q in (1.5, 3.0, 4.5, 6.0):

@@ -148,7 +148,7 @@ def test_gyroscopic_natural_frequencies_at_speed():
         p2 = np.poly1d([-id_, sign * ip * spin, k22])
         roots = (p1 * p2 - k12**2).roots
         expected[whirl] = np.sort(roots[(np.abs(roots.imag) < 1e-6) & (roots.real > 0)].real)
-    modes = _overhung(ip, id_).natural_frequencies(speed=spin, n_modes=4, error_estimate=False)
+    modes = _overhung(ip, id_).natural_frequencies(spin_omega=spin, n_modes=4, error_estimate=False)
     for whirl in ("forward", "backward"):
         got = modes.omega[np.array(modes.whirl) == whirl]
         np.testing.assert_allclose(got, expected[whirl][:got.size], rtol=1e-8)
@@ -191,7 +191,7 @@ def test_critical_speeds_agree_with_campbell_eigenvalues():
                   bearings=[Bearing(0.0, 5e7), Bearing(0.4, 5e7)])
     crit = rotor.critical_speeds(orders=[1.0, 2.0], n_modes=2)
     for om, k, whirl in zip(crit.omega, crit.order, crit.whirl):
-        modes = rotor.natural_frequencies(speed=om, n_modes=8, error_estimate=False)
+        modes = rotor.natural_frequencies(spin_omega=om, n_modes=8, error_estimate=False)
         i = np.argmin(np.abs(modes.omega - k * om))
         assert modes.omega[i] == pytest.approx(k * om, rel=1e-9)
         assert modes.whirl[i] == whirl
@@ -207,7 +207,7 @@ def test_cross_coupled_bearings_use_the_general_pencil():
                             Bearing(1.0, 1e7, 8e6, kxy=2e5, kyx=-2e5)])
     crit = rotor.critical_speeds(n_modes=2)
     for om in crit.omega:
-        modes = rotor.natural_frequencies(speed=om, n_modes=6, error_estimate=False)
+        modes = rotor.natural_frequencies(spin_omega=om, n_modes=6, error_estimate=False)
         assert np.min(np.abs(modes.omega - om)) / om < 1e-7
 
 
@@ -240,7 +240,8 @@ def test_model_errors_name_the_item():
 
 def test_result_frames_and_plots():
     rotor = Rotor(shaft=[ShaftSection(1.0, 0.05, material=STEEL)],
-                  disks=[Disk(0.5, 20.0, 0.1, 0.2)], bearings=[Bearing(0.0, 1e7), Bearing(1.0, 1e7)])
+                  disks=[Disk(0.5, 20.0, 0.1, 0.2)], bearings=[Bearing(0.0, 1e7), Bearing(1.0,
+                                                                                          1e7)])
     modes = rotor.natural_frequencies(400.0, n_modes=4)
     frame = modes.to_frame()
     assert list(frame.columns[:5]) == ["mode", "frequency_hz", "frequency_rpm", "damping_ratio",

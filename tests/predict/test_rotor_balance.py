@@ -113,10 +113,10 @@ def test_trial_mass_matrix_form_and_residual_from_check_run():
 def test_iso_permissible_unbalance():
     """G = e_per Ω: G 6.3 at 3000 rpm gives e_per = 6.3 mm/s / 314.16 rad/s = 20.05 µm."""
     omega = 3000 * np.pi / 30
-    u = permissible_unbalance(6.3, rotor_mass=1.0, max_speed=omega)
+    u = permissible_unbalance(6.3, rotor_mass=1.0, max_omega=omega)
     assert u == pytest.approx(20.05e-6, rel=1e-3)
-    check = grade_check([3e-4, 5e-4], rotor_mass=50.0, max_speed=omega, grade=6.3)
-    per_plane = permissible_unbalance(6.3, rotor_mass=50.0, max_speed=omega) / 2
+    check = grade_check([3e-4, 5e-4], rotor_mass=50.0, max_omega=omega, grade=6.3)
+    per_plane = permissible_unbalance(6.3, rotor_mass=50.0, max_omega=omega) / 2
     assert check.permissible == pytest.approx([per_plane, per_plane])
     assert check.passed == bool(5e-4 <= per_plane)
     assert check.smallest_grade == 6.3

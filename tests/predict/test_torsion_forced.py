@@ -39,7 +39,7 @@ def test_tree_elimination_matches_dense_solve():
         [2.0, 0.5, 3.0, 1.0, 4.0, 0.2], [(0, 1), (1, 2), (1, 3), (3, 4), (-1, 4), (2, 5), (1, 2)],
         [1e5, 2e6, 3e4, 5e5, 1e3, 0.0, 1e4], edge_damping=[1, 2, 3, 4, 5, 0.5, 0],
         edge_loss_factor=[0.01, 0, 0.05, 0, 0, 0, 0.1], node_damping=[0, 1, 0, 0, 10, 0],
-        edge_stiffness_speed2=[0, 0, 0, 0, 0, 0.2 * 4, 0])
+        edge_stiffness_omega2=[0, 0, 0, 0, 0, 0.2 * 4, 0])
     speed = np.array([30.0, 90.0])
     orders = np.array([0.5, 3.0])
     rng = np.random.default_rng(1)

@@ -50,10 +50,10 @@ PULSE_FUNCS = {
     "angular_vibration": lambda e, **kw: angular_vibration(e, pulses_per_rev=PPR, **kw),
 }
 ORDER_FUNCS = {
-    "order_track": lambda x, rpm: order_track(x, rpm=rpm, orders=[2.0, 4.0], revolutions=8),
-    "order_map": lambda x, rpm: order_map(x, rpm=rpm, revolutions=8),
-    "order_spectrum": lambda x, rpm: order_spectrum(x, rpm=rpm),
-    "campbell_map": lambda x, rpm: campbell_map(x, rpm=rpm, nperseg=1024),
+    "order_track": lambda x, rpm: order_track(x, speed_rpm=rpm, orders=[2.0, 4.0], revolutions=8),
+    "order_map": lambda x, rpm: order_map(x, speed_rpm=rpm, revolutions=8),
+    "order_spectrum": lambda x, rpm: order_spectrum(x, speed_rpm=rpm),
+    "campbell_map": lambda x, rpm: campbell_map(x, speed_rpm=rpm, nperseg=1024),
 }
 
 
@@ -187,7 +187,7 @@ def test_too_short_channel_is_named_error(func):
 
 def test_dead_sensor_gives_zero_orders_not_nan():
     c = sig.channel_constant()
-    res = order_track(_channel(c.data), rpm=c.rpm, orders=[2.0, 4.0], revolutions=8)
+    res = order_track(_channel(c.data), speed_rpm=c.rpm, orders=[2.0, 4.0], revolutions=8)
     amp = res.amplitude.values
     assert np.all(np.isfinite(amp)) and np.all(amp == 0.0)
 
@@ -243,7 +243,7 @@ def test_uff_keeps_or_refuses_dropouts(tmp_path):
 def test_masked_dropout_gives_masked_order_track_with_warning():
     c = sig.channel_dropout_nan()
     with pytest.warns(UserWarning, match=r"acc.*(masked|NaN).*2(\.0)?\.\.2\.0495 s"):
-        res = order_track(_channel(c.data), rpm=c.rpm, orders=[2.0], revolutions=8)
+        res = order_track(_channel(c.data), speed_rpm=c.rpm, orders=[2.0], revolutions=8)
     amp = res.amplitude.sel(order=2.0)
     t = res.time.values
     assert np.isnan(amp.values[np.abs(t - 2.02) < 0.05]).all()
@@ -268,7 +268,7 @@ def test_clipped_channel_order_amplitude_is_wrong_without_flag():
     c = sig.channel_clipped()
     with warnings.catch_warnings():
         warnings.simplefilter("error")
-        res = order_track(_channel(c.data), rpm=c.rpm, orders=[2.0], revolutions=8)
+        res = order_track(_channel(c.data), speed_rpm=c.rpm, orders=[2.0], revolutions=8)
     amp = float(res.amplitude.sel(order=2.0).mean())
     assert abs(amp - c.truth[2.0]) > 0.1
 

@@ -86,15 +86,17 @@ def signals(draw):
 
 
 CALLS = {
-    "angle_resample": lambda x, fs, rpm: angle_resample(x, fs=fs, rpm=rpm, samples_per_rev=16),
-    "order_track": lambda x, fs, rpm: order_track(x, fs=fs, rpm=rpm, orders=[0.5, 1.0, 2.0],
+    "angle_resample": lambda x, fs, rpm: angle_resample(x, fs=fs, speed_rpm=rpm,
+                                                        samples_per_rev=16),
+    "order_track": lambda x, fs, rpm: order_track(x, fs=fs, speed_rpm=rpm, orders=[0.5, 1.0, 2.0],
                                                   samples_per_rev=16, revolutions=2),
-    "order_track_vkf": lambda x, fs, rpm: order_track(x, fs=fs, rpm=rpm, orders=[1.0, 2.0],
+    "order_track_vkf": lambda x, fs, rpm: order_track(x, fs=fs, speed_rpm=rpm, orders=[1.0, 2.0],
                                                       method="vkf", bandwidth_orders=0.5),
-    "order_map": lambda x, fs, rpm: order_map(x, fs=fs, rpm=rpm, samples_per_rev=16,
+    "order_map": lambda x, fs, rpm: order_map(x, fs=fs, speed_rpm=rpm, samples_per_rev=16,
                                               revolutions=2),
-    "order_spectrum": lambda x, fs, rpm: order_spectrum(x, fs=fs, rpm=rpm, samples_per_rev=16),
-    "campbell_map": lambda x, fs, rpm: campbell_map(x, fs=fs, rpm=rpm, nperseg=64),
+    "order_spectrum": lambda x, fs, rpm: order_spectrum(x, fs=fs, speed_rpm=rpm,
+                                                        samples_per_rev=16),
+    "campbell_map": lambda x, fs, rpm: campbell_map(x, fs=fs, speed_rpm=rpm, nperseg=64),
 }
 
 
@@ -122,7 +124,7 @@ def test_known_order_amplitude_and_phase_recovered(order, amp, phase, rpm0, rise
     n = int(3 * fs)
     rpm = rpm0 * (1 + rise * np.arange(n) / n)
     x = amp * np.cos(order * shaft_angle(rpm, fs) + phase)
-    res = order_track(x, fs=fs, rpm=rpm, orders=[order], revolutions=8)
+    res = order_track(x, fs=fs, speed_rpm=rpm, orders=[order], revolutions=8)
     a = res.amplitude.sel(order=order).values
     p = res.phase.sel(order=order).values
     np.testing.assert_allclose(a, amp, rtol=5e-3)
@@ -134,7 +136,7 @@ def test_known_order_amplitude_and_phase_recovered(order, amp, phase, rpm0, rise
        rpm=st.floats(30.0, 3000.0))
 def test_vkf_on_zero_signal_is_zero_not_nan(n, fs, rpm):
     try:
-        res = vold_kalman(np.zeros(n), fs=fs, rpm=np.full(n, rpm), orders=[1.0],
+        res = vold_kalman(np.zeros(n), fs=fs, speed_rpm=np.full(n, rpm), orders=[1.0],
                           bandwidth_orders=0.5)
     except CrankbenchError as exc:      # too short for the filter: our error, named
         assert "x:" in str(exc)
@@ -147,7 +149,7 @@ def test_speed_far_above_sample_rate_is_our_error():
     x = np.random.default_rng(0).standard_normal(200)
     with time_limit(10, "order analysis"), \
             pytest.raises(CrankbenchError, match=r"rpm.*(sample|fs)"):
-        order_map(x, fs=1000.0, rpm=1e6)
+        order_map(x, fs=1000.0, speed_rpm=1e6)
 
 
 def test_speed_far_below_sample_rate_is_our_error(monkeypatch):
@@ -165,7 +167,7 @@ def test_speed_far_below_sample_rate_is_our_error(monkeypatch):
     monkeypatch.setattr(sps, "firwin", guarded)
     x = np.random.default_rng(0).standard_normal(64)
     with pytest.raises(CrankbenchError, match=r"taps|rpm"):
-        angle_resample(x, fs=200.0, rpm=np.full(64, 1e-5), samples_per_rev=16)
+        angle_resample(x, fs=200.0, speed_rpm=np.full(64, 1e-5), samples_per_rev=16)
 
 
 def test_vkf_at_extremely_low_speed_does_not_design_a_huge_filter(monkeypatch):
@@ -180,7 +182,7 @@ def test_vkf_at_extremely_low_speed_does_not_design_a_huge_filter(monkeypatch):
 
     monkeypatch.setattr(sps, "firwin", guarded)
     try:
-        vold_kalman(np.full(8, 1e-13), fs=200.0, rpm=np.full(8, 1e-6), orders=[1.0, 2.0],
+        vold_kalman(np.full(8, 1e-13), fs=200.0, speed_rpm=np.full(8, 1e-6), orders=[1.0, 2.0],
                     bandwidth_orders=0.5)
     except CrankbenchError:
         pass
