@@ -312,14 +312,20 @@ def predicted_response(system, speed_rpm, orders, node, *, load, quantity="angle
 
     from crankbench.predict.torsion.excitation import engine_excitation
 
-    imep = load.imep if load.imep is not None else system.operating.get("imep")
-    exc = engine_excitation(system, imep=imep, orders=orders)
+    from .given_excitation import given_excitation, given_forcing
+
     omega = np.asarray(speed_rpm, float) * np.pi / 30.0
-    scale = load.scale(speed_rpm)
-    torque = (exc.gas[None, :] * scale[:, None]
-              + (omega**2)[:, None] * exc.inertia[None, :])[:, :, None]
-    torque = np.repeat(torque, exc.n_cylinders, axis=2)
-    res = system.forced_response(speed_rpm, torque=torque, orders=orders, superpose=False)
+    if given_excitation(system) is not None:  # a bench without an engine
+        forced, torque = given_forcing(system, speed_rpm, orders)
+        res = forced.forced_response(speed_rpm, torque=torque, orders=orders, superpose=False)
+    else:
+        imep = load.imep if load.imep is not None else system.operating.get("imep")
+        exc = engine_excitation(system, imep=imep, orders=orders)
+        scale = load.scale(speed_rpm)
+        torque = (exc.gas[None, :] * scale[:, None]
+                  + (omega**2)[:, None] * exc.inertia[None, :])[:, :, None]
+        torque = np.repeat(torque, exc.n_cylinders, axis=2)
+        res = system.forced_response(speed_rpm, torque=torque, orders=orders, superpose=False)
     i = system.node_names.index(node)
     amp = np.abs(res.angle[:, :, i])
     if quantity == "angular_velocity":
@@ -547,7 +553,10 @@ def analyse(record, model, *, channel=None, speed_channel=None, orders=None, max
     rate = np.abs(np.gradient(rpm_ok, t))
     moving = rate > 0.2
     sweep_rate = float(np.median(rate[moving])) if moving.any() else 0.0
-    all_orders = [float(o) for o in (system.default_orders() if orders is None else orders)
+    from .given_excitation import default_orders, given_excitation
+
+    all_orders = [float(o) for o in (default_orders(system, max_order) if orders is None
+                                     else orders)
                   if o <= max_order + 1e-9 and o * hi / 60.0 < 0.4 * fs]
     if not all_orders:
         raise AnalysisError(f"no order up to {max_order:g} lies below 0.4 × the sample rate "
@@ -572,6 +581,12 @@ def analyse(record, model, *, channel=None, speed_channel=None, orders=None, max
         predicted.loc[~predicted["order"].isin(orders), "significant"] = False
     else:
         orders = all_orders
+    given = given_excitation(system)
+    if given is not None and given.get("torque") is None:
+        # a bench whose torques are not given: its criticals are compared by speed only
+        predicted["amplitude"] = np.nan
+        predicted["significant"] = predicted["identified"] & predicted["order"].isin(orders)
+        response_da.attrs["note"] = "response to 1 N·m per order: exciting torques not given"
     done("prediction")
 
     if bandwidth_orders is None:

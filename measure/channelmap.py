@@ -77,6 +77,11 @@ log = logging.getLogger("crankbench")
 ROLES = ("wheel", "tdc")
 _SOURCE_TABLE_KEYS = ("sample_rate", "time_column", "time_units", "delimiter", "decimal",
                       "header_rows", "skip_rows", "encoding", "sheet")
+#: every key of [source] and of a [channel.<name>] table
+SOURCE_KEYS = _SOURCE_TABLE_KEYS + ("start_time", "engine_id", "test_id", "keep_unmapped")
+CHANNEL_KEYS = ("column", "units", "quantity", "scale", "offset", "location", "direction",
+                "node", "role", "pulses_per_rev", "missing_teeth", "per_cycle", "keep_raw",
+                "slope", "level", "hysteresis", "tdc_offset_deg")
 
 
 @dataclass(frozen=True)
@@ -244,7 +249,7 @@ def _parse(doc: TomlTable, *, text: str, origin: str) -> ChannelMap:
         if "sample_rate" in source and "time_column" in source:
             src.fail("sample_rate", "and time_column are both given; give one (the time "
                                     "column's own rate is used)")
-        src.check_unknown()
+        src.check_unknown(SOURCE_KEYS)
     chans = doc.table("channel", None)
     if chans is None or not chans.keys():
         doc.fail("channel", "is missing: a map names at least one channel as "
@@ -312,7 +317,7 @@ def _channel(t, name) -> ChannelSpec:
                     "level", "hysteresis", "tdc_offset_deg"):
             if key in t:
                 t.fail(key, "applies only to pulse channels (role = 'wheel' or 'tdc')")
-        t.check_unknown()
+        t.check_unknown(CHANNEL_KEYS)
         return ChannelSpec(**kw)
     kw["keep_raw"] = _bool(t, "keep_raw") if "keep_raw" in t else False
     kw["slope"] = t.string("slope", "rising", options=["rising", "falling"])
@@ -338,7 +343,7 @@ def _channel(t, name) -> ChannelSpec:
             if key in t:
                 t.fail(key, "applies to role = 'wheel' (a TDC mark is once per revolution, "
                             "or per cycle with per_cycle = true)")
-    t.check_unknown()
+    t.check_unknown(CHANNEL_KEYS)
     return ChannelSpec(**kw)
 
 

@@ -8,7 +8,9 @@ runt. :func:`find_edges` handles them without a threshold from the user:
 1. **Noise.** The noise rms is estimated from differences of order 1 to 6 of the samples
    (``MAD(Δᵏx) / 0.6745 / √C(2k, k)``, the smallest over ``k``): white noise gives the same
    value at every order, a pulse shape only inflates the orders that see it, so the smallest
-   is a close upper estimate whatever the pulse shape and the samples per pulse.
+   is a close upper estimate whatever the pulse shape; for square pulses only a few samples
+   long, where every difference sees edges, the spread of the samples about each of the two
+   levels is the estimate.
 2. **Envelope.** The local high and low levels are the running maximum and minimum over a
    window of 2.5 of the longest pulse intervals (a first pass finds them), so the switching
    level follows the amplitude of an inductive pick-up over a run-up and a drifting baseline,
@@ -63,7 +65,8 @@ class EdgeDetection:
         Edge times, s from the first sample, ascending.
     runt_times : numpy.ndarray
         Times of runt pulses (they leave the baseline but never reach the switching level),
-        s: the rising crossing of their own half height.
+        s: the rising crossing of their own half height (half way from the baseline to the
+        median of their top).
     runt_heights : numpy.ndarray
         Their peak above the local low level, as a fraction of the local swing.
     noise_rms : float
@@ -111,7 +114,7 @@ def noise_rms(signal) -> float:
     if x.size > 1_000_000:
         starts = np.linspace(0, x.size - 250_000, 4).astype(int)
         return float(min(noise_rms(x[s:s + 250_000]) for s in starts))
-    best = np.inf
+    best = _two_level_noise(x)
     d = x
     for k in range(1, 7):
         d = np.diff(d)
@@ -120,6 +123,32 @@ def noise_rms(signal) -> float:
         mad = float(np.median(np.abs(d - np.median(d))))
         best = min(best, 1.482602218505602 * mad / np.sqrt(comb(2 * k, k)))
     return float(best) if np.isfinite(best) else 0.0
+
+
+def _two_level_noise(x) -> float:
+    """Noise of a two-level signal (square pulses, few samples per pulse, where differences
+    see edges everywhere): the spread of the samples around each level, when the two levels
+    (split at Otsu's threshold) hold at least 5 % of the samples each and stand more than 8
+    spreads apart; else inf (one level, or a continuum: no such estimate)."""
+    if x.size < 64:
+        return np.inf
+    hist, edges = np.histogram(x, bins=256)
+    centres = 0.5 * (edges[1:] + edges[:-1])
+    w0 = np.cumsum(hist)
+    w1 = w0[-1] - w0
+    m0 = np.cumsum(hist * centres)
+    mean0 = m0 / np.maximum(w0, 1)
+    mean1 = (m0[-1] - m0) / np.maximum(w1, 1)
+    k = int(np.argmax(w0 * w1 * (mean0 - mean1) ** 2))      # Otsu's between-class variance
+    thr = edges[k + 1]
+    lo, hi = x[x < thr], x[x >= thr]
+    if min(lo.size, hi.size) < 0.05 * x.size:
+        return np.inf
+    spread = [1.482602218505602 * float(np.median(np.abs(v - np.median(v)))) for v in (lo, hi)]
+    sigma = float(np.median(spread))
+    if not sigma > 0 or np.median(hi) - np.median(lo) < 8.0 * max(spread):
+        return np.inf
+    return sigma
 
 
 def _envelope(x, width):
@@ -297,7 +326,9 @@ def _runts(x, mid, width, sigma, switch_on, upper):
         p = a + int(np.argmax(seg))
         if x[p] >= upper[p]:
             continue
-        half = 0.5 * (lo[p] + x[p])
+        # its own level: the median of its top half (overshoot and noise average out)
+        top = seg[seg >= 0.5 * (lo[p] + x[p])]
+        half = 0.5 * (lo[p] + float(np.median(top)))
         j = p
         while j > 0 and x[j - 1] >= half:
             j -= 1

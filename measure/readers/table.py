@@ -110,9 +110,8 @@ class SheetTable(Table):
     """
 
     def __init__(self, path, sheet=None, *, header_rows=None, skip_rows=None):
-        from crankbench.predict._validate import require
+        import openpyxl
 
-        openpyxl = require("openpyxl", extra="xlsx", feature=".xlsx spreadsheets")
         self.path = Path(path)
         self.file = str(path)
         wb = openpyxl.load_workbook(self.path, read_only=True, data_only=True)

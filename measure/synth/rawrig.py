@@ -100,9 +100,8 @@ def export_table(path, columns, *, delimiter=",", decimal=".", header="name [uni
         raise ConfigError(f"header={header!r}; expected 'name [unit]', 'names+units', 'names' "
                           "or None")
     if path.suffix.lower() == ".xlsx":
-        from crankbench.predict._validate import require
+        import openpyxl
 
-        openpyxl = require("openpyxl", extra="xlsx", feature="writing .xlsx test files")
         wb = openpyxl.Workbook(write_only=True)
         ws = wb.create_sheet("Data")
         for line in preamble:
