@@ -583,10 +583,12 @@ def analyse(record, model, *, channel=None, speed_channel=None, orders=None, max
         orders = all_orders
     given = given_excitation(system)
     if given is not None and given.get("torque") is None:
-        # a bench whose torques are not given: its criticals are compared by speed only
+        # torques not given: criticals are compared by speed only; which are expected in the
+        # measurement was judged on the response to 1 N·m per order
         predicted["amplitude"] = np.nan
-        predicted["significant"] = predicted["identified"] & predicted["order"].isin(orders)
-        response_da.attrs["note"] = "response to 1 N·m per order: exciting torques not given"
+        response_da.attrs["note"] = ("response to 1 N·m per order: exciting torques not given "
+                                     "(criticals expected where that response is >= 5 % of "
+                                     "its largest)")
     done("prediction")
 
     if bandwidth_orders is None:

@@ -32,6 +32,9 @@ def configure(parser) -> None:
 def pulse_summary(record) -> list[dict]:
     """One row per pulse channel: role, layout, edges, revolutions, edges/rev, mean speed.
 
+    Revolutions come from the pitch count (:func:`measure.tacho.count_pitches`), so edges per
+    revolution and the mean speed (crankshaft, rpm, over the span of the edges) are exact.
+
     Examples
     --------
     >>> import numpy as np
@@ -42,9 +45,11 @@ def pulse_summary(record) -> list[dict]:
     >>> row["edges"], round(row["mean_speed_rpm"], 6)
     (50, 1500.0)
     """
+    import warnings
+
     import numpy as np
 
-    from crankbench.measure.tacho import pulse_channel_speed
+    from crankbench.measure.tacho import count_pitches
     from crankbench.predict.errors import CrankbenchError
 
     rows = []
@@ -59,10 +64,15 @@ def pulse_summary(record) -> list[dict]:
                "runt_teeth": ", ".join(map(str, var.attrs.get("runt_teeth", []))),
                "lost_teeth": ", ".join(map(str, var.attrs.get("lost_teeth", [])))}
         try:
-            mean_rpm = float(np.mean(pulse_channel_speed(var, smoothing_revs=0.0).speed_rpm))
-            turns = mean_rpm / 60.0 * float(edges[-1] - edges[0])     # crankshaft turns
-            row.update(revolutions=turns, mean_speed_rpm=mean_rpm,
-                       edges_per_rev=(edges.size - 1) / (turns * ratio))
+            with warnings.catch_warnings():       # the decoding warned already
+                warnings.simplefilter("ignore")
+                pc = count_pitches(edges, pulses_per_rev=ppr,
+                                   missing_teeth=var.attrs.get("missing_teeth", 0))
+            wheel_turns = (pc.pitch[-1] - pc.pitch[0]) / ppr
+            span = float(pc.edge_times[-1] - pc.edge_times[0])
+            row.update(revolutions=wheel_turns / ratio,          # crankshaft revolutions
+                       edges_per_rev=(pc.edge_times.size - 1) / wheel_turns,
+                       mean_speed_rpm=60.0 * wheel_turns / ratio / span)
         except CrankbenchError as exc:
             row.update(revolutions=float("nan"), edges_per_rev=float("nan"),
                        mean_speed_rpm=float("nan"), note=str(exc))
