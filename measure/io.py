@@ -7,10 +7,18 @@ extension      format                      streams with :func:`open`
 .nc            netCDF4 (h5netcdf)          data yes; time coordinates held in memory
 .tdms          NI TDMS (npTDMS)            yes: channel slices read on demand
 .wav           WAV + ``.wav.json`` sidecar yes: frames read on demand (main clock only)
-.csv           CSV, units in header        no: loaded whole, then chunked
+.csv .txt      delimited text, any dialect no: parsed whole (8 bytes a value), then chunked
+.tsv .tab
+.asc .dat
+.xlsx .xlsm    Excel workbook (openpyxl)   no: loaded whole, then chunked
 .mf4 .mdf      ASAM MDF4 (asammdf)         no: loaded whole, then chunked
 .uff .unv      UFF dataset 58 (pyuff)      no: loaded whole, then chunked
 =============  ==========================  ====================================================
+
+Text and spreadsheet exports whose headers do not say what a column is are read through a
+channel map (``read(path, map=...)``, :mod:`measure.channelmap`), which also decodes raw wheel
+and TDC signals into pulse trains. HDF5/netCDF files holding external links or virtual
+datasets are refused (a record holds its own data).
 
 Input files are opened read-only and never modified. :func:`write` is atomic (temporary file
 in the target folder, then rename) and refuses to replace an existing file unless

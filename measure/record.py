@@ -12,9 +12,14 @@ Each channel is a 1-D data variable with attrs
 Channels on one clock share the dim ``time`` (coordinate in s from record start, float64);
 channels on another clock get ``time_<group>`` with its own coordinate. Pulse trains are stored as
 edge times on dim ``pulse`` (``pulse_<name>`` when several) with units ``s``, quantity
-``pulse_times`` and attrs ``pulses_per_rev`` (int) and ``missing_teeth`` (int, default 0).
+``pulse_times`` and attrs ``pulses_per_rev`` (int) and ``missing_teeth`` (int, default 0);
+optional ``speed_ratio`` (turns of the pulse source per crankshaft turn, > 0, default 1: 0.5 for
+a mark once per four-stroke cycle) and ``role`` ("wheel" or "tdc", set when decoded from a raw
+signal by a channel map, with ``runt_teeth``/``lost_teeth`` and how it was decoded).
 Dataset attrs: ``start_time`` (ISO 8601), ``source`` (file name), ``sha256`` (of the source
-file), optional ``engine_id`` and ``test_id``. Mixed sample rates are never resampled.
+file), optional ``engine_id`` and ``test_id``; a record read through a channel map also keeps
+``raw_source``, ``raw_sha256`` (the raw export it came from), ``channel_map`` (the map's text)
+and ``channel_map_sha256``. Mixed sample rates are never resampled.
 """
 
 from __future__ import annotations
@@ -388,6 +393,14 @@ def _validate_pulses(name: str, var: xr.DataArray, dim: str) -> None:
     if not _is_int(missing) or not 0 <= int(missing) < int(ppr):
         raise RecordError(f"pulse-time channel {name!r}: missing_teeth={missing!r}; expected an "
                           f"integer in [0, {int(ppr) - 1}]")
+    ratio = var.attrs.get("speed_ratio", 1.0)
+    try:
+        ratio_ok = float(ratio) > 0 and math.isfinite(float(ratio))
+    except (TypeError, ValueError):
+        ratio_ok = False
+    if not ratio_ok:
+        raise RecordError(f"pulse-time channel {name!r}: speed_ratio={ratio!r}; expected a "
+                          "number > 0 (turns of the pulse source per crankshaft turn)")
     if _is_lazy(var):
         return
     t = np.asarray(var.values, dtype=np.float64)

@@ -31,7 +31,7 @@ from crankbench.predict.errors import AnalysisError
 from .edges import EdgeDetection, find_edges
 from .record import RecordWarning
 
-__all__ = ["DecodedPulses", "decode_wheel", "decode_marks"]
+__all__ = ["DecodedPulses", "decode_wheel", "decode_marks", "edges_per_rev"]
 
 #: share of revolutions in which a runt must stand at an empty tooth position to be taken
 RUNT_SHARE = 0.5
@@ -148,8 +148,15 @@ def _runt_edges(pc, det_runts, ppr):
     return np.sort(runts[keep & good[pos]])
 
 
-def _edges_per_rev(pitch, ppr):
-    """Median number of edges in the record's complete revolutions (counted from pitch 0)."""
+def edges_per_rev(pitch, ppr):
+    """Median number of edges in the record's complete revolutions (counted from pitch 0).
+
+    Examples
+    --------
+    >>> p = np.arange(3, 400)
+    >>> edges_per_rev(p[np.mod(p, 60) < 58], 60)
+    58.0
+    """
     if ppr == 1:
         return 1.0
     rev = np.floor_divide(pitch, ppr)
@@ -237,7 +244,7 @@ def decode_wheel(signal, *, fs, pulses_per_rev, missing_teeth=None, t0=0.0, slop
                 f"the swing, in {extra.size} of {revs:.0f} revolutions; its edges were taken at "
                 "the runt's own half height (check the pick-up gap at that tooth)")
     revs = (pc.pitch[-1] - pc.pitch[0]) / ppr if ppr > 1 else float(pc.edge_times.size - 1)
-    per_rev = _edges_per_rev(pc.pitch, ppr)
+    per_rev = edges_per_rev(pc.pitch, ppr)
     if pc.removed > 0.05 * pc.edge_times.size:
         notes.append(f"{pc.removed} spurious pulses removed ({100 * pc.removed / edges.size:.0f}"
                      " % of the edges): noise or ringing on the pick-up")

@@ -32,8 +32,9 @@ def configure(parser) -> None:
 def pulse_summary(record) -> list[dict]:
     """One row per pulse channel: role, layout, edges, revolutions, edges/rev, mean speed.
 
-    Revolutions come from the pitch count (:func:`measure.tacho.count_pitches`), so edges per
-    revolution and the mean speed (crankshaft, rpm, over the span of the edges) are exact.
+    Revolutions come from the pitch count (:func:`measure.tacho.count_pitches`), so the mean
+    speed (crankshaft, rpm, over the span of the edges) is exact; edges per revolution is the
+    median count over the complete revolutions of the wheel.
 
     Examples
     --------
@@ -50,6 +51,7 @@ def pulse_summary(record) -> list[dict]:
     import numpy as np
 
     from crankbench.measure.tacho import count_pitches
+    from crankbench.measure.wheel import edges_per_rev
     from crankbench.predict.errors import CrankbenchError
 
     rows = []
@@ -68,10 +70,10 @@ def pulse_summary(record) -> list[dict]:
                 warnings.simplefilter("ignore")
                 pc = count_pitches(edges, pulses_per_rev=ppr,
                                    missing_teeth=var.attrs.get("missing_teeth", 0))
-            wheel_turns = (pc.pitch[-1] - pc.pitch[0]) / ppr
+            wheel_turns = float(pc.pitch[-1] - pc.pitch[0]) / ppr
             span = float(pc.edge_times[-1] - pc.edge_times[0])
             row.update(revolutions=wheel_turns / ratio,          # crankshaft revolutions
-                       edges_per_rev=(pc.edge_times.size - 1) / wheel_turns,
+                       edges_per_rev=edges_per_rev(pc.pitch, ppr) if ppr > 1 else 1.0,
                        mean_speed_rpm=60.0 * wheel_turns / ratio / span)
         except CrankbenchError as exc:
             row.update(revolutions=float("nan"), edges_per_rev=float("nan"),

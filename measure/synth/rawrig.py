@@ -165,7 +165,7 @@ def raw_rig(folder, *, name="rig", dialect="tab_headerless", fs=100_000.0, durat
             speed_rpm=(1500.0, 1500.0), pulses_per_rev=60, missing_teeth=2, runt_teeth=(57,),
             runt_level=0.11, shape="square", ringing=0.0, noise_rms=0.02, tdc=True,
             tdc_width_samples=2.0, per_cycle=False, pressure=True, time_column=False,
-            theta0_deg=37.0, seed=0, map_missing_teeth=...) -> RawRig:
+            theta0_deg=37.0, seed=0, map_missing_teeth=..., digits=8) -> RawRig:
     """Write a raw rig export (wheel, TDC mark, pressure transducer) with its map and truth.
 
     Parameters
@@ -204,6 +204,8 @@ def raw_rig(folder, *, name="rig", dialect="tab_headerless", fs=100_000.0, durat
     seed : int
     map_missing_teeth : int, optional
         ``missing_teeth`` written into the map (default: the wheel's; None leaves it out).
+    digits : int
+        Significant digits written (a logger's resolution).
 
     Returns
     -------
@@ -267,8 +269,7 @@ def raw_rig(folder, *, name="rig", dialect="tab_headerless", fs=100_000.0, durat
     spec = DIALECTS[dialect]
     ext = ".xlsx" if dialect == "xlsx" else ".txt"
     path = folder / f"{name}{ext}"
-    export_table(path, columns, sample_rate=fs,
-                 **{k: v for k, v in spec.items()})
+    export_table(path, columns, sample_rate=fs, digits=digits, **spec)
     cmap = {"description": f"raw rig export, dialect {dialect}", "source": {}, "channel": {}}
     if not time_column:
         cmap["source"]["sample_rate"] = float(fs)
