@@ -22,6 +22,7 @@ is empty 26 times. This is robust where the position of the longest intervals is
 
 from __future__ import annotations
 
+import logging
 from dataclasses import dataclass
 
 import numpy as np
@@ -29,6 +30,8 @@ import numpy as np
 from crankbench.predict.errors import AnalysisError
 
 __all__ = ["GapLayout", "locate_gap", "empty_runs"]
+
+log = logging.getLogger("crankbench")
 
 
 @dataclass(frozen=True)
@@ -173,9 +176,9 @@ def locate_gap(pitch, counts, *, pulses_per_rev, missing_teeth, n_edges):
         consistent = [r for r in runs if r[2] >= 2]
         if not consistent:
             if revs >= 2.0:
-                return GapLayout(phase=None, missing_teeth=0, width=0,
-                                 notes=("missing_teeth inferred as 0: every pitch position "
-                                        f"has edges ({seen})",))
+                log.info("tacho: missing_teeth inferred as 0: every pitch position has edges "
+                         "(%s)", seen)
+                return GapLayout(phase=None, missing_teeth=0, width=0)
             raise AnalysisError(f"cannot infer the wheel layout from {seen}: every pitch "
                                 "position must be passed at least twice to tell a gap from a "
                                 "dropout; give missing_teeth")
