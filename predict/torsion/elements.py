@@ -199,6 +199,7 @@ class ShaftLine:
         self._alias: dict[str, tuple[int, float]] = {}
         self._edges: list[dict] = []
         self._cylinders: dict[int, int] = {}
+        self._friction: list[dict] = []
 
     # ---------------------------------------------------------------- nodes -------------
     def _port(self, name: str) -> tuple[int, float]:
@@ -487,6 +488,17 @@ class ShaftLine:
                     raise ModelError(f"{self.name}: cylinders {sorted(self._cylinders)} on the "
                                      f"shaft line, engine has 1..{self.engine.n_cylinders}")
                 firing = self.engine.firing_angles_deg()
+        from .friction import FrictionDamper
+
+        friction = []
+        for fr in self._friction:
+            idx, ratio = self._port(fr["node"])
+            if not np.isclose(ratio, 1.0):
+                raise ModelError(f"{self.name}: friction damper {fr['name']!r} on "
+                                 f"{fr['node']!r} (speed ratio {ratio:g}): the non-linear "
+                                 "friction ring must sit on a node at crankshaft speed")
+            friction.append(FrictionDamper(int(new[idx]), fr["ring_inertia"],
+                                           fr["slip_torque"], fr["name"]))
         return TorsionalSystem(
             [n["inertia"] for n in nodes], e, [d["k"] for d in edges],
             node_names=[n["name"] for n in nodes], edge_names=[d["name"] for d in edges],
@@ -498,4 +510,4 @@ class ShaftLine:
             edge_inner_diameter=[d["d_in"] for d in edges],
             eigen_nodes=[n["eigen"] for n in nodes], cylinder_nodes=cylinders,
             firing_angles_deg=firing, cycle=cycle, engine=self.engine, limits=limits,
-            name=self.name)
+            name=self.name, friction_dampers=friction)
