@@ -357,6 +357,19 @@ class ForcedResponse:
         return fig
 
 
+def check_speeds_orders(system, speed_rpm, orders):
+    """Validated speeds (rpm, > 0) and orders (> 0; None: the system's default orders)."""
+    speed_rpm = check_finite_array(speed_rpm, "speed_rpm", ndim=1, min_length=1,
+                                   error=ModelError)
+    if np.any(speed_rpm <= 0):
+        raise ModelError("speed_rpm must be > 0 everywhere")
+    orders = system.default_orders() if orders is None else check_finite_array(
+        orders, "orders", ndim=1, min_length=1, error=ModelError)
+    if np.any(orders <= 0):
+        raise ModelError("orders must be > 0")
+    return speed_rpm, orders
+
+
 def cylinder_harmonics(system, omega, orders, *, torque=None, misfire=None, imep=None):
     """Cylinder torque harmonics for :func:`cylinder_forcing` and the label of their source.
 
@@ -418,14 +431,7 @@ def forced_response(system, speed_rpm, *, torque=None, orders=None, misfire=None
     >>> print(round(float(np.abs(r.torque[0, 0, 0])), 3))
     57.942
     """
-    speed_rpm = check_finite_array(speed_rpm, "speed_rpm", ndim=1, min_length=1,
-                                   error=ModelError)
-    if np.any(speed_rpm <= 0):
-        raise ModelError("speed_rpm must be > 0 everywhere")
-    orders = system.default_orders() if orders is None else check_finite_array(
-        orders, "orders", ndim=1, min_length=1, error=ModelError)
-    if np.any(orders <= 0):
-        raise ModelError("orders must be > 0")
+    speed_rpm, orders = check_speeds_orders(system, speed_rpm, orders)
     if system.friction_dampers:
         from .friction_line import friction_forced_response
 

@@ -27,10 +27,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .._validate import check_finite_array
 from ..errors import ModelError
-from .forced import (SAMPLES_PER_PERIOD, ForcedResponse, cylinder_forcing, cylinder_harmonics,
-                     harmonic_solve, response_from_angles)
+from .forced import (SAMPLES_PER_PERIOD, ForcedResponse, check_speeds_orders, cylinder_forcing,
+                     cylinder_harmonics, harmonic_solve, response_from_angles)
 from .friction import _balance, _state
 
 __all__ = ["FrictionForcedResponse", "friction_forced_response"]
@@ -147,13 +146,7 @@ def friction_forced_response(system, speed_rpm, *, torque=None, orders=None, mis
                          f"{len(system.friction_dampers)} friction dampers; the harmonic "
                          "balance here handles exactly one")
     d = system.friction_dampers[0]
-    rpm = check_finite_array(speed_rpm, "speed_rpm", ndim=1, min_length=1, error=ModelError)
-    if np.any(rpm <= 0):
-        raise ModelError("speed_rpm must be > 0 everywhere")
-    orders = system.default_orders() if orders is None else check_finite_array(
-        orders, "orders", ndim=1, min_length=1, error=ModelError)
-    if np.any(orders <= 0):
-        raise ModelError("orders must be > 0")
+    rpm, orders = check_speeds_orders(system, speed_rpm, orders)
     speed = rpm * np.pi / 30.0
     harmonics, label = cylinder_harmonics(system, speed, orders, torque=torque,
                                           misfire=misfire, imep=imep)
