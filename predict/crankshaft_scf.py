@@ -16,7 +16,9 @@ rule (§3 (1)-(3); symbols of its Fig. 5). Dimensions are related to the crank-p
     t_H = T_H/D, t_G = T_G/D (fillet recesses)
 
 s may be extended to large negative values (no overlap): f(recess) is then not taken below 1
-and f(s, w), f(r, s) are evaluated with s = −0.5 when s < −0.5 (§3 (1)(H)). For 2-stroke
+and f(s, w), f(r, s) are evaluated with s = −0.5 when s < −0.5 (§3 (1)(H)). The text names
+only f(s, w) and f(r, s); the journal's f_B(s, w) and f_Q(s) are frozen the same way here (an
+interpretation: f_Q(s) would turn negative below s ≈ −0.58). For 2-stroke
 semi-built crankshafts with T_H > R_H the web thickness is W_red = W − (T_H − R_H) (§3 (1)(G));
 their journal fillets are outside the formulas.
 
