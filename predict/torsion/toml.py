@@ -39,6 +39,15 @@ Layout (SI unless the key names another unit; values at each part's own speed)::
                             balance — or design_frequency + design_amplitude, the linearised
                             equivalent viscous damper)
 
+    [excitation]                           # a bench without an engine (motor-driven):
+    node = "motor"                         # where the exciting torque acts
+    orders = [1, 2, 6]                     # excitation orders (per turn of the reference shaft)
+    torque = [12.0, 4.0, 1.5]              # N·m amplitudes; leave out when unknown (criticals
+                                           #   are then compared by speed, not amplitude)
+    phase_deg = [0, 0, 0]                  # optional
+    law = "constant"                       # or "speed_squared" (torque ∝ speed², e.g. a fan)
+    reference_rpm = 1500.0                 # speed where the torques apply for speed_squared
+
     [limits]                               # rule data, see load_limits
     application = "propulsion"
     operating_range_rpm = [500, 750]
@@ -370,10 +379,34 @@ def from_toml(path):
     lt = doc.table("limits", None)
     if lt is not None:
         limits = load_limits(lt, engine=engine)
+    excitation = _excitation(doc.table("excitation", None), line)
     doc.check_unknown(["description", "engine"])
     system = wrap(sl, line.build, limits=limits)
     if limits is not None:
         system = system.replace(limits=_complete_limits(limits, system, lt))
     return system.replace(operating=dict(
         speed_range_rpm=None if speed_range is None else tuple(speed_range), imep=imep,
-        source=str(path)))
+        source=str(path), excitation=excitation))
+
+
+def _excitation(t, line):
+    """The ``[excitation]`` table of a bench without an engine, as a plain dict (or None)."""
+    if t is None:
+        return None
+    nodes = list(getattr(line, "_alias", {})) or None
+    node = t.string("node", None, options=nodes) if nodes else t.string("node", None)
+    orders = t.numbers("orders", low=0.0, strict_low=True)
+    torque = t.numbers("torque", None, length=orders.size, low=0.0)
+    phase = t.numbers("phase_deg", None, length=orders.size)
+    law = t.string("law", "constant", options=["constant", "speed_squared"])
+    ref = t.positive("reference_rpm", None)
+    if law == "speed_squared" and ref is None:
+        t.fail("reference_rpm", "is needed for law = 'speed_squared' (the speed at which the "
+                                "torques apply)")
+    if len(set(orders.tolist())) != orders.size:
+        t.fail("orders", f"= {orders.tolist()} repeats an order")
+    t.check_unknown(["description"])
+    return {"node": node, "orders": orders.tolist(),
+            "torque": None if torque is None else torque.tolist(),
+            "phase_deg": None if phase is None else phase.tolist(), "law": law,
+            "reference_rpm": ref, "source": t.where()}
