@@ -6,9 +6,9 @@ the heat released, ``p = p_motored + Q u(ψ)``, so cycle-to-cycle variation is a
 release per cycle, ``Q_k = Q (1 + cycle_variation ε_k)``, ε ~ N(0, 1), times the scene's load
 factor at that speed (a load law scales the fuel, not the compression). The channel then gets
 
-* ``offset`` (Pa): the unknown level of a piezoelectric transducer — the pegging error;
-* ``drift_rate`` (Pa/s) and ``noise_rms`` (Pa) from the scene's
-  :class:`.imperfections.Imperfections`;
+* ``offset`` (Pa: the unknown level of a piezoelectric transducer — the pegging error),
+  ``gain_error``, ``drift_rate`` (Pa/s) and ``noise_rms`` (Pa): the sampled-channel faults of
+  the scene's :class:`.imperfections.Imperfections`;
 * ``thermal_shock`` (Pa): the flame heats the diaphragm and the reading dips during expansion,
   ``−A (Q_k/Q) g(ψ − ψ_s)`` with ``g(u) = (u/τ)² e^{2(1 − u/τ)}`` (peak 1 at ``u = τ`` =
   ``thermal_shock_deg`` after the start of combustion ψ_s), i.e. a short-term drift of the
@@ -22,8 +22,8 @@ trapezoidal loop integral of the 0.1° model trace), the peak pressure and its a
 evaluation of the spline), MFB50 of the Wiebe law (closed form), and the settings above.
 
 Scene keys of a ``kind = "pressure"`` sensor: ``cylinder``, ``sample_rate``, ``location`` and
-``offset``, ``thermal_shock``, ``thermal_shock_deg``, ``tdc_error_deg``, ``cycle_variation``
-(plus the usual ``noise_rms``, ``drift_rate``).
+``thermal_shock``, ``thermal_shock_deg``, ``tdc_error_deg``, ``cycle_variation`` (plus the
+usual ``offset``, ``gain_error``, ``noise_rms``, ``drift_rate``).
 """
 
 from __future__ import annotations
@@ -42,8 +42,7 @@ __all__ = ["TransducerErrors", "pressure_channel", "pressure_truth", "cylinder_n
            "PRESSURE_KEYS"]
 
 #: scene keys of a pressure sensor besides cylinder, sample_rate and location
-PRESSURE_KEYS = ("offset", "thermal_shock", "thermal_shock_deg", "tdc_error_deg",
-                 "cycle_variation")
+PRESSURE_KEYS = ("thermal_shock", "thermal_shock_deg", "tdc_error_deg", "cycle_variation")
 
 TWO_PI = 2.0 * np.pi
 RPM = TWO_PI / 60.0
@@ -55,8 +54,6 @@ class TransducerErrors:
 
     Attributes
     ----------
-    offset : float
-        Pa added to the whole channel.
     thermal_shock : float
         Amplitude of the thermal-shock dip, Pa (at the mean heat release).
     thermal_shock_deg : float
@@ -67,14 +64,12 @@ class TransducerErrors:
         Relative rms of the heat release per cycle.
     """
 
-    offset: float = 0.0
     thermal_shock: float = 0.0
     thermal_shock_deg: float = 60.0
     tdc_error_deg: float = 0.0
     cycle_variation: float = 0.0
 
     def __post_init__(self):
-        check_range(self.offset, "offset", error=ConfigError)
         check_nonnegative(self.thermal_shock, "thermal_shock", error=ConfigError)
         check_range(self.thermal_shock_deg, "thermal_shock_deg", 1.0, 180.0, error=ConfigError)
         check_range(self.tdc_error_deg, "tdc_error_deg", -30.0, 30.0, error=ConfigError)
@@ -183,7 +178,7 @@ def pressure_channel(scene, spec, psi0, rng, *, vibration=None):
     shifted = psi - np.radians(err.tdc_error_deg)
     wrapped = np.mod(shifted, period)
     true = motored(wrapped) + q * load * scale[k - k0] * unit(wrapped)
-    data = true + err.offset
+    data = true
     start = np.radians(full.parameters["combustion_start_deg"])
     if err.thermal_shock > 0:
         rel = np.mod(shifted + period / 2, period) - period / 2    # from firing TDC
@@ -246,6 +241,8 @@ def _truth(engine, full, q, motored, unit, scale, k0, psi0, fire, prof, err, spe
             "model": {k: float(v) for k, v in prm.items()},
             "errors": asdict(spec.params.get("transducer", TransducerErrors())),
             "noise_rms_pa": float(spec.imperfections.noise_rms),
+            "offset_pa": float(spec.imperfections.offset),
+            "gain_error": float(spec.imperfections.gain_error),
             "drift_rate_pa_per_s": float(spec.imperfections.drift_rate)}
 
 

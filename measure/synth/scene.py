@@ -43,7 +43,7 @@ Sensor keys by kind: *torsiograph* ``node``, ``quantity``, ``sample_rate``; *enc
 once-per-revolution mark ``mark_width_deg``, e.g. a TDC mark one or two samples wide);
 *vibrograph* ``point = [x, y, z]`` or ``mount = "name"``, ``direction`` (x/y/z),
 ``quantity`` (acceleration/velocity/displacement), ``sample_rate``; *pressure* ``cylinder``,
-``sample_rate`` and the transducer errors of :mod:`.pressure` (``offset``, ``thermal_shock``,
+``sample_rate`` and the transducer errors of :mod:`.pressure` (``thermal_shock``,
 ``thermal_shock_deg``, ``tdc_error_deg``, ``cycle_variation``); *speed* ``sample_rate``. Torsiograph and vibrograph sensors may give a
 seismic instrument, ``instrument_frequency`` (Hz) and ``instrument_damping`` (fraction of
 critical, default 0.65): the channel is then the instrument's reading
@@ -79,8 +79,8 @@ SENSOR_KINDS = {
               "ringing_hz", "mark_width_deg"),
     "vibrograph": ("point", "mount", "direction", "quantity", "sample_rate", "location",
                    "instrument_frequency", "instrument_damping"),
-    "pressure": ("cylinder", "sample_rate", "location", "offset", "thermal_shock",
-                 "thermal_shock_deg", "tdc_error_deg", "cycle_variation"),
+    "pressure": ("cylinder", "sample_rate", "location", "thermal_shock", "thermal_shock_deg",
+                 "tdc_error_deg", "cycle_variation"),
     "speed": ("sample_rate", "location"),
 }
 
