@@ -285,13 +285,17 @@ def predicted_response(system, speed_rpm, orders, node, *, load, quantity="angle
 
 
 def _prediction(system, orders, node, quantity, units, load, lo, hi, base_points, *,
-                fraction=0.05, max_fit=8):
+                fraction=0.05, max_fit=8, min_prominence=0.05):
     """Critical speeds in range, identified on the predicted response like the measurement.
 
     The predicted steady-state order response at ``node`` is passed through the same
     resonance finder as the measured track (SDOF modal fit), so measured and predicted
     critical speeds, damping and amplitudes are estimated the same way; each predicted
-    resonance is assigned the mode of the nearest undamped critical of its order.
+    resonance is assigned the mode of the nearest undamped critical of its order. A critical
+    is *significant* (expected in the measurement) when the finder identifies it on the
+    predicted curve with the prominence the measured finder demands (``min_prominence``) and
+    its amplitude is at least 5 % of the largest: a bump of a few per cent on a large
+    background cannot be identified in a measured track either.
     """
     import xarray as xr
 
@@ -326,7 +330,8 @@ def _prediction(system, orders, node, quantity, units, load, lo, hi, base_points
 
     found = find_resonances(track, orders=fit_orders, response="velocity"
                             if quantity == "angular_velocity" else "displacement",
-                            min_amplitude_fraction=0.0, min_snr=1e-6, min_prominence=0.01,
+                            min_amplitude_fraction=0.0, min_snr=1e-6,
+                            min_prominence=min_prominence,
                             sweep_correction=False).to_frame() if fit_orders else \
         pd.DataFrame(columns=["order", "speed_rpm", "frequency_hz", "amplitude",
                               "damping_ratio"])
@@ -499,7 +504,8 @@ def analyse(record, model, *, channel=None, speed_channel=None, orders=None, max
     step("prediction")
     predicted, response_da, grid, pred_stress = _prediction(
         system, all_orders, node, quantity, units, load, lo, hi, base_points,
-        fraction=order_fraction, max_fit=max_tracked if orders is None else len(all_orders))
+        fraction=order_fraction, max_fit=max_tracked if orders is None else len(all_orders),
+        min_prominence=float((resonance_options or {}).get("min_prominence", 0.05)))
     if orders is None:
         # track the orders whose predicted resonances matter, largest first
         big = predicted["amplitude"].max() if len(predicted) else 0.0
@@ -536,7 +542,8 @@ def analyse(record, model, *, channel=None, speed_channel=None, orders=None, max
     done("resonances")
 
     step("comparison")
-    comparison = match_criticals(resonances, predicted, gate=gate, tolerance=tolerance,
+    predicted, measured = _swept_like_with_like(predicted, resonances, track, quantity, gate)
+    comparison = match_criticals(measured, predicted, gate=gate, tolerance=tolerance,
                                  amplitude_tolerance=amplitude_tolerance,
                                  speed_range_rpm=(lo, hi))
     done("comparison")
@@ -584,6 +591,28 @@ def analyse(record, model, *, channel=None, speed_channel=None, orders=None, max
         resonances=resonances, predicted=predicted, response=response_da,
         comparison=comparison, limits=tuple(limits), system=system, record=rec,
         settings=settings, timings=timings, balance=tuple(balance))
+
+
+def _swept_like_with_like(predicted, resonances, track, quantity, gate):
+    """Sweep effects before matching (:mod:`analysis.resonance.sweep`): predicted criticals the
+    run does not cover with both flanks (and the sweep delay) are not expected; measured
+    resonances the finder could not correct for the sweep lose the delay the model predicts
+    at the measured rate."""
+    from .resonance import correct_sweep_delay, sweep_expectation
+
+    if "time" not in track.coords or track.sizes.get("time", 0) < 4 or not len(predicted):
+        return predicted, resonances
+    expected = sweep_expectation(
+        predicted, time=track["time"].values, speed_rpm=track["rpm"].values,
+        response="velocity" if quantity == "angular_velocity" else "displacement")
+    edge = expected["significant"] & ~expected["covered"]
+    for _, r in expected[edge].iterrows():
+        log.info("mode %d order %g: critical at %.0f rpm is not covered by the run with both "
+                 "flanks (and the sweep delay); listed, not judged", r["mode"], r["order"],
+                 r["speed_rpm"])
+    expected.loc[edge, "significant"] = False
+    measured = correct_sweep_delay(resonances.to_frame(), expected, gate=gate)
+    return expected, measured
 
 
 def _balance(rec, system, lo, hi, orders=(1.0, 2.0)):
