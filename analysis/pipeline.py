@@ -20,7 +20,9 @@ Steps and their fidelity knobs:
 5. :func:`analysis.match_criticals`;
 6. limit checks: measured vibratory stress = measured order amplitude × the model's stress per
    unit node amplitude of that order (the classical torsiograph evaluation), summed over orders
-   (an upper bound on the superposed stress), against the continuous/transient limits.
+   (an upper bound on the superposed stress), against the continuous/transient limits;
+7. block/mount vibration: every vibrograph channel placed on the engine block against the
+   engine model on its mounts, per (sensor, order) (:mod:`analysis.vibrograph`).
 """
 
 from __future__ import annotations
@@ -134,10 +136,14 @@ class PipelineResult:
         Every parameter used.
     timings : dict
         Seconds per step.
-    balance : tuple of (channel, BalanceComparison or None, pandas.DataFrame)
-        Orders 1 and 2 at each vibrograph mounted at a named mount: the comparison with the
-        predicted balance residuals through the mount model (None when the prediction is zero
-        by design), and a table of predicted and measured maxima per order.
+    balance : tuple
+        Kept for compatibility (empty): the vibrograph channels are compared in
+        ``vibrograph``.
+    vibrograph : VibrographResult or None
+        Block/mount vibration per (sensor, order) against the shaft line's engine on its
+        mounts (:func:`analysis.vibrograph.compare_vibrograph`), with the residual forces and
+        moments when enough sensors; None when the engine has no ``[mounts]`` or the record
+        no placeable vibrograph channel.
     """
 
     source: str
@@ -161,11 +167,14 @@ class PipelineResult:
     settings: dict = field(default_factory=dict)
     timings: dict = field(default_factory=dict)
     balance: tuple = ()
+    vibrograph: object = None
 
     @property
     def passed(self) -> bool:
-        """True when prediction and measurement agree and every limit check passed."""
-        return self.comparison.agrees and all(c.passed for c in self.limits)
+        """True when prediction and measurement agree, every limit check passed and no
+        vibrograph check failed."""
+        return (self.comparison.agrees and all(c.passed for c in self.limits)
+                and (self.vibrograph is None or self.vibrograph.verdict.status != "fail"))
 
     def to_frame(self):
         """The summary as a one-row DataFrame."""
@@ -191,7 +200,12 @@ class PipelineResult:
                 "max_abs_deviation_pct": s["max_abs_deviation_pct"],
                 "model_agrees": s["agrees"],
                 "limits_passed": all(c.passed for c in self.limits),
-                "worst_limit_ratio": worst, "passed": self.passed,
+                "worst_limit_ratio": worst,
+                "vibration_worst_ratio": self.vibrograph.summary()["vibration_worst_ratio"]
+                if self.vibrograph is not None else float("nan"),
+                "vibration_verdict": self.vibrograph.verdict.status
+                if self.vibrograph is not None else "no vibrograph channel",
+                "passed": self.passed,
                 "elapsed_s": float(sum(self.timings.values()))}
 
 
@@ -386,7 +400,8 @@ def analyse(record, model, *, channel=None, speed_channel=None, orders=None, max
             method="vkf", bandwidth_orders=None, revolutions=4, load=None, gate=0.15,
             tolerance=0.03, amplitude_tolerance=0.5, machine_class="III",
             operating_range_rpm=None, base_points=1500, order_fraction=0.05, max_tracked=8,
-            resonance_options=None, progress=None) -> PipelineResult:
+            resonance_options=None, vibration_tolerance=0.5,
+            progress=None) -> PipelineResult:
     """Run the chain on one record against one shaft-line model.
 
     Parameters
@@ -430,6 +445,9 @@ def analyse(record, model, *, channel=None, speed_channel=None, orders=None, max
         O(N K²) in the number of orders K.
     resonance_options : dict, optional
         Passed to :func:`analysis.find_resonances`.
+    vibration_tolerance : float
+        Ratio band of the vibrograph comparison (:func:`analysis.vibrograph.compare_vibrograph`)
+        of any block/mount channel when the engine has ``[mounts]``.
     progress : callable, optional
         ``progress(step_name)`` called before each step (CLI progress bars).
 
@@ -549,7 +567,7 @@ def analyse(record, model, *, channel=None, speed_channel=None, orders=None, max
     done("comparison")
 
     step("balance")
-    balance = _balance(rec, system, lo, hi)
+    vibrograph = _vibrograph(rec, system, load, speed_channel, vibration_tolerance)
     done("balance")
 
     step("limits")
@@ -590,7 +608,7 @@ def analyse(record, model, *, channel=None, speed_channel=None, orders=None, max
         speed_range_rpm=(lo, hi), sweep_rate_rpm_per_s=sweep_rate, track=track,
         resonances=resonances, predicted=predicted, response=response_da,
         comparison=comparison, limits=tuple(limits), system=system, record=rec,
-        settings=settings, timings=timings, balance=tuple(balance))
+        settings=settings, timings=timings, vibrograph=vibrograph)
 
 
 def _swept_like_with_like(predicted, resonances, track, quantity, gate):
@@ -615,76 +633,23 @@ def _swept_like_with_like(predicted, resonances, track, quantity, gate):
     return expected, measured
 
 
-def _balance(rec, system, lo, hi, orders=(1.0, 2.0)):
-    """Orders 1 and 2 at the mounts against the balance residuals through the mount model.
-
-    The predicted response is that of the free inertia forces and moments only
-    (:func:`predict.balance.unbalance`, through :class:`predict.mounts.MountedEngine`, via
-    :class:`measure.synth.vibrograph.MountChannels` without torque reaction): the orders a
-    balance check is about. Orders balanced by design (prediction below 1e-9 of the
-    measurement) are listed with their measured residual level only.
-    """
-    import pandas as pd
-    import xarray as xr
-
-    from .compare import compare_balance
-    from .orders import order_track
-    from .speedref import speed_reference
+def _vibrograph(rec, system, load, speed_channel, tolerance):
+    """The vibrograph comparison of the record's block/mount channels against the shaft line's
+    engine on its mounts; None without ``[mounts]`` or placeable channels."""
+    from .vibrograph import compare_vibrograph
 
     engine = getattr(system, "engine", None)
     source = getattr(engine, "source", None)
     if engine is None or not source:
-        return []
+        return None
     try:
-        from crankbench.predict.mounts import MountedEngine
-
-        mounted = MountedEngine.from_toml(source)
-    except (ValueError, OSError, KeyError):
-        return []  # no [mounts] in the engine model
-    names = {m.name: m.position for m in mounted.mounts}
-    out = []
-    for name in rec.data_vars:
-        v = rec[name]
-        q = v.attrs.get("quantity")
-        direction = str(v.attrs.get("direction", "")).lower()
-        if q not in ("acceleration", "velocity", "displacement") or v.ndim != 1 or \
-                v.attrs.get("location") not in names or direction not in ("x", "y", "z"):
-            continue
-        from crankbench.measure.synth.vibrograph import MountChannels
-
-        grid = np.linspace(lo, hi, 60) * np.pi / 30.0
-        mc = MountChannels(mounted, engine, None, list(orders), [names[v.attrs["location"]]],
-                           grid)
-        pred = np.vstack([np.abs(mc.table(i, 0, direction, q)) for i in range(len(orders))])
-        predicted = xr.DataArray(pred, dims=("order", "rpm"),
-                                 coords={"order": list(orders), "rpm": grid * 30 / np.pi},
-                                 attrs={"units": v.attrs.get("units", "")})
-        fs = float(v.attrs["sample_rate"])
-        rpm = speed_reference(rec, str(name))
-        x = np.nan_to_num(np.asarray(v.values, float))
-        track = order_track(x, fs=fs, speed_rpm=np.nan_to_num(rpm, nan=float(np.nanmedian(rpm))),
-                            orders=list(orders), revolutions=8, overlap=0.5)
-        rows = []
-        live = []
-        for i, o in enumerate(orders):
-            m_max = float(track["amplitude"].sel(order=o).max())
-            p_max = float(pred[i].max())
-            balanced = p_max <= 1e-9 * max(m_max, 1e-300)
-            rows.append(dict(order=o, predicted_max=p_max, measured_max=m_max,
-                             balanced_by_design=balanced))
-            if not balanced:
-                live.append(o)
-        comp = None
-        if live:
-            try:
-                comp = compare_balance(track, predicted, orders=live,
-                                       channel=f"{name} ({v.attrs['location']} {direction})")
-            except AnalysisError as exc:
-                log.info("balance comparison at %s skipped: %s", name, exc)
-        table = pd.DataFrame(rows)
-        table.attrs["units"] = v.attrs.get("units", "")
-        out.append((str(name), comp, table))
-    return out
+        return compare_vibrograph(rec, source, load=load, speed_channel=speed_channel,
+                                  tolerance=tolerance)
+    except ConfigError as exc:        # no [mounts] in the engine model
+        log.info("no vibrograph comparison: %s", exc)
+    except (RecordError, AnalysisError) as exc:   # no channel to place, nothing to compare
+        log.info("no vibrograph comparison: %s", exc)
+    return None
 
 
 def _limit_checks(rec, system, track, grid, pred_stress, response, orders, channel, machine_class,

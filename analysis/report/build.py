@@ -218,22 +218,10 @@ def build_report(result, *, title=None, parameters=None, record_path=None, model
                   caption="speed_rpm: the model's resonance identified like the measurement "
                           "(SDOF fit of the predicted response at the measured node); "
                           "speed_rpm_undamped: 60 f_n / order of the undamped model.")
-    for channel, comp, table in getattr(result, "balance", ()):
-        sec = "Balance residuals at the mounts"
-        units = table.attrs.get("units", "")
-        rep.add_table(table, title=f"{channel}: orders 1 and 2", section=sec,
-                      caption=f"Amplitudes in {units} (peak). Predicted: free inertia forces "
-                              "and moments of the engine model through the mount model; "
-                              "orders balanced by design show the measured residual only.")
-        if comp is not None:
-            rep.add_table(comp.table, title=f"{channel}: measured / predicted", section=sec,
-                          caption=f"passed: median ratio within a factor {comp.factor:g}")
-            rep.add_summary(f"balance residuals at {channel}", comp.passed,
-                            ", ".join(f"order {r.order:g}: ×{r.median_ratio:.2f}"
-                                      for _, r in comp.table.iterrows()))
-            if figures:
-                rep.add_figure(comp.plot(), title=f"{channel}: balance orders against speed",
-                               section=sec)
+    if getattr(result, "vibrograph", None) is not None:
+        from ..vibrograph_report import add_vibrograph
+
+        add_vibrograph(rep, result.vibrograph, figures=figures)
     if result.limits:
         rep.add_limit_checks(result.limits, figures=figures)
     return rep

@@ -398,7 +398,8 @@ def _mount_channels(scene, sensors, excitation, orders, psi0, t_truth, rpm_truth
     speeds = prof.speed_rpm * RPM
     n_grid = 150 if np.ptp(speeds) > 0 else 1
     grid = np.linspace(speeds.min(), speeds.max(), n_grid)
-    mc = MountChannels(mounted, scene.engine, excitation, orders, np.array(points), grid)
+    mc = MountChannels(mounted, scene.engine, excitation, orders, np.array(points), grid,
+                       counterweights=tuple(scene.balance_masses) + tuple(scene.imbalance))
     load_fn = lambda w: scene.load.scale(w / RPM)  # noqa: E731
     step = float(orders[0])
     # per sensor: response tables on the speed grid and the orders worth synthesising
@@ -461,8 +462,11 @@ def _mount_channels(scene, sensors, excitation, orders, psi0, t_truth, rpm_truth
         ts = np.arange(data[p].size) / fs
         values = _read_out(data[p], ts, s.imperfections, rng, s, s.params["quantity"])
         units = truth_rows[-len(sensors) + p][1]
+        attrs = dict(_instrument_attrs(s), position=[float(v) for v in points[p]])
+        if "mount" in s.params:
+            attrs["mount"] = s.params["mount"]
         channels[s.name] = dict(data=values, sample_rate=fs, units=units,
-                                quantity=s.params["quantity"], attrs=_instrument_attrs(s),
+                                quantity=s.params["quantity"], attrs=attrs,
                                 location=s.params.get("location", s.params.get(
                                     "mount", f"point {points[p]}")),
                                 direction=s.params["direction"])
