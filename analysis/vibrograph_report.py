@@ -47,7 +47,8 @@ def vibrograph_json(result) -> dict:
 
 
 def print_vibrograph(result, *, header=True) -> None:
-    """Human-readable tables of a vibrograph comparison on stdout."""
+    """Human-readable tables of a vibrograph comparison on stdout (``header``: the record,
+    model and speed lines of a stand-alone comparison)."""
     from ._output import print_table
 
     if header:
@@ -88,16 +89,15 @@ def print_vibrograph(result, *, header=True) -> None:
            if x.required and x.status != "pass"]
     for x in bad:
         print(f"{x.status.upper():12s} {x.name}: {x.reason}")
-    print(f"verdict: {v.status}" + (f" ({v.reason})" if v.reason else ""))
+    label = "verdict" if header else "block/mount vibration verdict"
+    print(f"{label}: {v.status.upper()}" + (f" — {v.reason}" if v.status != "pass" else
+                                            "  (every required check passed)"))
 
 
 def add_vibrograph(rep, result, *, figures=True, section="Block and mount vibration") -> None:
-    """Add the vibrograph comparison to a :class:`analysis.report.Report`."""
+    """Add the vibrograph comparison's sections to a :class:`analysis.report.Report` (its
+    verdict goes into the verdict box by the caller)."""
     res = result.residuals
-    rep.add_summary("block/mount vibration against the engine model",
-                    {"pass": True, "fail": False}.get(result.verdict.status),
-                    f"{int(result.table['required'].sum())} (sensor, order) checks; "
-                    f"verdict {result.verdict.status}")
     rep.add_text("Sensors: " + "; ".join(s.describe() for s in result.sensors)
                  + ("." if not result.skipped else ". Not placed: " + "; ".join(
                      f"{c} ({r})" for c, r in result.skipped) + "."),
@@ -157,9 +157,9 @@ def build_vibrograph_report(result, *, title=None, parameters=None, record_path=
 
     rep = Report(title or f"Block and mount vibration test report — {result.source}",
                  subtitle=f"record {result.source} · model {Path(result.model_path).name}")
-    v = result.verdict
-    rep.add_summary("overall", {"pass": True, "fail": False}.get(v.status),
-                    v.reason or v.status)
+    rep.add_verdict(result.verdict)
+    if result.residuals is not None:
+        rep.add_verdicts(v for v in result.residuals.verdicts if v.required)
     rep.add_metadata({"record": result.source, "model": result.model_path,
                       "speed range (rpm)": f"{result.speed_range_rpm[0]:.1f} – "
                                            f"{result.speed_range_rpm[1]:.1f}",

@@ -4,8 +4,8 @@ Runs the chain of :mod:`analysis.pipeline` (a shaft-line model) or the vibrograp
 of :mod:`analysis.vibrograph` (an engine model with ``[mounts]``) and writes the
 self-contained HTML report (figures embedded, no network) built by
 :func:`analysis.report.build.build_report` or
-:func:`analysis.vibrograph_report.build_vibrograph_report`; ``--pdf`` also
-writes a PDF beside it (weasyprint when installed, else a matplotlib layout). Outputs are
+:func:`analysis.vibrograph_report.build_vibrograph_report`; ``--pdf`` also writes a PDF beside
+it, typeset from the same HTML by WeasyPrint. Outputs are
 written atomically and never replace an existing file without ``--overwrite``.
 """
 
@@ -110,7 +110,9 @@ def run(args) -> int:
     finally:
         bar.close()
     params = {"channel": result.channel, "method": args.method, "gate": args.gate,
-              "tolerance": args.tolerance, "machine class": args.machine_class}
+              "tolerance": args.tolerance}
+    if args.machine_class is not None:
+        params["machine class"] = args.machine_class
     bench_rows = None
     if args.bench:
         from crankbench.analysis.bench import run_suites
@@ -125,9 +127,9 @@ def run(args) -> int:
     else:
         for p in paths:
             print(f"report written: {p}")
-        verdict = "all checks passed" if result.passed else "see the disagreements and " \
-                                                            "failed checks in the report"
-        print(f"verdict: {verdict}")
+        v = result.verdict
+        print(f"verdict: {v.status.upper()}" + (f" — {v.reason}" if v.status != "pass" else
+                                                "  (every required check passed)"))
     return 0
 
 
@@ -159,6 +161,7 @@ def _run_engine(args, options, out, quiet) -> int:
     else:
         for p in paths:
             print(f"report written: {p}")
-        print(f"verdict: {result.verdict.status}"
-              + (f" ({result.verdict.reason})" if result.verdict.reason else ""))
+        v = result.verdict
+        print(f"verdict: {v.status.upper()}" + (f" — {v.reason}" if v.status != "pass" else
+                                                "  (every required check passed)"))
     return 0
