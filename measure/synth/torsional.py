@@ -283,8 +283,9 @@ class ModalModel:
         >>> round(float(fn[0]), 9), round(float(zeta[0]), 9)
         (20.0, 0.02)
 
-        Two modes sharing one hysteretic spring each get ``zeta = eta / 2`` at their own
-        frequency (a single viscous matrix gives the second mode ``eta/2 * w2/w1``):
+        Two modes of springs with one loss factor ``eta`` each get ``zeta = eta / 2`` at their
+        own frequency, as the frequency-domain model gives them (one viscous matrix, each
+        spring tuned at the mode it strains most, cannot give both):
 
         >>> s = TorsionalSystem([1.0, 1.0], [(-1, 0), (0, 1)], [1e4, 1e4],
         ...                     edge_loss_factor=[0.04, 0.04])
@@ -292,7 +293,7 @@ class ModalModel:
         [0.02, 0.02]
         >>> [round(float(z), 4) for z in ModalModel.from_system(
         ...     s, damping="single viscous").natural_frequencies()[1]]
-        [0.02, 0.0524]
+        [0.0166, 0.0289]
         """
         from crankbench.predict._validate import check_option
 
