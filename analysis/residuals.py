@@ -98,6 +98,7 @@ class ResidualEstimate:
         return self.table.copy()
 
     def summary(self) -> dict:
+        """Report speed, phase reference, orders and the combined verdict."""
         from .verdict import combine
 
         return {"speed_rpm": self.speed_rpm, "phase_reference": self.phase_reference,

@@ -381,9 +381,10 @@ def _orders(engine, orders, max_order, fs_min, hi_rpm):
     return orders[keep]
 
 
-def _phase_reference(rec, sensor_name, rpm, fs, revolutions):
-    """Per block, the angle of cylinder 1 from its TDC minus the tracker's integrated angle,
-    as ``e^{i delta}`` (order 1), from a tacho with a TDC reference; (None, reason) without."""
+def _phase_reference(rec, sensor_name, rpm, fs, revolutions, block_times):
+    """At each block time, the angle of cylinder 1 from its TDC minus the tracker's integrated
+    angle, as ``e^{i delta}`` (order 1), from a tacho with a TDC reference; (None, reason)
+    without."""
     from crankbench.measure.tacho import angle_from_pulses
 
     from .orders import order_track
@@ -400,14 +401,17 @@ def _phase_reference(rec, sensor_name, rpm, fs, revolutions):
             trace = angle_from_pulses(np.asarray(v.values, float), pulses_per_rev=ppr,
                                       missing_teeth=missing,
                                       tdc_offset_deg=float(v.attrs["tdc_offset_deg"]))
-            t = np.arange(rec[sensor_name].size) / fs
-            psi = trace.at(t)
-            ref = order_track(np.cos(psi), fs=fs, speed_rpm=rpm, orders=[1.0],
+            var = rec[sensor_name]
+            dim = var.dims[0]
+            t = (np.asarray(rec[dim].values, float) if dim in rec.coords
+                 else np.arange(var.size) / fs)
+            ref = order_track(np.cos(trace.at(t)), fs=fs, speed_rpm=rpm, orders=[1.0],
                               revolutions=revolutions, overlap=0.0)
         except (AnalysisError, RecordError, ValueError) as exc:
             log.info("tacho %r gives no phase reference: %s", name, exc)
             continue
-        ph = ref["phase"].sel(order=1.0).values
+        ph = np.unwrap(ref["phase"].sel(order=1.0).values)
+        ph = np.interp(block_times, ref["time"].values, ph)
         return np.exp(1j * ph), f"TDC of cylinder 1 from tacho {name!r}"
     return None, "relative: no tacho with a TDC reference (attr 'tdc_offset_deg')"
 
@@ -527,21 +531,28 @@ def compare_vibrograph(record, model, *, load=None, speed_channel=None, orders=N
     step("order tracking")
     lo_band, hi_band = 1.0 / (1.0 + tolerance), 1.0 + tolerance
     rows, verdicts, curves, blocks = [], [], {}, {}
-    rate = []
+    rate, tracked = [], []
     for s in sensors:
         var = rec[s.channel]
         fs = float(var.attrs["sample_rate"])
         rpm, sc = rpms[s.channel]
-        x = np.nan_to_num(np.asarray(var.values, float))
-        track = order_track(x, fs=fs, speed_rpm=rpm, orders=orders, revolutions=revolutions,
-                            overlap=0.0)
-        t_b = track["time"].values
-        rpm_b = np.asarray(track["rpm"].values, float)
+        # dropouts (NaN spans) are masked by the tracker: their blocks are left out
+        track = order_track(np.asarray(var.values, float), fs=fs, speed_rpm=rpm, orders=orders,
+                            revolutions=revolutions, overlap=0.0)
+        amp = np.asarray(track["amplitude"].values, float)                  # (n_o, n_b)
+        noise = np.asarray(track["amplitude_noise"].values, float)
+        ok = np.isfinite(amp).all(axis=0) & np.isfinite(noise) & (noise > 0)
+        if ok.sum() < 3:
+            skipped = skipped + ((s.channel, f"only {int(ok.sum())} order-tracking blocks "
+                                              "without dropouts"),)
+            continue
+        t_b = track["time"].values[ok]
+        rpm_b = np.asarray(track["rpm"].values, float)[ok]
         if rpm_b.size >= 2:
             rate.append(np.abs(np.gradient(rpm_b, t_b)))
-        amp = np.asarray(track["amplitude"].values, float)                  # (n_o, n_b)
-        meas_c = amp * np.exp(1j * np.asarray(track["phase"].values, float))
-        noise = np.maximum(np.asarray(track["amplitude_noise"].values, float), 1e-300)
+        amp = amp[:, ok]
+        meas_c = amp * np.exp(1j * np.asarray(track["phase"].values, float)[:, ok])
+        noise = noise[ok]
         omega_b = rpm_b * np.pi / 30.0
         p = _QUANTITIES[s.quantity]
         # predicted complex amplitude per order and block; H: per unit load (F, M) at point
@@ -556,6 +567,7 @@ def compare_vibrograph(record, model, *, load=None, speed_channel=None, orders=N
         pred = np.abs(pred_c)
         blocks[s.channel] = dict(time=t_b, rpm=rpm_b, measured=meas_c, noise=noise, h=h,
                                  load=lf, fs=fs, speed_rpm=rpm)
+        tracked.append(s)
         sigma = float(np.median(noise))
         strongest_p = float(pred.max()) if pred.size else 0.0
         strongest_m = float(amp.max()) if amp.size else 0.0
@@ -648,21 +660,21 @@ def compare_vibrograph(record, model, *, load=None, speed_channel=None, orders=N
     residuals = None
     res_orders = [int(o) for o in (residual_orders if residual_orders is not None else
                                    [n for n in integer if n <= 8])]
-    if res_orders and len(sensors) >= 3:
+    if res_orders and len(tracked) >= 3:
         from .residuals import estimate_residuals
 
         phase = {}
-        for s in sensors:
+        for s in tracked:
             b = blocks[s.channel]
             phase[s.channel] = _phase_reference(rec, s.channel, b["speed_rpm"], b["fs"],
-                                                revolutions)
+                                                revolutions, b["time"])
         residuals = estimate_residuals(
-            blocks, [s.channel for s in sensors], orders, loads, engine, spec,
+            blocks, [s.channel for s in tracked], orders, loads, engine, spec,
             phase=phase, residual_orders=res_orders, speed_rpm=speed_rpm,
             excitation_has_gas=excitation is not None)
     elif res_orders:
-        log.info("residual forces and moments not estimated: %d sensor(s) placed; at least 3 "
-                 "(better 5 or more directions) are needed", len(sensors))
+        log.info("residual forces and moments not estimated: %d sensor(s) tracked; at least 3 "
+                 "(better 5 or more directions) are needed", len(tracked))
     settings = {"model": model_path, "orders": ", ".join(f"{o:g}" for o in orders),
                 "order tracking": f"COT, {revolutions}-revolution blocks, no overlap, hann",
                 "tolerance": f"ratio within [{lo_band:.3f}, {hi_band:.3f}]",
@@ -678,6 +690,6 @@ def compare_vibrograph(record, model, *, load=None, speed_channel=None, orders=N
                 "skipped": "; ".join(f"{n}: {r}" for n, r in skipped) or "none"}
     return VibrographResult(
         source=source, record_sha256=str(rec.attrs.get("sha256", "")), model_path=model_path,
-        sensors=sensors, skipped=skipped, table=table, verdicts=tuple(verdicts),
+        sensors=tuple(tracked), skipped=skipped, table=table, verdicts=tuple(verdicts),
         residuals=residuals, curves=curves, speed_range_rpm=(lo, hi),
         sweep_rate_rpm_per_s=sweep, tolerance=tolerance, settings=settings)

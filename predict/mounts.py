@@ -683,7 +683,8 @@ def _roll_harmonics(engine, excitation, orders):
     return (g * phase).sum(axis=1), (i1 * phase).sum(axis=1)
 
 
-def block_excitation(engine, orders, *, excitation=None, counterweights=()):
+def block_excitation(engine, orders, *, excitation=None, counterweights=(),
+                     torque_reaction=True):
     """Shaking loads per order on the block of an engine: inertia forces and moments of every
     layout (:func:`predict.balance.unbalance`) and the crankshaft-torque reaction.
 
@@ -693,10 +694,13 @@ def block_excitation(engine, orders, *, excitation=None, counterweights=()):
     orders : sequence of float
         Orders of the cycle (half orders for a 4-stroke carry only the torque reaction).
     excitation : predict.torsion.excitation.Excitation, optional
-        Cylinder torque harmonics (gas and inertia) covering ``orders``; None leaves the
-        torque reaction out.
+        Cylinder torque harmonics (gas and inertia) covering ``orders``. None: the inertia
+        part of the torque reaction alone, from :func:`predict.forces.engine_torque` (an
+        engine without combustion data), unless ``torque_reaction`` is False.
     counterweights : sequence of predict.balance.Counterweight
         Masses fixed to the crankshaft (counterweights, added or trial masses).
+    torque_reaction : bool
+        Include the reaction to the crankshaft torque (roll, ``M_x``).
 
     Returns
     -------
@@ -738,8 +742,17 @@ def block_excitation(engine, orders, *, excitation=None, counterweights=()):
             shift = np.exp(1j * n * theta_f)
             inertia[i, :3] = ex["force"] * shift
             inertia[i, 3:] = ex["moment"] * shift
-    if excitation is not None:
+    if excitation is not None and torque_reaction:
         roll_gas, roll_in = _roll_harmonics(engine, excitation, orders)
         inertia[:, 3] += roll_in
         gas[:, 3] += roll_gas
+    elif torque_reaction:
+        from .forces import engine_torque
+
+        # inertia torque per unit speed squared over one working cycle (exact to round-off
+        # for the orders a 1440-point cycle resolves)
+        n = 1440
+        psi = np.arange(n) * (np.pi * engine.cycle) / n
+        torque = engine_torque(engine, psi, omega=1.0)
+        inertia[:, 3] += 2.0 * np.exp(-1j * np.outer(orders, psi)) @ torque / n
     return BlockExcitation(orders=orders, inertia=inertia, gas=gas, point=point)

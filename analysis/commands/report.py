@@ -84,7 +84,6 @@ def run(args) -> int:
     import logging
     from pathlib import Path
 
-    from crankbench.analysis._output import print_json
     from crankbench.analysis.commands._pipeline_cli import options_from_args, progress_bar
     from crankbench.analysis.pipeline import analyse
     from crankbench.measure._atomic import check_overwrite
@@ -122,22 +121,28 @@ def run(args) -> int:
     paths = write_outputs(result, out, pdf=args.pdf, overwrite=args.overwrite,
                           title=args.title, parameters=params, record_path=args.record,
                           model_path=args.model, bench_rows=bench_rows)
+    _print_outcome(args, paths, result)
+    return 0
+
+
+def _print_outcome(args, paths, result) -> None:
+    """The written paths and the overall verdict (JSON with the summary under ``--json``)."""
+    from crankbench.analysis._output import print_json
+
     if args.json:
         print_json({"written": [str(p) for p in paths], "summary": result.summary()})
-    else:
-        for p in paths:
-            print(f"report written: {p}")
-        v = result.verdict
-        print(f"verdict: {v.status.upper()}" + (f" — {v.reason}" if v.status != "pass" else
-                                                "  (every required check passed)"))
-    return 0
+        return
+    for p in paths:
+        print(f"report written: {p}")
+    v = result.verdict
+    print(f"verdict: {v.status.upper()}" + (f" — {v.reason}" if v.status != "pass" else
+                                            "  (every required check passed)"))
 
 
 def _run_engine(args, options, out, quiet) -> int:
     """An engine model on its mounts: the vibrograph report."""
     from pathlib import Path
 
-    from crankbench.analysis._output import print_json
     from crankbench.analysis.commands._pipeline_cli import progress_bar, vibrograph_options
     from crankbench.analysis.vibrograph import compare_vibrograph
     from crankbench.analysis.vibrograph_report import build_vibrograph_report
@@ -156,12 +161,5 @@ def _run_engine(args, options, out, quiet) -> int:
         targets.append(out.with_suffix(".pdf"))
     paths = [rep.save(Path(t), overwrite=args.overwrite, option="--overwrite")
              for t in targets]
-    if args.json:
-        print_json({"written": [str(p) for p in paths], "summary": result.summary()})
-    else:
-        for p in paths:
-            print(f"report written: {p}")
-        v = result.verdict
-        print(f"verdict: {v.status.upper()}" + (f" — {v.reason}" if v.status != "pass" else
-                                                "  (every required check passed)"))
+    _print_outcome(args, paths, result)
     return 0

@@ -176,3 +176,18 @@ def test_balance_table_errors(tmp_path):
     with pytest.raises(ModelError, match=r"balance.mass\[0\].angle_deg is missing"):
         BalanceSpec.from_toml(p)
     assert not BalanceSpec.from_toml(ENGINES / "i4.toml").stated
+
+
+def test_without_combustion_data_the_inertia_torque_reaction_remains():
+    """An engine model without cylinder-pressure data: the torque reaction's inertia part
+    (from predict.forces.engine_torque) equals the excitation's inertia harmonics."""
+    engine = Engine.from_toml(ENGINES / "i4.toml")
+    orders = np.arange(0.5, 8.01, 0.5)
+    full = block_excitation(engine, orders,
+                            excitation=engine_excitation(engine, imep=1e6, orders=orders))
+    bare = block_excitation(engine, orders)
+    assert np.abs(bare.gas).max() == 0.0
+    np.testing.assert_allclose(bare.inertia[:, 3], full.inertia[:, 3],
+                               atol=1e-6 * np.abs(full.inertia[:, 3]).max())
+    none = block_excitation(engine, orders, torque_reaction=False)
+    assert np.abs(none.inertia[:, 3]).max() == 0.0
