@@ -18,7 +18,9 @@ point and direction is set beside the measured order track, and judged:
   revolution blocks, no overlap so that the blocks' noise is independent) against the record's
   speed reference; the 1-σ noise of each block from the track's broadband floor;
 * **predicted** — the exact harmonic response of the mounted block at each block's speed
-  (:meth:`MountedEngine.receptance`), quantity and direction of the channel;
+  (:meth:`MountedEngine.receptance`), quantity and direction of the channel, read through
+  the channel's seismic instrument when its attrs name one (``instrument_natural_frequency``,
+  ``instrument_damping_ratio``: :class:`measure.instruments.SeismicInstrument`);
 * **verdict per (sensor, order)** (:class:`analysis.verdict.Verdict`) — over the blocks where
   the prediction is at least 10 % of its largest value, the ratio of the measured to the
   predicted peak and the median ratio must both lie within ``[1/(1+t), 1+t]``
@@ -416,6 +418,18 @@ def _phase_reference(rec, sensor_name, rpm, fs, revolutions, block_times):
     return None, "relative: no tacho with a TDC reference (attr 'tdc_offset_deg')"
 
 
+def _instrument(attrs, quantity):
+    """The seismic instrument a channel's attrs describe (``instrument_natural_frequency`` Hz,
+    ``instrument_damping_ratio``), whose reading the channel is; None without."""
+    fn = attrs.get("instrument_natural_frequency")
+    if fn is None:
+        return None
+    from crankbench.measure.instruments import SeismicInstrument
+
+    return SeismicInstrument(float(fn), float(attrs.get("instrument_damping_ratio", 0.65)),
+                             quantity)
+
+
 def compare_vibrograph(record, model, *, load=None, speed_channel=None, orders=None,
                        max_order=12.0, tolerance=0.5, revolutions=8, significant_fraction=0.02,
                        min_snr=10.0, channels=None, residual_orders=None, speed_rpm=None,
@@ -557,10 +571,13 @@ def compare_vibrograph(record, model, *, load=None, speed_channel=None, orders=N
         p = _QUANTITIES[s.quantity]
         # predicted complex amplitude per order and block; H: per unit load (F, M) at point
         h = np.empty((orders.size, omega_b.size, 6), complex)
+        inst = _instrument(var.attrs, s.quantity)
         for k, q in enumerate(orders):
             g = mounted.receptance(q * omega_b / _TWO_PI, at=[s.position],
                                    directions=[s.direction], point=loads.point)[:, 0, :]
             h[k] = g * ((1j * q * omega_b) ** p)[:, None]
+            if inst is not None:        # the channel is a seismic instrument's reading
+                h[k] *= inst.frf(q * omega_b / _TWO_PI)[:, None]
         lf = load.scale(rpm_b)
         pred_c = np.einsum("kbj,kj->kb", h, loads.gas) * lf[None, :] + \
             np.einsum("kbj,kj->kb", h, loads.inertia) * (omega_b**2)[None, :]
