@@ -30,11 +30,14 @@ UNBALANCE_COLUMNS = ["unbalance_kgm", "unbalance_unc_kgm", "unbalance_angle_deg"
 
 
 def vibrograph_json(result) -> dict:
-    """The comparison as JSON-ready data: ``summary``, ``rows`` (one per (sensor, order):
-    ``sensor``, ``order``, ``measured``, ``predicted`` in SI units, ``ratio``, ``passed``,
-    ``verdict``…), ``residuals``, ``verdicts``, ``sensors``, ``skipped``, ``settings``."""
+    """The comparison as JSON-ready data: ``summary``, ``rows`` (one per judged (sensor,
+    order): ``sensor``, ``order``, ``measured``, ``predicted`` in SI units, ``ratio``,
+    ``passed``, ``verdict``…), ``informational`` (the same for the orders too weak or too
+    noisy to be judged), ``residuals``, ``verdicts``, ``sensors``, ``skipped``, ``settings``."""
     res = result.residuals
-    return {"summary": result.summary(), "rows": result.table,
+    t = result.table
+    return {"summary": result.summary(), "rows": t[t["required"]],
+            "informational": t[~t["required"]],
             "residuals": None if res is None else {
                 "speed_rpm": res.speed_rpm, "phase_reference": res.phase_reference,
                 "orders": res.table, "settings": res.settings},

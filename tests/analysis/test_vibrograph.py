@@ -69,6 +69,8 @@ def test_sample_record_matches_its_engine_model_from_the_cli(capsys):
     out = json.loads(capsys.readouterr().out)
     rows = out["rows"]
     assert {"sensor", "order", "measured", "predicted", "passed", "verdict"} <= set(rows[0])
+    assert all(r["passed"] for r in rows) and len(rows) >= 3      # the judged orders
+    assert all(not r["required"] for r in out["informational"])
     two = next(r for r in rows if r["order"] == 2.0)
     assert two["sensor"] == "acc_block_z" and two["passed"]
     assert two["measured"] / two["predicted"] == pytest.approx(1.0, abs=0.01)
