@@ -28,29 +28,46 @@ def configure(parser) -> None:
     parser.add_argument("--strict", action="store_true",
                         help="exit with status 1 unless the overall verdict is a pass (a "
                              "failed or inconclusive check)")
+    parser.add_argument("--store", metavar="FILE.duckdb", default=None,
+                        help="also write the results into this campaign store (created if "
+                             "missing; the same record and settings replace their rows)")
     parser.add_argument("--json", action="store_true", help="print JSON instead of tables")
 
 
 def run(args) -> int:
     import logging
+    from pathlib import Path
 
     from crankbench.analysis._output import print_json, print_table
     from crankbench.analysis.commands._pipeline_cli import options_from_args, progress_bar
     from crankbench.analysis.pipeline import analyse
-    from crankbench.analysis.vibrograph_report import print_vibrograph, vibrograph_json
-
     from crankbench.analysis.vibrograph import model_kind
+    from crankbench.analysis.vibrograph_report import print_vibrograph, vibrograph_json
+    from crankbench.predict.errors import ConfigError
 
     log = logging.getLogger("crankbench")
     quiet = args.json or log.getEffectiveLevel() > logging.INFO
+    if args.store and Path(args.store).resolve() in (Path(args.record).resolve(),
+                                                       Path(args.model).resolve()):
+        raise ConfigError(f"--store {args.store!r} is one of the inputs")
     if model_kind(args.model) == "engine":
+        if args.store:
+            raise ConfigError("--store keeps shaft-line runs; an engine model's vibrograph "
+                              "comparison is not stored (use --json)")
         return _run_engine(args, quiet)
     bar, progress = progress_bar(desc="compare", disable=quiet)
+    options = options_from_args(args, args.record)
     try:
-        result = analyse(args.record, args.model, progress=progress,
-                         **options_from_args(args, args.record))
+        result = analyse(args.record, args.model, progress=progress, **options)
     finally:
         bar.close()
+    if args.store:
+        from crankbench.analysis.campaign.documents import store_result
+
+        run_id = store_result(args.store, result, record_path=args.record,
+                              model_path=args.model, settings=options,
+                              elapsed_s=float(sum(result.timings.values())))
+        log.info("stored as run %s in %s", run_id, args.store)
     vib = result.vibrograph
     comp = result.comparison
     limits = [c.as_dict() for c in result.limits]
