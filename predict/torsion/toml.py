@@ -33,6 +33,11 @@ Layout (SI unless the key names another unit; values at each part's own speed)::
     [[shaftline.gear]]      driver, driven, ratio, mesh_stiffness (optional: rigid mesh)
     [[shaftline.ground]]    node, stiffness, damping
     [[shaftline.damper]]    type = "viscous" | "tuned" | "pendulum" | "friction", node, ...
+                            (friction: ring_inertia, slip_torque and either
+                            model = "harmonic-balance" — the default without a design point:
+                            the non-linear slip/stick ring, forced response by harmonic
+                            balance — or design_frequency + design_amplitude, the linearised
+                            equivalent viscous damper)
 
     [limits]                               # rule data, see load_limits
     application = "propulsion"
@@ -57,7 +62,7 @@ _DAMPER_KEYS = {
     "viscous": ("ring_inertia", "damping"),
     "tuned": ("ring_inertia", "stiffness", "damping", "loss_factor"),
     "pendulum": ("mass", "pivot_radius", "length", "damping"),
-    "friction": ("ring_inertia", "slip_torque", "design_frequency", "design_amplitude"),
+    "friction": ("ring_inertia", "slip_torque"),
 }
 
 
@@ -341,6 +346,20 @@ def from_toml(path):
                 kw[key] = t.number(key, 0.0, low=0.0)
             else:
                 kw[key] = t.positive(key)
+        if kind == "friction":
+            kw["design_frequency"] = t.positive("design_frequency", None)
+            kw["design_amplitude"] = t.positive("design_amplitude", None)
+            lin = kw["design_frequency"] is not None or kw["design_amplitude"] is not None
+            kw["model"] = t.string("model", "linearised" if lin else "harmonic-balance",
+                                   options=("harmonic-balance", "linearised"))
+            if kw["model"] == "linearised" and not (kw["design_frequency"] and
+                                                    kw["design_amplitude"]):
+                t.fail("model", '= "linearised" needs design_frequency (rad/s) and '
+                                "design_amplitude (rad)")
+            if kw["model"] == "harmonic-balance" and lin:
+                t.fail("design_frequency" if kw["design_frequency"] else "design_amplitude",
+                       'belongs to model = "linearised"; the harmonic-balance friction '
+                       "damper has no design point")
         t.check_unknown()
         func = {"viscous": _dampers.add_viscous_damper, "tuned": _dampers.add_tuned_damper,
                 "pendulum": _dampers.add_pendulum_absorber,
