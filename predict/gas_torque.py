@@ -13,9 +13,9 @@ pressure curve.
   ones (each in its own crank angle, i.e. delayed by its firing angle when placed on the
   shaft); with one measured cylinder that is the usual assumption of equal cylinders, stated
   in ``Excitation.source``.
-* :func:`mount_excitation` — the force and moment phasors on the engine block for one order:
-  the free forces and moments of :func:`predict.balance.unbalance` plus the reaction to the
-  crankshaft torque (a roll moment about the crankshaft axis), ready for
+* :func:`mount_excitation` — the force and moment phasors on the engine block for one order
+  (:func:`predict.mounts.block_excitation` fed with the measured excitation: the free forces
+  and moments plus the reaction to the crankshaft torque, a roll moment), ready for
   :meth:`predict.mounts.MountedEngine.response`; :func:`mount_response` gives the motion of
   points on the block over speed and order from it.
 
@@ -283,34 +283,18 @@ def mount_excitation(engine, excitation, *, order, omega, load=1.0):
     >>> round(float(abs(m["moment"][0])), 1), round(float(abs(m["force"][2])), 1)
     (91.2, 2984.5)
     """
-    from .balance import unbalance
-    from .mounts import excitation_from_unbalance
+    from .mounts import block_excitation
 
     w = float(omega)
     if not np.isfinite(w) or w <= 0:
         raise ModelError(f"omega={omega!r} must be > 0 (rad/s)")
     q = float(order)
-    h = excitation.harmonics(np.array([0.0, w]), [q])                  # (2, 1, z)
-    gas, both = h[0, 0], h[1, 0]
-    total = float(load) * gas + (both - gas)
-    fire = np.deg2rad(engine.firing_angles_deg())
-    torque = complex(np.sum(total * np.exp(-1j * q * fire)))
-    force = np.zeros(3, complex)
-    moment = np.zeros(3, complex)
-    point = np.array([engine.reference_position, 0.0, 0.0])
-    if np.isclose(q, round(q)) and round(q) >= 1:
-        # free forces and moments: predict.balance works in the shaft angle θ; move its phase
-        # to the crank angle of cylinder 1 from firing TDC (θ = ψ + θ_fire)
-        ub = unbalance(engine, omega=w, orders=(int(round(q)),))
-        ex = excitation_from_unbalance(ub, int(round(q)))
-        shift = np.exp(1j * q * engine.firing_tdc_shaft_angle)
-        force, moment, point = ex["force"] * shift, ex["moment"] * shift, ex["point"]
-    moment = moment.copy()
-    # reaction on the block: −(crankshaft torque) in the direction of rotation; the shaft turns
-    # about −x in the mount frame (the top of the crank moves towards +y), so +T about x
-    moment[0] += torque
-    return {"force": force, "moment": moment, "point": point,
-            "freq_hz": q * w / (2 * np.pi)}
+    # the block model's loads (predict.mounts.block_excitation: free forces and moments of any
+    # layout and the torque reaction) with this excitation
+    block = block_excitation(engine, [q], excitation=excitation)
+    loads = block.at(np.array([w]), load=float(load))[0, 0]
+    return {"force": loads[:3].copy(), "moment": loads[3:].copy(),
+            "point": np.asarray(block.point, float), "freq_hz": q * w / (2 * np.pi)}
 
 
 def mount_response(mounted, engine, excitation, *, speed_rpm, orders, points, load=1.0):
