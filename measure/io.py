@@ -35,7 +35,8 @@ from crankbench.predict.errors import CrankbenchError, RecordError
 from ._atomic import atomic_path, check_overwrite
 from .readers import EXTENSIONS, format_of_magic, module_for
 from .readers._common import REGULAR_KEY
-from .record import CLIP_QUANTITIES, RecordWarning, clipped_spans, nonfinite_spans, validate
+from .record import (CLIP_QUANTITIES, RecordWarning, clipped_spans, nonfinite_spans,
+                     shared_scans, validate)
 
 __all__ = ["read", "write", "open", "read_truth", "iter_blocks", "sha256_of", "EXTENSIONS"]
 
@@ -228,11 +229,12 @@ def read(path, *, channels=None, allow_nonfinite: bool = False) -> xr.Dataset:
         if allow_nonfinite:
             ds = _mask_nonfinite(ds, path)
         regular = frozenset(ds.encoding.pop(REGULAR_KEY, ()))
-        try:
-            validate(ds, allow_nonfinite=allow_nonfinite, _regular_dims=regular)
-        except RecordError as exc:
-            raise _named(path, exc) from None
-        _flag_clipping(ds, path)
+        with shared_scans():  # the NaN/inf check and the clipping check: one scan
+            try:
+                validate(ds, allow_nonfinite=allow_nonfinite, _regular_dims=regular)
+            except RecordError as exc:
+                raise _named(path, exc) from None
+            _flag_clipping(ds, path)
         ds.attrs["source"] = path.name
         ds.attrs["sha256"] = digest.result()
     return ds

@@ -12,8 +12,10 @@ Layout (``crankbench_format = "record"``, ``crankbench_format_version = 1`` on t
     /truth                 optional netCDF4 group (h5netcdf) holding the synthetic bench's
                            ground truth (order amplitudes along a run, critical speeds)
 
-Regular clocks are stored as three numbers, not as a time array, so a 2 GB record streams with
-a lazy :class:`xarray.indexes.RangeIndex` time coordinate and bounded memory.
+Regular clocks are stored as three numbers, not as a time array, and read back as an implicit
+time coordinate (:class:`measure.timeindex.SampledTimeIndex`: values generated on access,
+bit-identical to ``start + i / sample_rate``), by :func:`read` and :func:`open` alike: no time
+array is built unless asked for, and a 2 GB record streams with bounded memory.
 """
 
 from __future__ import annotations
@@ -25,7 +27,8 @@ import xarray as xr
 
 from crankbench.predict.errors import RecordError
 
-from ..record import is_pulse_dim, time_coordinate
+from ..record import is_pulse_dim
+from ..timeindex import regular_clock, sampled_time
 from ._common import build_dataset, clean_attrs, dims_of, regular_start, select, si_channel
 
 __all__ = ["FORMAT", "check_magic", "read", "write", "open", "read_truth", "write_truth"]
@@ -51,12 +54,12 @@ def _h5():
 def _dim_info(record: xr.Dataset, dim: str, first_channel: xr.DataArray) -> dict:
     if is_pulse_dim(dim):
         return {"kind": "index", "length": int(record.sizes[dim])}
-    index = record.xindexes.get(dim)
-    if index is not None and type(index).__name__ == "RangeIndex":
-        start = float(record[dim][0])
-        fs = float(first_channel.attrs["sample_rate"])
-        return {"kind": "regular", "start": start, "sample_rate": fs,
-                "length": int(record.sizes[dim])}
+    clock = regular_clock(record, dim)
+    if clock is not None:  # implicit coordinate: its numbers, no time array
+        start, fs, n = clock
+        if type(record.xindexes[dim]).__name__ == "RangeIndex":  # xarray's: step from a
+            fs = float(first_channel.attrs["sample_rate"])       # float division, use ours
+        return {"kind": "regular", "start": start, "sample_rate": fs, "length": n}
     t = np.asarray(record[dim].values, dtype=np.float64)
     fs = first_channel.attrs.get("sample_rate")
     if fs is not None:
@@ -190,7 +193,9 @@ def _channel_attrs(ds, name: str, dims: dict, file: str) -> tuple[str, dict]:
     return dim, attrs
 
 
-def _coordinate(dim: str, info: dict, file: str, *, lazy: bool):
+def _coordinate(dim: str, info: dict, file: str):
+    """The dim's time coordinate: ``xarray.Coordinates`` (implicit, regular clocks), a float64
+    array (explicit times) or None (pulse dims)."""
     kind = info.get("kind")
     n = int(info.get("length", 0))
     if kind == "index":
@@ -201,12 +206,7 @@ def _coordinate(dim: str, info: dict, file: str, *, lazy: bool):
         if not np.isfinite(fs) or fs <= 0:
             raise RecordError(f"{file}: dim {dim!r} declares sample_rate={fs!r} Hz; expected a "
                               "finite value > 0")
-        if lazy:
-            from xarray.indexes import RangeIndex
-
-            stop = start + (n - 1) / fs if n > 1 else start
-            return RangeIndex.linspace(start, stop, n, endpoint=True, dim=dim)
-        return time_coordinate(n, fs, start)
+        return sampled_time(n, fs, start=start, dim=dim)
     if kind == "explicit":
         values = np.asarray(info["values_ds"][...], dtype=np.float64)
         if values.size != n:
@@ -238,15 +238,19 @@ def read(path, *, channels=None) -> xr.Dataset:
             values, attrs = si_channel(name, _read_all(ds), attrs, file=file)
             out.append((name, dim, values, attrs))
             used[dim] = True
-        coords = {}
+        explicit, implicit = {}, []
         for dim in used:
-            c = _coordinate(dim, dims[dim], file, lazy=False)
-            if c is not None:
-                coords[dim] = c
-        regular = [d for d in coords if dims[d].get("kind") == "regular"]
+            c = _coordinate(dim, dims[dim], file)
+            if isinstance(c, np.ndarray):
+                explicit[dim] = c
+            elif c is not None:
+                implicit.append(c)
         attrs = {k: _from_attr(v) for k, v in clean_attrs(f.attrs).items()
                  if k not in ("crankbench_format", "crankbench_format_version", "channel_order")}
-    return build_dataset(out, coords, attrs, regular=regular)
+    ds = build_dataset(out, explicit, attrs)
+    for coords in implicit:
+        ds = ds.assign_coords(coords)
+    return ds
 
 
 class _LazyH5:
@@ -273,8 +277,9 @@ class _LazyH5:
 def open(path, *, chunk_seconds: float = 10.0, channels=None) -> xr.Dataset:  # noqa: A001
     """Open a crankbench HDF5 record lazily: dask chunks of ``chunk_seconds`` per clock.
 
-    Regular time coordinates are lazy ``RangeIndex`` objects (no time array in memory), so
-    peak memory is bounded by the chunks being processed, whatever the file size.
+    Regular time coordinates are implicit (:class:`measure.timeindex.SampledTimeIndex`, no
+    time array in memory), so peak memory is bounded by the chunks being processed, whatever
+    the file size.
     """
     import dask.array as da
 
@@ -305,7 +310,7 @@ def open(path, *, chunk_seconds: float = 10.0, channels=None) -> xr.Dataset:  # 
         coords = []
         plain = {}
         for dim in used:
-            c = _coordinate(dim, dims[dim], file, lazy=True)
+            c = _coordinate(dim, dims[dim], file)
             if c is None:
                 continue
             if isinstance(c, np.ndarray):
@@ -315,7 +320,6 @@ def open(path, *, chunk_seconds: float = 10.0, channels=None) -> xr.Dataset:  # 
         attrs = {k: _from_attr(v) for k, v in clean_attrs(f.attrs).items()
                  if k not in ("crankbench_format", "crankbench_format_version", "channel_order")}
     ds = xr.Dataset(data_vars, coords=plain, attrs=attrs)
-    for index in coords:
-        ds = ds.assign_coords(xr.Coordinates.from_xindex(index))
-        ds[index.dim].attrs.update(units="s", long_name="time from record start")
+    for c in coords:
+        ds = ds.assign_coords(c)
     return ds
