@@ -35,8 +35,14 @@ def add_common_arguments(parser) -> None:
                         help="largest relative speed deviation of a match (default 0.15)")
     parser.add_argument("--tolerance", type=float, default=0.03,
                         help="relative speed deviation flagged as disagreement (default 0.03)")
-    parser.add_argument("--machine-class", default="III",
-                        help="ISO 10816-1 machine class for vibrograph channels (default III)")
+    parser.add_argument("--vibration-standard", choices=("ISO 10816-6", "ISO 10816-1"),
+                        default=None,
+                        help="vibration-severity zones (default: the model's "
+                             "[limits.vibration], else ISO 10816-6 for reciprocating machines)")
+    parser.add_argument("--machine-class", default=None,
+                        help="class of that standard (ISO 10816-6: 1-7, ISO 10816-1: I-IV; "
+                             "default: the model's, else chosen from the engine's power and "
+                             "mounting)")
 
 
 def options_from_args(args, record_path=None) -> dict:
@@ -48,11 +54,12 @@ def options_from_args(args, record_path=None) -> dict:
     elif record_path is not None:
         load = load_from_record_file(record_path)
         if load is not None:
-            log.info("load from the record's scene: %s, imep %s Pa", load.law, load.imep)
+            log.debug("load from the record's scene: %s, imep %s Pa", load.law, load.imep)
     return dict(channel=args.channel, speed_channel=args.speed_channel, orders=args.orders,
                 method=args.method, bandwidth_orders=args.bandwidth_orders, load=load,
                 gate=args.gate, tolerance=args.tolerance,
-                machine_class=args.machine_class)
+                machine_class=args.machine_class,
+                vibration_standard=getattr(args, "vibration_standard", None))
 
 
 def progress_bar(total_steps: int = 7, *, desc: str = "", disable: bool = False):

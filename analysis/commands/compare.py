@@ -19,8 +19,11 @@ def configure(parser) -> None:
     parser.add_argument("model", metavar="MODEL.toml", help="shaft-line model (TOML)")
     add_common_arguments(parser)
     parser.add_argument("--strict", action="store_true",
-                        help="exit with status 1 when measurement and model disagree or a "
-                             "limit check fails")
+                        help="exit with status 1 unless the overall verdict is a pass (a "
+                             "failed or inconclusive check)")
+    parser.add_argument("--store", metavar="FILE.duckdb", default=None,
+                        help="also write the results into this campaign store (created if "
+                             "missing; the same record and settings replace their rows)")
     parser.add_argument("--json", action="store_true", help="print JSON instead of tables")
 
 
@@ -34,11 +37,25 @@ def run(args) -> int:
     log = logging.getLogger("crankbench")
     bar, progress = progress_bar(desc="compare", disable=args.json or
                                  log.getEffectiveLevel() > logging.INFO)
+    from pathlib import Path
+
+    from crankbench.predict.errors import ConfigError
+
+    if args.store and Path(args.store).resolve() in (Path(args.record).resolve(),
+                                                       Path(args.model).resolve()):
+        raise ConfigError(f"--store {args.store!r} is one of the inputs")
+    options = options_from_args(args, args.record)
     try:
-        result = analyse(args.record, args.model, progress=progress,
-                         **options_from_args(args, args.record))
+        result = analyse(args.record, args.model, progress=progress, **options)
     finally:
         bar.close()
+    if args.store:
+        from crankbench.analysis.campaign.documents import store_result
+
+        run_id = store_result(args.store, result, record_path=args.record,
+                              model_path=args.model, settings=options,
+                              elapsed_s=float(sum(result.timings.values())))
+        log.info("stored as run %s in %s", run_id, args.store)
     comp = result.comparison
     limits = [c.as_dict() for c in result.limits]
     if args.json:
@@ -47,6 +64,8 @@ def run(args) -> int:
                     "unmatched_measured": comp.unmatched_measured,
                     "unmatched_predicted": comp.unmatched_predicted,
                     "resonances": result.resonances.to_frame(), "limits": limits,
+                    "verdict": result.verdict.as_dict(),
+                    "checks": [v.as_dict() for v in result.verdicts],
                     "flags": list(comp.flags), "settings": result.settings})
     else:
         print(f"record   {result.source}  channel {result.channel} at {result.node}")
@@ -70,15 +89,17 @@ def run(args) -> int:
             print()
             print_table(comp.unmatched_measured, title="measured resonances without a critical")
         print()
-        for c in result.limits:
-            print(f"{'PASS' if c.passed else 'FAIL'}  {c.name}: {c.detail}")
-        print()
         if comp.flags:
             print("disagreements:")
             for f in comp.flags:
                 print(f"  - {f}")
-        else:
-            print("measurement and model agree within the tolerances")
+            print()
+        for c in result.verdicts:
+            print(f"{c.status.upper():<12} {c.name}: {c.reason or c.basis}"
+                  + ("" if c.required else "  (for information)"))
+        v = result.verdict
+        print(f"verdict: {v.status.upper()}" + (f" — {v.reason}" if v.status != "pass" else
+                                                "  (every required check passed)"))
     if args.strict and not result.passed:
         return 1
     return 0
