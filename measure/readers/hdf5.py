@@ -20,6 +20,7 @@ array is built unless asked for, and a 2 GB record streams with bounded memory.
 
 from __future__ import annotations
 
+import builtins
 import json
 
 import numpy as np
@@ -149,8 +150,10 @@ def read_truth(path) -> xr.Dataset:
         return ds.load()
 
 
-def _layout(f, file: str) -> tuple[list[str], dict]:
-    fmt = f.attrs.get("crankbench_format")
+def _layout(f, file: str, root=None) -> tuple[list[str], dict]:
+    """Channel order and dims of an open file; ``root`` = its cleaned root attrs if read."""
+    root = clean_attrs(f.attrs) if root is None else root
+    fmt = root.get("crankbench_format")
     if isinstance(fmt, bytes):
         fmt = fmt.decode()
     if fmt != "record" or "channels" not in f or "dims" not in f:
@@ -158,13 +161,13 @@ def _layout(f, file: str) -> tuple[list[str], dict]:
             f"{file}: HDF5 file is not in crankbench's record layout (expected root attr "
             "crankbench_format='record' and groups /channels, /dims); netCDF files should be "
             "named .nc")
-    version = int(f.attrs.get("crankbench_format_version", 0))
+    version = int(root.get("crankbench_format_version", 0))
     if version > FORMAT_VERSION:
         raise RecordError(f"{file}: layout version {version} is newer than this crankbench "
                           f"reads ({FORMAT_VERSION}); upgrade crankbench")
     try:
-        order = json.loads(f.attrs["channel_order"])
-    except (KeyError, ValueError):
+        order = json.loads(root["channel_order"])
+    except (KeyError, TypeError, ValueError):
         order = sorted(f["channels"])
     missing = [n for n in order if n not in f["channels"]]
     if missing:
@@ -217,10 +220,68 @@ def _coordinate(dim: str, info: dict, file: str):
                       "explicit or index")
 
 
+def _raw_runs(ds):
+    """File byte ranges holding a 1-D dataset's samples, as ``[(file offset, first sample,
+    samples)]`` with file-adjacent chunks merged, or None when HDF5 must do the read itself
+    (filters, foreign byte order, external or virtual storage, a user block, unallocated
+    chunks)."""
+    if (ds.ndim != 1 or not ds.dtype.isnative or ds.dtype.kind not in "fiu" or ds.is_virtual
+            or ds.file.userblock_size != 0):
+        return None
+    plist = ds.id.get_create_plist()
+    if plist.get_nfilters() or plist.get_external_count():
+        return None
+    item = ds.dtype.itemsize
+    n = ds.shape[0]
+    if ds.chunks is None:
+        offset = ds.id.get_offset()
+        return None if offset is None else [(int(offset), 0, n)]
+    chunk = ds.chunks[0]
+    info = []
+    ds.id.chunk_iter(lambda si: info.append((si.chunk_offset[0], si.byte_offset, si.size,
+                                             si.filter_mask)))
+    if len(info) != -(-n // chunk):
+        return None
+    runs = []
+    for first, offset, size, mask in sorted(info):
+        count = min(chunk, n - first)
+        if mask or size != chunk * item or offset is None:
+            return None
+        if runs and runs[-1][0] + runs[-1][2] * item == offset and runs[-1][1] + runs[-1][2] == first:
+            runs[-1][2] += count
+        else:
+            runs.append([int(offset), int(first), int(count)])
+    return [tuple(r) for r in runs]
+
+
 def _read_all(ds) -> np.ndarray:
+    """All samples of a 1-D dataset. Unfiltered chunked or contiguous data (what :func:`write`
+    produces) is read straight from the file's byte ranges into the result -- one system read
+    per run of adjacent chunks, as ``numpy.fromfile`` does -- instead of chunk by chunk
+    through HDF5 (about twice the time for 20 MB); three samples are then checked against
+    HDF5's own read. Anything else goes through ``read_direct``."""
     out = np.empty(ds.shape, dtype=ds.dtype)
-    if out.size:
-        ds.read_direct(out)
+    if not out.size:
+        return out
+    runs = None
+    try:
+        runs = _raw_runs(ds)
+    except Exception:  # noqa: BLE001 - an h5py build without chunk queries: HDF5 reads
+        runs = None
+    if runs is not None:
+        flat = out.view(np.uint8)
+        item = out.dtype.itemsize
+        with builtins.open(ds.file.filename, "rb") as fh:
+            for offset, first, count in runs:
+                fh.seek(offset)
+                view = memoryview(flat[first * item:(first + count) * item])
+                if fh.readinto(view) != count * item:
+                    runs = None  # truncated file: let HDF5 report it
+                    break
+        probe = sorted({0, out.size // 2, out.size - 1})
+        if runs is not None and np.array_equal(ds[probe], out[probe], equal_nan=True):
+            return out
+    ds.read_direct(out)
     return out
 
 
@@ -229,7 +290,8 @@ def read(path, *, channels=None) -> xr.Dataset:
     h5py = _h5()
     file = str(path)
     with h5py.File(path, "r") as f:
-        order, dims = _layout(f, file)
+        root = clean_attrs(f.attrs)
+        order, dims = _layout(f, file, root)
         names = select(order, channels, file=file)
         out, used = [], {}
         for name in names:
@@ -245,12 +307,16 @@ def read(path, *, channels=None) -> xr.Dataset:
                 explicit[dim] = c
             elif c is not None:
                 implicit.append(c)
-        attrs = {k: _from_attr(v) for k, v in clean_attrs(f.attrs).items()
+        attrs = {k: _from_attr(v) for k, v in root.items()
                  if k not in ("crankbench_format", "crankbench_format_version", "channel_order")}
-    ds = build_dataset(out, explicit, attrs)
-    for coords in implicit:
-        ds = ds.assign_coords(coords)
-    return ds
+    if explicit or len(implicit) != 1:
+        ds = build_dataset(out, explicit, attrs)
+        for coords in implicit:
+            ds = ds.assign_coords(coords)
+        return ds
+    # the usual record, one regular clock: build it in one step (no merge/align pass)
+    data_vars = {name: xr.Variable((dim,), values, vattrs) for name, dim, values, vattrs in out}
+    return xr.Dataset(data_vars, coords=implicit[0], attrs=attrs)
 
 
 class _LazyH5:
