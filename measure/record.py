@@ -426,7 +426,11 @@ def _check_time_axis_rate_only(name, coord, fs, dim) -> None:
     n = coord.size
     if n < 2:
         return
-    t0, t1 = float(coord[0]), float(coord[-1])
+    index = coord.xindexes.get(dim)
+    if hasattr(index, "sample_rate") and hasattr(index, "start"):  # implicit: its numbers
+        t0, t1 = index.start, index.start + (n - 1) / index.sample_rate
+    else:
+        t0, t1 = float(coord[0]), float(coord[-1])
     mean_step = (t1 - t0) / (n - 1)
     if abs(mean_step * fs - 1.0) > RATE_RTOL:
         raise RecordError(

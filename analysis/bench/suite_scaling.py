@@ -25,6 +25,8 @@ Axes
 
 from __future__ import annotations
 
+import contextlib
+import io
 import shutil
 import tempfile
 from pathlib import Path
@@ -184,9 +186,10 @@ sample_rate = 100.0
             level = quiet.level
             quiet.setLevel(logging.ERROR)
             try:
-                status = main(["-q", "batch", *files[:k], "--model", str(model), "-o",
-                               str(tmp / f"summary{k}.csv"), "--overwrite", "--no-cache",
-                               "--workers", "1"])
+                with contextlib.redirect_stdout(io.StringIO()):  # its summary table
+                    status = main(["-q", "batch", *files[:k], "--model", str(model), "-o",
+                                   str(tmp / f"summary{k}.csv"), "--overwrite", "--no-cache",
+                                   "--workers", "1"])
             finally:
                 quiet.setLevel(level)
             if status != 0:
