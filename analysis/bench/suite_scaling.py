@@ -19,8 +19,9 @@ Axes
   claimed O(n²), bound 2.3), and ``natural_frequencies(n_modes=10)``, 10³ ... 10⁵ masses
   (bisection, claimed O(n), bound 1.25).
 * **Records per batch** (1 ... 8 short synthetic I4 run-ups; 1 and 2 with ``--quick``):
-  ``crankbench batch`` in-process with one worker (claimed linear: no per-batch cost beyond a
-  constant, bound 1.25).
+  ``crankbench batch`` in-process with one worker on 3 s run-ups of the sample I4 scene
+  (torsiograph and speed channels; claimed linear: no per-batch cost beyond a constant, bound
+  1.25).
 """
 
 from __future__ import annotations
@@ -136,47 +137,25 @@ def _chain_rows(quick, rounds) -> list[Row]:
 
 
 def _batch_rows(quick, rounds, tmp: Path) -> list[Row]:
-    import json
     import logging
+    from dataclasses import replace
 
     from crankbench.analysis.cli import main
     from crankbench.measure.io import write
     from crankbench.measure.synth import Scene, synthesize
+    from crankbench.measure.synth.profile import ramp
+    from crankbench.measure.synth.scene import SensorSpec
 
     root = Path(__file__).resolve().parents[2]
     model = root / "sample_data/shaftlines/i4.toml"
-    scene = tmp / "scene.toml"
-    scene.write_text(f"""
-[scene]
-name = "I4 batch scaling"
-engine = {json.dumps(str(root / "sample_data/engines/i4.toml"))}
-shaftline = {json.dumps(str(model))}
-seed = 1
-max_order = 6.0
-[profile]
-kind = "runup"
-start_rpm = 1900.0
-end_rpm = 3100.0
-duration = 3.0
-[load]
-imep = 1.0e6
-law = "constant"
-[[sensor]]
-kind = "torsiograph"
-name = "tv_pulley"
-node = "pulley hub"
-quantity = "angle"
-sample_rate = 4000.0
-noise_rms = 1.0e-5
-[[sensor]]
-kind = "speed"
-name = "speed"
-sample_rate = 100.0
-""")
+    sample = Scene.from_toml(root / "sample_data/scenes/i4_runup.toml")
+    torsiograph = next(s for s in sample.sensors if s.kind == "torsiograph")
+    scene = replace(sample, name="I4 batch scaling", max_order=6.0,
+                    profile=ramp(1900.0, 3100.0, duration=3.0),
+                    sensors=(torsiograph, SensorSpec("speed", "speed", {"sample_rate": 100.0})))
     counts = [1, 2] if quick else [1, 2, 4, 8]
-    base = Scene.from_toml(scene)
     for i in range(max(counts)):
-        run = synthesize(base)
+        run = synthesize(scene)
         write(run.record.assign_attrs(build=f"B{i}"), tmp / f"run{i:03d}.h5", truth=run.truth)
     files = sorted(str(p) for p in tmp.glob("run*.h5"))
     quiet = logging.getLogger("crankbench")

@@ -291,24 +291,13 @@ def test_geared_branch_ratio_10_forced_torque_in_the_fast_shaft():
 
 # ----------------------------------------- every mode at N = 1000, the lowest-k subset solve
 def sturm_count_extended(inertias, stiffnesses, sigma, grounded):
-    """:func:`sturm_count` in 80-bit extended precision (numpy ``longdouble``, eps ≈ 1e-19):
-    the recursion's own rounding stays far below a 1e-13 certificate at 20 000 masses."""
-    assert np.finfo(np.longdouble).eps < 1e-18, "needs 80-bit or wider long double"
-    j = np.asarray(inertias, np.longdouble)
-    k = np.asarray(stiffnesses, np.longdouble)
-    if grounded:
-        k0, k = k[0], k[1:]
-    else:
-        k0 = np.longdouble(0)
-    sigma = np.asarray(sigma, np.longdouble)
-    count = np.zeros(sigma.shape, int)
-    q = k0 - sigma * j[0]
-    for i in range(1, j.size):
-        p = q + k[i - 1]
-        count += p < 0
-        q = k[i - 1] * q / p - sigma * j[i]
-    count += q < 0
-    return count
+    """:func:`sturm_count` in 80-bit extended precision (numpy ``longdouble``, eps ≈ 1e-19;
+    the bench's reference, :mod:`analysis.bench._sturm`): the recursion's own rounding stays
+    far below a 1e-13 certificate at 20 000 masses."""
+    from crankbench.analysis.bench._sturm import EXTENDED, sturm_count as extended
+
+    assert EXTENDED, "needs 80-bit or wider long double"
+    return extended(inertias, stiffnesses, sigma, grounded=grounded)
 
 
 def certified_within(omega, inertias, stiffnesses, grounded, rel, first_index=0):
