@@ -14,6 +14,9 @@ log = logging.getLogger("crankbench")
 
 def add_common_arguments(parser) -> None:
     """Arguments shared by ``compare``, ``report`` and ``batch``."""
+    parser.add_argument("--map", metavar="MAP.toml", default=None,
+                        help="channel map for the record(s): columns, units, calibration, raw "
+                             "pulse roles")
     parser.add_argument("--channel", metavar="NAME", default=None,
                         help="torsional channel (default: the first angle/angular-velocity one)")
     parser.add_argument("--speed-channel", metavar="NAME", default=None,
@@ -55,7 +58,8 @@ def options_from_args(args, record_path=None) -> dict:
         load = load_from_record_file(record_path)
         if load is not None:
             log.debug("load from the record's scene: %s, imep %s Pa", load.law, load.imep)
-    return dict(channel=args.channel, speed_channel=args.speed_channel, orders=args.orders,
+    return dict(channel_map=args.map, channel=args.channel, speed_channel=args.speed_channel,
+                orders=args.orders,
                 method=args.method, bandwidth_orders=args.bandwidth_orders, load=load,
                 gate=args.gate, tolerance=args.tolerance,
                 machine_class=args.machine_class,

@@ -214,6 +214,11 @@ def run(args) -> int:
         options["load"] = dict(imep=options["load"].imep, law=options["load"].law,
                                reference_rpm=options["load"].reference_rpm)
     model_sha = file_sha256(model)
+    if options.get("channel_map"):  # the map's text is part of what a cached row depends on
+        from crankbench.measure.channelmap import load_map
+
+        model_sha += load_map(options["channel_map"]).sha256   # validated before any record
+        options["channel_map"] = str(Path(options["channel_map"]).resolve())
     cache_dir = out.with_name(out.name + ".cache")
     store, store_settings, skey, done = None, None, None, set()
     if args.store:

@@ -104,6 +104,9 @@ def run(args) -> int:
               "tolerance": args.tolerance}
     if args.machine_class is not None:
         params["machine class"] = args.machine_class
+    if args.map:
+        params["channel map"] = (f"{args.map} (sha256 "
+                                 f"{result.record.attrs.get('channel_map_sha256', '')})")
     bench_rows = None
     if args.bench:
         from crankbench.analysis.bench import run_suites

@@ -94,6 +94,12 @@ class TorsionalSystem:
     name : str
     operating : dict, optional
         Operating data from the model file: ``speed_range_rpm`` (low, high), ``imep`` (Pa).
+    friction_dampers : sequence of FrictionDamper, optional
+        Lanchester friction rings kept as non-linear elements
+        (:class:`predict.torsion.friction.FrictionDamper`): not in the linear matrices nor
+        the eigen-analysis (a slipping ring carries no stiffness); the forced response then
+        goes through :func:`predict.torsion.friction_line.friction_forced_response`
+        (harmonic balance of the exact stick-slip torque, each order alone).
 
     Notes
     -----
@@ -121,7 +127,7 @@ class TorsionalSystem:
                  edge_stiffness_omega2=None, node_ratio=None, edge_ratio=None,
                  edge_outer_diameter=None, edge_inner_diameter=None, eigen_nodes=None,
                  cylinder_nodes=(), firing_angles_deg=None, cycle=4, engine=None, limits=None,
-                 name="", operating=None):
+                 name="", operating=None, friction_dampers=()):
         # own copies: the system is immutable and must not freeze or alias the caller's arrays
         j = np.array(check_finite_array(inertias, "inertias", ndim=1, min_length=1,
                                         error=ModelError))
@@ -207,6 +213,20 @@ class TorsionalSystem:
         self.limits = limits
         self.name = str(name)
         self.operating = dict(operating or {})
+        from .friction import FrictionDamper
+
+        fd = tuple(friction_dampers or ())
+        for d in fd:
+            if not isinstance(d, FrictionDamper):
+                raise ModelError(f"friction_dampers must hold FrictionDamper, got "
+                                 f"{type(d).__name__}")
+            if not 0 <= d.node < n:
+                raise ModelError(f"friction damper {d.name!r}: node {d.node} out of range "
+                                 f"0..{n - 1}")
+            if not np.isclose(self._node_ratio[d.node], 1.0):
+                raise ModelError(f"friction damper {d.name!r}: its node must turn at "
+                                 "crankshaft speed (ratio 1)")
+        self.friction_dampers = fd
 
     # ----------------------------------------------------------------- properties -------
     @property
@@ -301,7 +321,7 @@ class TorsionalSystem:
                     eigen_nodes=self._eigen_nodes, cylinder_nodes=self.cylinder_nodes,
                     firing_angles_deg=self.firing_angles_deg, cycle=self.cycle,
                     engine=self.engine, limits=self.limits, name=self.name,
-                    operating=self.operating)
+                    operating=self.operating, friction_dampers=self.friction_dampers)
         unknown = set(changes) - set(args)
         if unknown:
             raise ModelError(f"replace(): unknown argument(s) {sorted(unknown)}")
@@ -337,6 +357,7 @@ class TorsionalSystem:
         self.engine = self.limits = None
         self.name = ""
         self.operating = {}
+        self.friction_dampers = ()
         return self
 
     def __repr__(self) -> str:
@@ -455,13 +476,19 @@ class TorsionalSystem:
             shapes[nodes] = vec
         return omega, shapes, numbers, method, bound
 
-    def natural_frequencies(self, units: str = "hz", *, n_modes: int | None = None) -> np.ndarray:
+    def natural_frequencies(self, units: str = "hz", *, speed_rpm=None,
+                            n_modes: int | None = None) -> np.ndarray:
         """Undamped natural frequencies, ascending; rigid-body modes exactly 0.
 
         Parameters
         ----------
         units : {'hz', 'rad/s', 'cpm'}
             Hz (default), rad/s or cycles per minute.
+        speed_rpm : float, optional
+            Crankshaft speed, rpm, for systems with speed-dependent springs (centrifugal
+            pendulums): their modes are included at that speed
+            (:func:`predict.torsion.campbell.system_at_speed`). Without it such springs and
+            their pendulum nodes are left out (a pendulum has no stiffness at standstill).
         n_modes : int, optional
             Only the lowest ``n_modes`` (the first entries of the full list, rigid-body modes
             included). A long chain then solves for those alone by bisection, in O(n·k) time
@@ -491,14 +518,19 @@ class TorsionalSystem:
             from .._validate import check_option
 
             check_option(units, "units", tuple(_UNIT_SCALE), error=ModelError)
+        if speed_rpm is not None:
+            from .campbell import system_at_speed
+
+            return system_at_speed(self, speed_rpm).natural_frequencies(units, n_modes=n_modes)
         if n_modes is None:
             omega = self._values[0]
         else:
             omega = subset.lowest(self, self._n_modes(n_modes))[0]
         return omega * scale if scale != 1.0 else omega.copy()
 
-    def mode_shapes(self, *, n_modes: int | None = None) -> Modes:
-        """Natural frequencies and mass-normalised mode shapes (:class:`Modes`).
+    def mode_shapes(self, *, speed_rpm=None, n_modes: int | None = None) -> Modes:
+        """Natural frequencies and mass-normalised mode shapes (:class:`Modes`); ``speed_rpm``
+        as in :meth:`natural_frequencies`.
 
         Parameters
         ----------
@@ -516,6 +548,10 @@ class TorsionalSystem:
         >>> print(chain([1.0] * 5000, [1e4] * 4999).mode_shapes(n_modes=3).shapes.shape)
         (5000, 3)
         """
+        if speed_rpm is not None:
+            from .campbell import system_at_speed
+
+            return system_at_speed(self, speed_rpm).mode_shapes(n_modes=n_modes)
         if n_modes is None:
             omega, shapes, numbers, method, bound = self._eigen
         else:
@@ -601,7 +637,10 @@ class TorsionalSystem:
         pandas.DataFrame
             Columns ``mode`` (1 = first elastic mode), ``order``, ``speed_rpm``,
             ``frequency_hz``, ``vector_sum`` (relative, NaN without firing angles),
-            ``major`` (bool), sorted by speed.
+            ``major`` (bool), sorted by speed. With centrifugal pendulums the modes move with
+            speed and a critical speed is a root of ω_m(Ω) = qΩ
+            (:mod:`predict.torsion.campbell`); ``frequency_hz`` is then the mode's frequency
+            at that speed.
 
         References
         ----------
@@ -625,6 +664,13 @@ class TorsionalSystem:
         lo, hi = (0.0, np.inf) if speed_range_rpm is None else map(float, speed_range_rpm)
         if not lo <= hi:
             raise ModelError(f"speed_range_rpm={speed_range_rpm!r} must be (low, high), low<=high")
+        from .campbell import has_speed_dependence, speed_dependent_criticals
+
+        if has_speed_dependence(self):
+            rows = speed_dependent_criticals(self, orders, lo, hi)
+            frame = pd.DataFrame(rows, columns=["mode", "order", "speed_rpm", "frequency_hz",
+                                                "vector_sum", "major"])
+            return frame.sort_values(["speed_rpm", "mode"], ignore_index=True)
         if np.isfinite(hi):  # only modes that can cross an order below the top speed
             omega, numbers, shapes = subset.below(self, TWO_PI * float(np.max(orders)) * hi
                                                   / 60.0 * (1 + 1e-9))
@@ -659,8 +705,13 @@ class TorsionalSystem:
         omega, numbers = self._values[:2]
         f = omega / TWO_PI
         shown = [i for i in np.flatnonzero(numbers > 0) if modes is None or numbers[i] in modes]
-        for i in shown:
-            ax.axhline(f[i], color="0.5", lw=0.8)
+        from .campbell import has_speed_dependence, _draw_branches
+
+        if has_speed_dependence(self):      # pendulum modes move with speed: draw the curves
+            _draw_branches(self, ax, max(lo, 1e-3), hi)
+        else:
+            for i in shown:
+                ax.axhline(f[i], color="0.5", lw=0.8)
         rpm = np.array([lo, hi])
         for q in orders:
             ax.plot(rpm, rpm * q / 60.0, color="C0" if self.major_orders([q])[0] else "C1",
