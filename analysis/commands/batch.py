@@ -1,6 +1,8 @@
 """``crankbench batch 'runs/*.h5' --model MODEL.toml [-o summary.csv] [--scheduler ADDRESS]``.
 
-Runs the chain of :mod:`analysis.pipeline` on many records in parallel with dask — threads
+Runs the chain of :mod:`analysis.pipeline` (a shaft-line model) or the vibrograph comparison
+(an engine model with ``[mounts]``: the row carries the worst measured/predicted ratio and the
+verdict) on many records in parallel with dask — threads
 in this process by default, or an existing ``dask.distributed`` cluster with ``--scheduler``
 (``pip install 'crankbench[distributed]'``) — and writes one summary row per record (CSV,
 atomically). A record that fails is reported with its error and skipped; the others go on.
@@ -29,7 +31,7 @@ def configure(parser) -> None:
     parser.add_argument("pattern", metavar="PATTERN", nargs="+",
                         help="record files or glob patterns (quote them: 'runs/*.h5')")
     parser.add_argument("--model", required=True, metavar="MODEL.toml",
-                        help="shaft-line model (TOML)")
+                        help="shaft-line model, or an engine model with [mounts] (TOML)")
     parser.add_argument("-o", "--output", default="summary.csv", metavar="FILE",
                         help="summary table (.csv or .json; default summary.csv)")
     parser.add_argument("--overwrite", action="store_true",
@@ -108,15 +110,24 @@ def process_one(record_path, model_path, options, cache_file=None, report_dir=No
             opts["load"] = load_from_record_file(record_path)
         elif isinstance(opts["load"], dict):
             opts["load"] = LoadCase(**opts["load"])
-        result = analyse(record_path, model_path, **opts)
+        from crankbench.analysis.vibrograph import compare_vibrograph, model_kind
+
+        if model_kind(model_path) == "engine":
+            from crankbench.analysis.commands._pipeline_cli import vibrograph_options
+            from crankbench.analysis.vibrograph_report import build_vibrograph_report
+
+            result = compare_vibrograph(record_path, model_path, **vibrograph_options(opts))
+            builder = build_vibrograph_report
+        else:
+            from crankbench.analysis.report.build import build_report as builder
+
+            result = analyse(record_path, model_path, **opts)
         row = {"status": "ok", "error": ""}
         row.update(result.summary())
         row["record"] = str(record_path)
         if report_dir is not None:
-            from crankbench.analysis.report.build import build_report
-
             out = Path(report_dir) / (Path(record_path).stem + ".html")
-            build_report(result, record_path=record_path, model_path=model_path).save(
+            builder(result, record_path=record_path, model_path=model_path).save(
                 out, overwrite=overwrite, option="--overwrite")
             row["report"] = str(out)
         if store_run is not None:
@@ -208,6 +219,11 @@ def run(args) -> int:
     model = Path(args.model)
     if not model.is_file():
         raise FileNotFoundError(f"{model}: no such model file")
+    from crankbench.analysis.vibrograph import model_kind
+
+    if getattr(args, "store", None) and model_kind(model) == "engine":
+        raise ConfigError("--store keeps shaft-line runs; an engine model's vibrograph "
+                          "comparison is not stored (the summary CSV/JSON has its rows)")
     files = expand(args.pattern)
     options = options_from_args(args)  # load per record from its truth when not given
     if options["load"] is not None:
@@ -336,7 +352,8 @@ def _print_summary(rows, files, out, args) -> int:
     else:
         cols = [c for c in ("record", "status", "verdict", "resonances", "matched",
                             "max_abs_deviation_pct", "comparison_verdict", "limits_verdict",
-                            "elapsed_s") if c in table]
+                            "vibration_worst_ratio", "vibration_verdict", "elapsed_s")
+                if c in table]
         print_table(table[cols], title=f"{len(files)} records ({len(failed)} failed)")
         for _, r in failed.iterrows():
             print(f"FAILED {r.record}: {r.error}")
