@@ -20,7 +20,9 @@ Steps and their fidelity knobs:
 5. :func:`analysis.match_criticals`;
 6. limit checks: measured vibratory stress = measured order amplitude × the model's stress per
    unit node amplitude of that order (the classical torsiograph evaluation), summed over orders
-   (an upper bound on the superposed stress), against the continuous/transient limits.
+   (an upper bound on the superposed stress), against the continuous/transient limits;
+7. block/mount vibration: every vibrograph channel placed on the engine block against the
+   engine model on its mounts, per (sensor, order) (:mod:`analysis.vibrograph`).
 """
 
 from __future__ import annotations
@@ -139,10 +141,17 @@ class PipelineResult:
         For a steady-speed record: the steady-state order table
         (:func:`analysis.steady.steady_orders`: amplitude and phase per order with their
         uncertainty) shown instead of a sweep rate and resonances.
-    balance : tuple of (channel, BalanceComparison or None, pandas.DataFrame)
-        Orders 1 and 2 at each vibrograph mounted at a named mount: the comparison with the
-        predicted balance residuals through the mount model (None when the prediction is zero
-        by design), and a table of predicted and measured maxima per order.
+    balance : tuple
+        Kept for compatibility (empty): the vibrograph channels are compared in
+        ``vibrograph``.
+    vibrograph : VibrographResult or None
+        Block/mount vibration per (sensor, order) against the shaft line's engine on its
+        mounts (:func:`analysis.vibrograph.compare_vibrograph`), with the residual forces and
+        moments when enough sensors; None when the engine has no ``[mounts]`` or the record
+        no placeable vibrograph channel.
+    pressure : analysis.excitation_compare.ExcitationComparison or None
+        With cylinder pressure in the record: the indicator analysis and the response
+        predicted from the measured excitation beside the model's.
     """
 
     source: str
@@ -166,8 +175,10 @@ class PipelineResult:
     settings: dict = field(default_factory=dict)
     timings: dict = field(default_factory=dict)
     balance: tuple = ()
+    pressure: object = None
     extra_verdicts: tuple = ()
     steady_orders: object = None
+    vibrograph: object = None
 
     @property
     def steady(self) -> bool:
@@ -178,26 +189,17 @@ class PipelineResult:
     @property
     def verdicts(self) -> tuple:
         """Every check as a :class:`analysis.verdict.Verdict`: the comparison with the model,
-        each limit check, the balance comparisons (informational) and any added by other
-        steps (``extra_verdicts``, e.g. a steady-state order comparison)."""
-        from .verdict import Verdict
-
+        each limit check, the block/mount vibration against the engine on its mounts (one
+        combined verdict of :attr:`vibrograph`) and any added by other steps
+        (``extra_verdicts``, e.g. a steady-state order comparison)."""
         lo, hi = self.speed_range_rpm
         out = [self.comparison.verdict(
             steady=self.steady,
             basis=f"record {self.source}, channel {self.channel} at {self.node}, "
                   f"{lo:.0f}–{hi:.0f} rpm, {len(self.resonances)} resonance(s) found")]
         out += [c.verdict for c in self.limits]
-        for channel, comp, _ in self.balance:
-            if comp is None:
-                continue
-            detail = ", ".join(f"order {r.order:g}: ×{r.median_ratio:.2f}"
-                               for _, r in comp.table.iterrows())
-            out.append(Verdict.from_bool(
-                f"balance residuals at {channel}", comp.passed,
-                rule=f"median measured/predicted within a factor {comp.factor:g}",
-                basis=f"channel {channel}, orders 1 and 2 against the mount model",
-                reason=detail, required=False))
+        if self.vibrograph is not None:
+            out.append(self.vibrograph.verdict)
         return tuple(out) + tuple(self.extra_verdicts)
 
     @property
@@ -243,6 +245,10 @@ class PipelineResult:
                 "unmatched_predicted_significant": s["unmatched_predicted_significant"],
                 "max_abs_deviation_pct": s["max_abs_deviation_pct"],
                 "model_agrees": s["agrees"],
+                "vibration_worst_ratio": self.vibrograph.summary()["vibration_worst_ratio"]
+                if self.vibrograph is not None else float("nan"),
+                "vibration_verdict": self.vibrograph.verdict.status
+                if self.vibrograph is not None else "no vibrograph channel",
                 "elapsed_s": float(sum(self.timings.values()))}
 
 
@@ -286,12 +292,12 @@ def _node_of(record, channel, system):
     return system.node_names[0]
 
 
-def _load_record(record):
+def _load_record(record, channel_map=None):
     if isinstance(record, (str, Path)):
         from crankbench import measure
 
         path = Path(record)
-        return measure.read(path), str(path)
+        return measure.read(path, map=channel_map), str(path)
     if hasattr(record, "data_vars"):
         return record, str(record.attrs.get("source", "record"))
     raise RecordError(f"record must be a path or an xarray.Dataset Record, got "
@@ -309,9 +315,13 @@ def _load_model(model):
                       f"{type(model).__name__}")
 
 
-def predicted_response(system, speed_rpm, orders, node, *, load, quantity="angle"):
+def predicted_response(system, speed_rpm, orders, node, *, load, quantity="angle",
+                       excitation=None):
     """Steady-state order amplitudes at ``node`` and the complex stress of each section.
 
+    ``excitation`` (an :class:`predict.torsion.excitation.Excitation`, e.g. from measured
+    pressure) replaces the model's parametric one; its gas part is scaled by the load law —
+    except for a :class:`predict.gas_torque.SpeedExcitation`, measured at each speed.
     Returns (amplitude (n_s, n_o), stress (n_s, n_o, n_edges) complex Pa — NaN where a
     section has no diameter —, the ForcedResponse).
     """
@@ -319,14 +329,25 @@ def predicted_response(system, speed_rpm, orders, node, *, load, quantity="angle
 
     from crankbench.predict.torsion.excitation import engine_excitation
 
-    imep = load.imep if load.imep is not None else system.operating.get("imep")
-    exc = engine_excitation(system, imep=imep, orders=orders)
+    from .given_excitation import given_excitation, given_forcing
+
     omega = np.asarray(speed_rpm, float) * np.pi / 30.0
-    scale = load.scale(speed_rpm)
-    torque = (exc.gas[None, :] * scale[:, None]
-              + (omega**2)[:, None] * exc.inertia[None, :])[:, :, None]
-    torque = np.repeat(torque, exc.n_cylinders, axis=2)
-    res = system.forced_response(speed_rpm, torque=torque, orders=orders, superpose=False)
+    if excitation is None and given_excitation(system) is not None:  # a bench without an engine
+        forced, torque = given_forcing(system, speed_rpm, orders)
+        res = forced.forced_response(speed_rpm, torque=torque, orders=orders, superpose=False)
+    else:
+        if excitation is None:
+            imep = load.imep if load.imep is not None else system.operating.get("imep")
+            excitation = engine_excitation(system, imep=imep, orders=orders)
+        if getattr(excitation, "speed_dependent", False):   # measured per speed: no load law
+            torque = excitation.harmonics(omega, orders)
+        else:
+            scale = load.scale(speed_rpm)
+            gas = excitation.harmonics(np.zeros(1), orders)[0]                 # (n_o, z)
+            inertia = excitation.harmonics(np.ones(1), orders)[0] - gas
+            torque = gas[None] * scale[:, None, None] \
+                + (omega**2)[:, None, None] * inertia[None]
+        res = system.forced_response(speed_rpm, torque=torque, orders=orders, superpose=False)
     i = system.node_names.index(node)
     amp = np.abs(res.angle[:, :, i])
     if quantity == "angular_velocity":
@@ -336,13 +357,17 @@ def predicted_response(system, speed_rpm, orders, node, *, load, quantity="angle
 
 
 def _prediction(system, orders, node, quantity, units, load, lo, hi, base_points, *,
-                fraction=0.05, max_fit=8):
+                fraction=0.05, max_fit=8, min_prominence=0.05):
     """Critical speeds in range, identified on the predicted response like the measurement.
 
     The predicted steady-state order response at ``node`` is passed through the same
     resonance finder as the measured track (SDOF modal fit), so measured and predicted
     critical speeds, damping and amplitudes are estimated the same way; each predicted
-    resonance is assigned the mode of the nearest undamped critical of its order.
+    resonance is assigned the mode of the nearest undamped critical of its order. A critical
+    is *significant* (expected in the measurement) when the finder identifies it on the
+    predicted curve with the prominence the measured finder demands (``min_prominence``) and
+    its amplitude is at least 5 % of the largest: a bump of a few per cent on a large
+    background cannot be identified in a measured track either.
     """
     import xarray as xr
 
@@ -377,7 +402,8 @@ def _prediction(system, orders, node, quantity, units, load, lo, hi, base_points
 
     found = find_resonances(track, orders=fit_orders, response="velocity"
                             if quantity == "angular_velocity" else "displacement",
-                            min_amplitude_fraction=0.0, min_snr=1e-6, min_prominence=0.01,
+                            min_amplitude_fraction=0.0, min_snr=1e-6,
+                            min_prominence=min_prominence,
                             sweep_correction=False).to_frame() if fit_orders else \
         pd.DataFrame(columns=["order", "speed_rpm", "frequency_hz", "amplitude",
                               "damping_ratio"])
@@ -435,8 +461,9 @@ def _track(x, fs, rpm, orders, *, method, bandwidth_orders, revolutions):
 def analyse(record, model, *, channel=None, speed_channel=None, orders=None, max_order=12.0,
             method="vkf", bandwidth_orders=None, revolutions=4, load=None, gate=0.15,
             tolerance=0.03, amplitude_tolerance=0.5, machine_class=None,
-            vibration_standard=None, operating_range_rpm=None, base_points=1500, order_fraction=0.05, max_tracked=8,
-            resonance_options=None, progress=None) -> PipelineResult:
+            vibration_standard=None, operating_range_rpm=None, base_points=1500,
+            order_fraction=0.05, max_tracked=8, resonance_options=None,
+            vibration_tolerance=0.5, progress=None, channel_map=None) -> PipelineResult:
     """Run the chain on one record against one shaft-line model.
 
     Parameters
@@ -491,8 +518,13 @@ def analyse(record, model, *, channel=None, speed_channel=None, orders=None, max
         O(N K²) in the number of orders K.
     resonance_options : dict, optional
         Passed to :func:`analysis.find_resonances`.
+    vibration_tolerance : float
+        Ratio band of the vibrograph comparison (:func:`analysis.vibrograph.compare_vibrograph`)
+        of any block/mount channel when the engine has ``[mounts]``.
     progress : callable, optional
         ``progress(step_name)`` called before each step (CLI progress bars).
+    channel_map : path-like, dict or ChannelMap, optional
+        Channel map for a record file (:mod:`measure.channelmap`).
 
     Returns
     -------
@@ -531,7 +563,7 @@ def analyse(record, model, *, channel=None, speed_channel=None, orders=None, max
         log.debug("step %-15s %.2f s", name, timings[name])
 
     step("read")
-    rec, source = _load_record(record)
+    rec, source = _load_record(record, channel_map)
     system, model_path = _load_model(model)
     load = LoadCase.from_any(load, getattr(system, "engine", None))
     channel = torsional_channel(rec, channel)
@@ -563,7 +595,10 @@ def analyse(record, model, *, channel=None, speed_channel=None, orders=None, max
     steady_run = steady_speed(rpm_ok, fs)
     sweep_rate = 0.0 if steady_run else _sweep_rate(rpm_ok, fs)
     speed_arg = rpm if bool(np.all(ok)) else rpm_ok   # keeps the encoder angle when present
-    all_orders = [float(o) for o in (system.default_orders() if orders is None else orders)
+    from .given_excitation import default_orders, given_excitation
+
+    all_orders = [float(o) for o in (default_orders(system, max_order) if orders is None
+                                     else orders)
                   if o <= max_order + 1e-9 and o * hi / 60.0 < 0.4 * fs]
     if not all_orders:
         raise AnalysisError(f"no order up to {max_order:g} lies below 0.4 × the sample rate "
@@ -573,7 +608,8 @@ def analyse(record, model, *, channel=None, speed_channel=None, orders=None, max
     step("prediction")
     predicted, response_da, grid, pred_stress = _prediction(
         system, all_orders, node, quantity, units, load, lo, hi, base_points,
-        fraction=order_fraction, max_fit=max_tracked if orders is None else len(all_orders))
+        fraction=order_fraction, max_fit=max_tracked if orders is None else len(all_orders),
+        min_prominence=float((resonance_options or {}).get("min_prominence", 0.05)))
     if orders is None:
         # track the orders whose predicted resonances matter, largest first
         big = predicted["amplitude"].max() if len(predicted) else 0.0
@@ -588,6 +624,14 @@ def analyse(record, model, *, channel=None, speed_channel=None, orders=None, max
         predicted.loc[~predicted["order"].isin(orders), "significant"] = False
     else:
         orders = all_orders
+    given = given_excitation(system)
+    if given is not None and given.get("torque") is None:
+        # torques not given: criticals are compared by speed only; which are expected in the
+        # measurement was judged on the response to 1 N·m per order
+        predicted["amplitude"] = np.nan
+        response_da.attrs["note"] = ("response to 1 N·m per order: exciting torques not given "
+                                     "(criticals expected where that response is >= 5 % of "
+                                     "its largest)")
     done("prediction")
 
     if bandwidth_orders is None:
@@ -620,13 +664,14 @@ def analyse(record, model, *, channel=None, speed_channel=None, orders=None, max
     done("resonances")
 
     step("comparison")
-    comparison = match_criticals(resonances, predicted, gate=gate, tolerance=tolerance,
+    predicted, measured = _swept_like_with_like(predicted, resonances, track, quantity, gate)
+    comparison = match_criticals(measured, predicted, gate=gate, tolerance=tolerance,
                                  amplitude_tolerance=amplitude_tolerance,
                                  speed_range_rpm=(lo, hi))
     done("comparison")
 
     step("balance")
-    balance = _balance(rec, system, lo, hi)
+    vibrograph = _vibrograph(rec, system, load, speed_channel, vibration_tolerance)
     done("balance")
 
     step("limits")
@@ -634,6 +679,13 @@ def analyse(record, model, *, channel=None, speed_channel=None, orders=None, max
                            channel, machine_class, operating_range_rpm, load=load,
                            standard=vibration_standard, speed_range=(lo, hi))
     done("limits")
+
+    step("measured excitation")                # cylinder pressure, if the record has it
+    from .excitation_compare import measured_excitation_prediction
+
+    pressure = measured_excitation_prediction(rec, system, grid, all_orders, node, quantity,
+                                              units, load, track, response_da)
+    done("measured excitation")
 
     ppr = next((int(rec[n].attrs["pulses_per_rev"]) for n in rec.data_vars
                 if "pulses_per_rev" in rec[n].attrs), None)
@@ -666,7 +718,8 @@ def analyse(record, model, *, channel=None, speed_channel=None, orders=None, max
         speed_range_rpm=(lo, hi), sweep_rate_rpm_per_s=sweep_rate, track=track,
         resonances=resonances, predicted=predicted, response=response_da,
         comparison=comparison, limits=tuple(limits), system=system, record=rec,
-        settings=settings, timings=timings, balance=tuple(balance), steady_orders=steady_table)
+        settings=settings, timings=timings, vibrograph=vibrograph,
+        pressure=pressure, steady_orders=steady_table)
 
 
 def _tracking_settings(track, method, bandwidth_orders, revolutions) -> dict:
@@ -694,76 +747,45 @@ def _tracking_settings(track, method, bandwidth_orders, revolutions) -> dict:
             "orders", "window": track.attrs.get("window", "hann")}
 
 
-def _balance(rec, system, lo, hi, orders=(1.0, 2.0)):
-    """Orders 1 and 2 at the mounts against the balance residuals through the mount model.
+def _swept_like_with_like(predicted, resonances, track, quantity, gate):
+    """Sweep effects before matching (:mod:`analysis.resonance.sweep`): predicted criticals the
+    run does not cover with both flanks (and the sweep delay) are not expected; measured
+    resonances the finder could not correct for the sweep lose the delay the model predicts
+    at the measured rate."""
+    from .resonance import correct_sweep_delay, sweep_expectation
 
-    The predicted response is that of the free inertia forces and moments only
-    (:func:`predict.balance.unbalance`, through :class:`predict.mounts.MountedEngine`, via
-    :class:`measure.synth.vibrograph.MountChannels` without torque reaction): the orders a
-    balance check is about. Orders balanced by design (prediction below 1e-9 of the
-    measurement) are listed with their measured residual level only.
-    """
-    import pandas as pd
-    import xarray as xr
+    if "time" not in track.coords or track.sizes.get("time", 0) < 4 or not len(predicted):
+        return predicted, resonances
+    expected = sweep_expectation(
+        predicted, time=track["time"].values, speed_rpm=track["rpm"].values,
+        response="velocity" if quantity == "angular_velocity" else "displacement")
+    edge = expected["significant"] & ~expected["covered"]
+    for _, r in expected[edge].iterrows():
+        log.info("mode %d order %g: critical at %.0f rpm is not covered by the run with both "
+                 "flanks (and the sweep delay); listed, not judged", r["mode"], r["order"],
+                 r["speed_rpm"])
+    expected.loc[edge, "significant"] = False
+    measured = correct_sweep_delay(resonances.to_frame(), expected, gate=gate)
+    return expected, measured
 
-    from .compare import compare_balance
-    from .orders import order_track
-    from .speedref import speed_reference
+
+def _vibrograph(rec, system, load, speed_channel, tolerance):
+    """The vibrograph comparison of the record's block/mount channels against the shaft line's
+    engine on its mounts; None without ``[mounts]`` or placeable channels."""
+    from .vibrograph import compare_vibrograph
 
     engine = getattr(system, "engine", None)
     source = getattr(engine, "source", None)
     if engine is None or not source:
-        return []
+        return None
     try:
-        from crankbench.predict.mounts import MountedEngine
-
-        mounted = MountedEngine.from_toml(source)
-    except (ValueError, OSError, KeyError):
-        return []  # no [mounts] in the engine model
-    names = {m.name: m.position for m in mounted.mounts}
-    out = []
-    for name in rec.data_vars:
-        v = rec[name]
-        q = v.attrs.get("quantity")
-        direction = str(v.attrs.get("direction", "")).lower()
-        if q not in ("acceleration", "velocity", "displacement") or v.ndim != 1 or \
-                v.attrs.get("location") not in names or direction not in ("x", "y", "z"):
-            continue
-        from crankbench.measure.synth.vibrograph import MountChannels
-
-        grid = np.linspace(lo, hi, 60) * np.pi / 30.0
-        mc = MountChannels(mounted, engine, None, list(orders), [names[v.attrs["location"]]],
-                           grid)
-        pred = np.vstack([np.abs(mc.table(i, 0, direction, q)) for i in range(len(orders))])
-        predicted = xr.DataArray(pred, dims=("order", "rpm"),
-                                 coords={"order": list(orders), "rpm": grid * 30 / np.pi},
-                                 attrs={"units": v.attrs.get("units", "")})
-        fs = float(v.attrs["sample_rate"])
-        rpm = speed_reference(rec, str(name))
-        x = np.nan_to_num(np.asarray(v.values, float))
-        track = order_track(x, fs=fs, speed_rpm=np.nan_to_num(rpm, nan=float(np.nanmedian(rpm))),
-                            orders=list(orders), revolutions=8, overlap=0.5)
-        rows = []
-        live = []
-        for i, o in enumerate(orders):
-            m_max = float(track["amplitude"].sel(order=o).max())
-            p_max = float(pred[i].max())
-            balanced = p_max <= 1e-9 * max(m_max, 1e-300)
-            rows.append(dict(order=o, predicted_max=p_max, measured_max=m_max,
-                             balanced_by_design=balanced))
-            if not balanced:
-                live.append(o)
-        comp = None
-        if live:
-            try:
-                comp = compare_balance(track, predicted, orders=live,
-                                       channel=f"{name} ({v.attrs['location']} {direction})")
-            except AnalysisError as exc:
-                log.debug("balance comparison at %s skipped: %s", name, exc)
-        table = pd.DataFrame(rows)
-        table.attrs["units"] = v.attrs.get("units", "")
-        out.append((str(name), comp, table))
-    return out
+        return compare_vibrograph(rec, source, load=load, speed_channel=speed_channel,
+                                  tolerance=tolerance)
+    except ConfigError as exc:        # no [mounts] in the engine model
+        log.info("no vibrograph comparison: %s", exc)
+    except (RecordError, AnalysisError) as exc:   # no channel to place, nothing to compare
+        log.info("no vibrograph comparison: %s", exc)
+    return None
 
 
 def _superpose(stress, orders):
@@ -868,7 +890,7 @@ def _limit_checks(rec, system, track, grid, pred_stress, response, orders, chann
                  "per section, superposed over the cycle")
         checks.extend(check_torsional_stress(
             centre, total, limits, sections=[names[c] for c in cols],
-            operating_range_rpm=operating_range_rpm, name=f"measured torsional stress",
+            operating_range_rpm=operating_range_rpm, name="measured torsional stress",
             basis=basis, covered_rpm=(lo, hi)))
         if getattr(system, "engine", None) is not None and load is not None and \
                 hasattr(limits, "misfire_operation"):

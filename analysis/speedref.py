@@ -160,16 +160,10 @@ def _pulse_speed(var, name):
         raise RecordError(f"pulse channel {name!r} has no 'pulses_per_rev' attr")
     if var.shape[0] == 0:
         raise AnalysisError(f"pulse channel {name!r} holds no edges (zero-length channel)")
-    from crankbench.measure import tacho
+    from crankbench.measure.tacho import pulse_channel_speed  # reads the layout attrs
 
-    if hasattr(tacho, "pulse_channel_speed"):      # reads speed_ratio etc. from the attrs
-        t, omega = tacho.pulse_channel_speed(var)
-        return np.asarray(t, float), np.asarray(omega, float)
-    missing = var.attrs.get("missing_teeth", 0)
-    t, omega = tacho.speed_from_pulses(np.asarray(var.values, dtype=float),
-                                       pulses_per_rev=int(var.attrs["pulses_per_rev"]),
-                                       missing_teeth=0 if missing is None else int(missing))
-    return np.asarray(t, float), np.asarray(omega, float) / _ratio(var, name)
+    t, omega = pulse_channel_speed(var)
+    return np.asarray(t, float), np.asarray(omega, float)
 
 
 def _pulse_angle(var, name, t_out):

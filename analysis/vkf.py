@@ -62,6 +62,7 @@ import numpy as np
 from crankbench.predict._deprecate import renamed
 from crankbench.predict._validate import check_int, check_option, check_positive
 from crankbench.predict.errors import AnalysisError
+from crankbench.predict._threads import single_threaded_blas
 
 from .resample import _as_angle, _as_rpm, _as_signal, _fft_lowpass
 from .resample import shaft_angle as _integrate_speed
@@ -353,6 +354,7 @@ def _bandwidths(bandwidth_hz, bandwidth_orders, orders, speeds, n):
 
 
 @renamed(rpm="speed_rpm")
+@single_threaded_blas  # banded solves per block: BLAS threads only cost (issue 21)
 def vold_kalman(x, *, fs=None, speed_rpm, orders, bandwidth_hz=None, bandwidth_orders=None,
                 filter_order: int = 2, decimate: bool = True, block: int = 1 << 15,
                 knots_per_bandwidth: float | None = 40.0, shaft_angle=None,

@@ -7,13 +7,16 @@ import logging
 
 from crankbench.analysis.pipeline import LoadCase, load_from_record_file
 
-__all__ = ["add_common_arguments", "options_from_args", "progress_bar"]
+__all__ = ["add_common_arguments", "options_from_args", "vibrograph_options", "progress_bar"]
 
 log = logging.getLogger("crankbench")
 
 
 def add_common_arguments(parser) -> None:
     """Arguments shared by ``compare``, ``report`` and ``batch``."""
+    parser.add_argument("--map", metavar="MAP.toml", default=None,
+                        help="channel map for the record(s): columns, units, calibration, raw "
+                             "pulse roles")
     parser.add_argument("--channel", metavar="NAME", default=None,
                         help="torsional channel (default: the first angle/angular-velocity one)")
     parser.add_argument("--speed-channel", metavar="NAME", default=None,
@@ -43,6 +46,9 @@ def add_common_arguments(parser) -> None:
                         help="class of that standard (ISO 10816-6: 1-7, ISO 10816-1: I-IV; "
                              "default: the model's, else chosen from the engine's power and "
                              "mounting)")
+    parser.add_argument("--vibration-tolerance", type=float, default=0.5, metavar="T",
+                        help="block/mount vibration against the engine model: measured/"
+                             "predicted order amplitude within [1/(1+T), 1+T] (default 0.5)")
 
 
 def options_from_args(args, record_path=None) -> dict:
@@ -55,11 +61,21 @@ def options_from_args(args, record_path=None) -> dict:
         load = load_from_record_file(record_path)
         if load is not None:
             log.debug("load from the record's scene: %s, imep %s Pa", load.law, load.imep)
-    return dict(channel=args.channel, speed_channel=args.speed_channel, orders=args.orders,
+    return dict(channel_map=args.map, channel=args.channel, speed_channel=args.speed_channel,
+                orders=args.orders,
                 method=args.method, bandwidth_orders=args.bandwidth_orders, load=load,
                 gate=args.gate, tolerance=args.tolerance,
                 machine_class=args.machine_class,
-                vibration_standard=getattr(args, "vibration_standard", None))
+                vibration_standard=getattr(args, "vibration_standard", None),
+                vibration_tolerance=getattr(args, "vibration_tolerance", 0.5))
+
+
+def vibrograph_options(options) -> dict:
+    """The options of :func:`analysis.vibrograph.compare_vibrograph` among those of
+    :func:`options_from_args` (an engine model: no torsional channel, no criticals)."""
+    return dict(load=options.get("load"), speed_channel=options.get("speed_channel"),
+                orders=options.get("orders"),
+                tolerance=options.get("vibration_tolerance", 0.5))
 
 
 def progress_bar(total_steps: int = 7, *, desc: str = "", disable: bool = False):

@@ -44,6 +44,8 @@ def _orders(text: str) -> list[float]:
 def configure(parser) -> None:
     parser.add_argument("record", metavar="RECORD",
                         help="record file (any format measure.read knows)")
+    parser.add_argument("--map", metavar="MAP.toml", default=None,
+                        help="channel map: columns, units, calibration, raw pulse roles")
     parser.add_argument("--channel", required=True, help="channel to analyse")
     parser.add_argument("--orders", required=True, type=_orders,
                         help="orders to track, comma-separated (e.g. 0.5,1,1.5)")
@@ -167,9 +169,9 @@ def run(args) -> int:
         log.info("%s: %.3g MB > %.3g MB, streaming it segment by segment (measure.open + "
                  "analysis.stream)", args.record, os.path.getsize(args.record) / 1e6,
                  STREAM_BYTES / 1e6)
-        record = measure.open(args.record)
+        record = measure.open(args.record, map=args.map)
     else:
-        record = measure.read(args.record)
+        record = measure.read(args.record, map=args.map)
     names = [str(n) for n in record.data_vars]
     if args.channel not in names:
         raise RecordError(f"{args.record}: no channel {args.channel!r}"

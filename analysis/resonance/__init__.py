@@ -33,7 +33,8 @@ end); see ``tests/analysis/test_pipeline.py``.
 
 from .finder import OrderCurve, Resonance, ResonanceTable, find_resonances
 from .sdof import RESPONSES, _modal_fit, _parabolic, half_power_damping, sdof_response
-from .sweep import sweep_peak_loss
+from .sweep import correct_sweep_delay, sweep_expectation, sweep_peak_loss
 
 __all__ = ["Resonance", "ResonanceTable", "OrderCurve", "find_resonances",
-           "half_power_damping", "sdof_response", "sweep_peak_loss", "RESPONSES"]
+           "half_power_damping", "sdof_response", "sweep_peak_loss", "sweep_expectation",
+           "correct_sweep_delay", "RESPONSES"]

@@ -8,7 +8,8 @@ of the scene:
   sweep shows its transient - lower, later, broader peaks);
 * vibrograph channels at mount points from the balance residuals and the torque reaction
   through the mount model (:mod:`.vibrograph`, quasi-steady);
-* cylinder pressure from the synthetic Wiebe trace of :mod:`predict.pressure`;
+* cylinder pressure from the synthetic Wiebe trace of :mod:`predict.pressure` with the
+  transducer errors of :mod:`.pressure` (offset, drift, thermal shock, noise, TDC error);
 * the bench speed channel (mean speed of the profile);
 
 then adds the scene's imperfections (:mod:`.imperfections`). The ground truth carries, per
@@ -34,7 +35,7 @@ from crankbench.predict._validate import check_option
 from crankbench.predict.errors import ConfigError
 
 from .imperfections import add_noise_and_drift as _add_noise_and_drift
-from .pulses import analogue_pickup, wheel_edges
+from .pulses import pickup_voltage, wheel_edges
 from .scene import Scene
 
 __all__ = ["synthesize", "SyntheticRun"]
@@ -173,6 +174,7 @@ def synthesize(scene, *, method="split", integration_rate=None):
     t_truth = np.arange(0.0, duration + 1e-9, 1.0 / scene.truth_rate)
     rpm_truth = prof.speed(t_truth) / RPM
     load_truth = scene.load.scale(rpm_truth)
+    crank_vibration = {}
     fidelity = {"method": method, "max_order": float(scene.max_order),
                 "orders": int(orders.size), "truth_rate_hz": float(scene.truth_rate),
                 "max_sweep_rate_rpm_per_s": prof.max_sweep_rate()}
@@ -181,7 +183,7 @@ def synthesize(scene, *, method="split", integration_rate=None):
     tors = [s for s in scene.sensors if s.kind in ("torsiograph", "encoder", "tacho")]
     modal = None
     if tors:
-        from .torsional import ModalModel, equivalent_viscous_system, order_forcing
+        from .torsional import ModalModel, order_forcing
 
         system = scene.shaftline
         rates = [s.sample_rate for s in tors if s.kind == "torsiograph"]
@@ -191,9 +193,14 @@ def synthesize(scene, *, method="split", integration_rate=None):
         psi = psi0 + prof.angle(tg)
         spd = prof.speed(tg)
         load_fn = lambda w: scene.load.scale(w / RPM)  # noqa: E731 - gas scale vs speed
-        modal = ModalModel.from_system(system, omega=float(np.mean(spd)))
+        modal = ModalModel.from_system(system, omega=float(np.mean(spd)),
+                                       max_frequency_hz=2.0 * f_max)
         gas, inertia = order_forcing(system, excitation, orders)
-        node_names = sorted({s.params["node"] for s in tors}, key=system.node_names.index)
+        from .pressure import cylinder_nodes
+
+        crank_nodes = cylinder_nodes(scene)          # pressure follows its cylinder's angle
+        node_names = sorted({s.params["node"] for s in tors} | set(crank_nodes.values()),
+                            key=system.node_names.index)
         nodes = [modal.node_index(nm) for nm in node_names]
         ratio = modal.node_ratio[nodes]
         x_tot = np.zeros((len(nodes), n_t))
@@ -203,9 +210,10 @@ def synthesize(scene, *, method="split", integration_rate=None):
         ph_x = np.zeros_like(amp_x)
         amp_v = np.zeros_like(amp_x)
         ph_v = np.zeros_like(amp_x)
+        diagnostics: dict = {}
         for k, q in enumerate(orders):
             x, v = modal.respond(tg, psi, q, gas[k], inertia[k], spd, load=load_fn,
-                                 nodes=nodes, method=method)
+                                 nodes=nodes, method=method, diagnostics=diagnostics)
             x_tot += x.real
             v_tot += v.real
             back = np.exp(-1j * q * psi[it])
@@ -213,11 +221,18 @@ def synthesize(scene, *, method="split", integration_rate=None):
             ph_x[:, k] = np.angle(x[:, it] * back)
             amp_v[:, k] = np.abs(v[:, it]) * ratio[:, None]
             ph_v[:, k] = np.angle(v[:, it] * back)
+        crank_vibration = {name: (tg, x_tot[node_names.index(node)])
+                           for name, node in crank_nodes.items()}
         steady_x, steady_v = _steady_state(system, excitation, orders, rpm_truth, load_truth,
                                            nodes)
         fidelity.update(integration_rate_hz=rate, modal_condition=modal.condition,
                         rigid_body_regularised=modal.regularised,
-                        hysteretic_damping="equivalent viscous at the most strained mode",
+                        damping="the model's own: steady state by its exact harmonic solve "
+                                "(hysteretic loss factors included); each mode's sweep "
+                                "transient with its damping at that mode's frequency",
+                        steady_interpolation_rel_error=float(
+                            diagnostics.get("steady_interpolation_rel_error", 0.0)),
+                        steady_points=int(diagnostics.get("steady_points", 0)),
                         hermite_interpolation_rel_error=float(
                             (TWO_PI * f_max / rate) ** 4 / 384.0))
         for s in tors:
@@ -252,8 +267,7 @@ def synthesize(scene, *, method="split", integration_rate=None):
             if s.kind == "tacho" and s.params.get("output") == "analogue":
                 fs = float(s.sample_rate)
                 ts = np.arange(int(np.floor(duration * fs)) + 1) / fs
-                volts = analogue_pickup(clean, time=ts, pulses_per_rev=s.params["pulses_per_rev"],
-                                        missing_teeth=s.params["missing_teeth"], profile=prof)
+                volts = pickup_voltage(clean, time=ts, params=s.params, profile=prof)
                 volts = _read_out(volts, ts, s.imperfections, rng)
                 channels[s.name] = dict(data=volts, sample_rate=fs, units="V",
                                         quantity="voltage",
@@ -277,9 +291,13 @@ def synthesize(scene, *, method="split", integration_rate=None):
         fidelity["mount_response"] = "quasi-steady (no mount-mode transient)"
 
     # ---------------------------------------------------------------- others -------------
+    pressure_truth = {}
     for s in scene.sensors:
         if s.kind == "pressure":
-            channels[s.name] = _pressure_channel(scene, s, psi0, rng)
+            from .pressure import pressure_channel
+
+            channels[s.name], pressure_truth[s.name] = pressure_channel(
+                scene, s, psi0, rng, vibration=crank_vibration.get(s.name))
         elif s.kind == "speed":
             fs = float(s.sample_rate)
             ts = np.arange(int(np.floor(duration * fs)) + 1) / fs
@@ -297,6 +315,8 @@ def synthesize(scene, *, method="split", integration_rate=None):
         "engine_id": engine.name, "test_id": scene.name, "synthetic": 1,
         "seed": int(scene.seed)})
     truth = _truth_dataset(scene, orders, t_truth, rpm_truth, truth_rows, modal, fidelity)
+    if pressure_truth:                           # measure.synth.pressure.pressure_truth reads it
+        truth.attrs["pressure"] = json.dumps(pressure_truth)
     elapsed = _time.perf_counter() - t_start
     log.debug("synthesized %r: %d channels, %.1f s of record in %.2f s", scene.name,
              len(channels), duration, elapsed)
@@ -355,16 +375,13 @@ def _resample(tg, data, ts, rate, fs, derivative=None):
 
 
 def _steady_state(system, excitation, orders, rpm, load, nodes):
-    """Steady-state node angles/velocities per order from predict.torsion (second method)."""
-    from .torsional import equivalent_viscous_system
-
-    visc = equivalent_viscous_system(system)
+    """Steady-state node angles/velocities per order from predict.torsion (the prediction)."""
     g = excitation.harmonics(np.array([0.0]), orders)[0]
     i1 = excitation.harmonics(np.array([1.0]), orders)[0] - g
     w = np.maximum(rpm, 1e-9) * RPM
     harm = load[:, None, None] * g[None] + (w**2)[:, None, None] * i1[None]
-    res = visc.forced_response(np.maximum(rpm, 1e-9), torque=harm, orders=orders,
-                               superpose=False)
+    res = system.forced_response(np.maximum(rpm, 1e-9), torque=harm, orders=orders,
+                                 superpose=False)
     ang = np.abs(res.angle[:, :, nodes])                          # (n_s, n_o, nodes), real
     vel = ang * (orders[None, :, None] * w[:, None, None])
     return ang, vel
@@ -395,7 +412,8 @@ def _mount_channels(scene, sensors, excitation, orders, psi0, t_truth, rpm_truth
     speeds = prof.speed_rpm * RPM
     n_grid = 150 if np.ptp(speeds) > 0 else 1
     grid = np.linspace(speeds.min(), speeds.max(), n_grid)
-    mc = MountChannels(mounted, scene.engine, excitation, orders, np.array(points), grid)
+    mc = MountChannels(mounted, scene.engine, excitation, orders, np.array(points), grid,
+                       counterweights=tuple(scene.balance_masses) + tuple(scene.imbalance))
     load_fn = lambda w: scene.load.scale(w / RPM)  # noqa: E731
     step = float(orders[0])
     # per sensor: response tables on the speed grid and the orders worth synthesising
@@ -458,8 +476,11 @@ def _mount_channels(scene, sensors, excitation, orders, psi0, t_truth, rpm_truth
         ts = np.arange(data[p].size) / fs
         values = _read_out(data[p], ts, s.imperfections, rng, s, s.params["quantity"])
         units = truth_rows[-len(sensors) + p][1]
+        attrs = dict(_instrument_attrs(s), position=[float(v) for v in points[p]])
+        if "mount" in s.params:
+            attrs["mount"] = s.params["mount"]
         channels[s.name] = dict(data=values, sample_rate=fs, units=units,
-                                quantity=s.params["quantity"], attrs=_instrument_attrs(s),
+                                quantity=s.params["quantity"], attrs=attrs,
                                 location=s.params.get("location", s.params.get(
                                     "mount", f"point {points[p]}")),
                                 direction=s.params["direction"])
@@ -470,30 +491,6 @@ def _instrument_attrs(spec):
         return {}
     return {"instrument_natural_frequency": float(spec.params["instrument_frequency"]),
             "instrument_damping_ratio": float(spec.params["instrument_damping"])}
-
-
-def _pressure_channel(scene, s, psi0, rng):
-    from crankbench.predict.pressure import synthetic_pressure
-
-    engine = scene.engine
-    c = s.params["cylinder"]
-    if c > engine.n_cylinders:
-        raise ConfigError(f"sensor {s.name!r}: cylinder={c} but the engine has "
-                          f"{engine.n_cylinders} cylinders")
-    trace = (synthetic_pressure(engine, imep=scene.load.imep) if scene.load.imep
-             else synthetic_pressure(engine))
-    fs = float(s.sample_rate)
-    prof = scene.profile
-    ts = np.arange(int(np.floor(prof.duration * fs)) + 1) / fs
-    psi = psi0 + prof.angle(ts)
-    fire = np.radians(engine.firing_angles_deg()[c - 1])
-    p = trace.at(psi - fire)
-    base = float(np.min(trace.pressure))
-    load = scene.load.scale(prof.speed(ts) / RPM)
-    p = base + load * (p - base)
-    p = _read_out(p, ts, s.imperfections, rng)
-    return dict(data=p, sample_rate=fs, units="Pa", quantity="pressure",
-                location=s.params.get("location", f"cylinder {c}"))
 
 
 def _truth_dataset(scene, orders, t_truth, rpm_truth, rows, modal, fidelity):
@@ -520,7 +517,7 @@ def _truth_dataset(scene, orders, t_truth, rpm_truth, rows, modal, fidelity):
         data_vars["amplitude_steady"] = (("channel", "order", "time"), steady,
                                          {"amplitude": "peak", "long_name": "steady-state "
                                           "amplitude at the same speed (predict.torsion."
-                                          "forced_response, equivalent viscous model)"})
+                                          "forced_response: the prediction)"})
     if scene.shaftline is not None:
         prof = scene.profile
         span = (float(prof.speed_rpm.min()), float(prof.speed_rpm.max()))

@@ -27,6 +27,12 @@ A scene is read from TOML (paths relative to the scene file)::
     [imperfections]                            # defaults for every sensor
     jitter_s = 2e-8
 
+    [[imbalance]]                              # optional: masses added to the crankshaft of
+    mass = 0.02                                # the synthesized engine only (a known test
+    radius = 0.05                              # imbalance: kg, m from the axis, deg ahead of
+    angle_deg = 90.0                           # throw 1, m along the crankshaft)
+    position = 0.1
+
     [[sensor]]
     kind = "torsiograph"                       # torsiograph | encoder | tacho | vibrograph |
     name = "tv_free_end"                       # pressure | speed
@@ -36,10 +42,16 @@ A scene is read from TOML (paths relative to the scene file)::
 
 Sensor keys by kind: *torsiograph* ``node``, ``quantity``, ``sample_rate``; *encoder* and
 *tacho* ``node``, ``pulses_per_rev``, ``missing_teeth``, ``tdc_offset_deg`` and, for a tacho,
-``output = "pulses" | "analogue"`` (``sample_rate`` for the analogue pick-up voltage);
+``output = "pulses" | "analogue"`` (``sample_rate`` for the analogue pick-up voltage; its
+``shape = "sine"`` (magnetic, default) or ``"square"`` (Hall/optical, 0-5 V), ``runt_teeth``
+(tooth numbers, 0 the first after the gap) reaching only ``runt_level`` of the swing (default
+0.11), ``ringing`` (damping ratio of the pick-up chain, 0 = none) at ``ringing_hz``, and for a
+once-per-revolution mark ``mark_width_deg``, e.g. a TDC mark one or two samples wide);
 *vibrograph* ``point = [x, y, z]`` or ``mount = "name"``, ``direction`` (x/y/z),
-``quantity`` (acceleration/velocity/displacement), ``sample_rate``; *pressure* ``cylinder``,
-``sample_rate``; *speed* ``sample_rate``. Torsiograph and vibrograph sensors may give a
+``quantity`` (acceleration/velocity/displacement), ``sample_rate`` (the channel carries its
+``position`` and ``direction`` attrs, docs/DESIGN.md "Vibrograph sensors"); *pressure* ``cylinder``,
+``sample_rate`` and the transducer errors of :mod:`.pressure` (``thermal_shock``,
+``thermal_shock_deg``, ``tdc_error_deg``, ``cycle_variation``); *speed* ``sample_rate``. Torsiograph and vibrograph sensors may give a
 seismic instrument, ``instrument_frequency`` (Hz) and ``instrument_damping`` (fraction of
 critical, default 0.65): the channel is then the instrument's reading
 (:mod:`measure.instruments`: a seismic torsiograph/vibrograph for angles and displacements, a
@@ -58,6 +70,7 @@ import numpy as np
 from crankbench.predict._toml import Table, load_toml
 from crankbench.predict.errors import ConfigError
 
+from .imperfections import _KEYS as _IMPERFECTION_KEYS
 from .imperfections import Imperfections
 from .profile import SpeedProfile, exponential_coastdown, from_table, ramp, steady
 
@@ -69,15 +82,15 @@ SENSOR_KINDS = {
                     "instrument_damping"),
     "encoder": ("node", "pulses_per_rev", "missing_teeth", "tdc_offset_deg", "location"),
     "tacho": ("node", "pulses_per_rev", "missing_teeth", "tdc_offset_deg", "output",
-              "sample_rate", "location"),
+              "sample_rate", "location", "shape", "runt_teeth", "runt_level", "ringing",
+              "ringing_hz", "mark_width_deg"),
     "vibrograph": ("point", "mount", "direction", "quantity", "sample_rate", "location",
                    "instrument_frequency", "instrument_damping"),
-    "pressure": ("cylinder", "sample_rate", "location"),
+    "pressure": ("cylinder", "sample_rate", "location", "thermal_shock", "thermal_shock_deg",
+                 "tdc_error_deg", "cycle_variation"),
     "speed": ("sample_rate", "location"),
 }
 
-_IMPERFECTION_KEYS = ("noise_rms", "drift_rate", "tooth_error_deg", "butt_joint_deg",
-                      "jitter_s", "timer_resolution_s", "dropout_rate", "spurious_rate")
 
 
 @dataclass(frozen=True)
@@ -150,6 +163,11 @@ class Scene:
     start_angle_deg : float
     truth_rate : float
         Hz.
+    balance_masses : tuple of predict.balance.Counterweight
+        Masses fixed to the crankshaft by the engine model (``[[balance.mass]]``).
+    imbalance : tuple of predict.balance.Counterweight
+        Masses the scene adds to the synthesized engine only (``[[imbalance]]``): a known
+        imbalance the model does not contain.
     source : str
         Scene file (or "python").
     settings : dict
@@ -167,6 +185,8 @@ class Scene:
     max_order: float = 12.0
     start_angle_deg: float = 0.0
     truth_rate: float = 20.0
+    balance_masses: tuple = ()
+    imbalance: tuple = ()
     source: str = "python"
     settings: dict = field(default_factory=dict)
 
@@ -262,12 +282,23 @@ class Scene:
             defaults = Imperfections.from_table(it)
             it.check_unknown()
         sensors = tuple(_sensor(t, defaults) for t in doc.tables("sensor", []))
+        from crankbench.predict.balance import Counterweight
+        from crankbench.predict.balance_tolerance import BalanceSpec
+
+        imbalance = []
+        for t in doc.tables("imbalance", []):
+            imbalance.append(Counterweight(
+                mass_radius=t.number("mass", low=0.0) * t.number("radius", low=0.0),
+                angle_deg=t.number("angle_deg"), position=t.number("position", 0.0)))
+            t.check_unknown(["description"])
+        balance_masses = BalanceSpec.from_toml(engine_path).masses
         doc.check_unknown(["description"])
         settings = dict(doc.data)
         try:
             return cls(name=name, engine=engine, shaftline=shaftline, mounts=mounts,
                        profile=profile, load=load, sensors=sensors, seed=seed,
                        max_order=max_order, start_angle_deg=start_angle, truth_rate=truth_rate,
+                       balance_masses=balance_masses, imbalance=tuple(imbalance),
                        source=str(path), settings=settings)
         except ConfigError as exc:  # whole-scene checks: say which file to fix
             raise ConfigError(f"{path}: {exc}") from None
@@ -351,6 +382,20 @@ def _sensor(t: Table, defaults: Imperfections) -> SensorSpec:
         p["output"] = t.string("output", "pulses", options=["pulses", "analogue"])
         if p["output"] == "analogue":
             p["sample_rate"] = t.positive("sample_rate")
+            p["shape"] = t.string("shape", "sine", options=["sine", "square"])
+            p["runt_teeth"] = [int(k) for k in t.numbers("runt_teeth", [])]
+            for k in p["runt_teeth"]:
+                if not 0 <= k < p["pulses_per_rev"] - p["missing_teeth"]:
+                    t.fail("runt_teeth", f"tooth {k} is not on the wheel (teeth 0 .. "
+                                         f"{p['pulses_per_rev'] - p['missing_teeth'] - 1}, 0 "
+                                         "the first after the gap)")
+            p["runt_level"] = t.number("runt_level", 0.11, low=0.0, high=1.0)
+            p["ringing"] = t.number("ringing", 0.0, low=0.0, high=1.0)
+            p["ringing_hz"] = t.positive("ringing_hz", p["sample_rate"] / 8.0)
+            if p["ringing"] and p["ringing_hz"] >= p["sample_rate"] / 2:
+                t.fail("ringing_hz", f"= {p['ringing_hz']:g} must be below half the sample "
+                                     "rate")
+            p["mark_width_deg"] = t.positive("mark_width_deg", None)
     if kind == "vibrograph":
         if ("point" in t) == ("mount" in t):
             t.fail("point", "give exactly one of point = [x, y, z] (m) or mount = 'name'")
@@ -363,8 +408,11 @@ def _sensor(t: Table, defaults: Imperfections) -> SensorSpec:
                                  options=["acceleration", "velocity", "displacement"])
         p["sample_rate"] = t.positive("sample_rate")
     if kind == "pressure":
+        from .pressure import TransducerErrors
+
         p["cylinder"] = t.integer("cylinder", 1, minimum=1)
         p["sample_rate"] = t.positive("sample_rate")
+        p["transducer"] = TransducerErrors.from_table(t)
     if kind == "speed":
         p["sample_rate"] = t.positive("sample_rate")
     if kind in ("torsiograph", "vibrograph") and "instrument_frequency" in t:

@@ -100,12 +100,21 @@ def stepped_shaft(segments, *, reference_diameter=None, shear_modulus=STEEL_SHEA
                 min_diameter=segs[i_min][1], bore=segs[i_min][2])
 
 
-def crank_throw_inertia(engine, cylinder: int, throw_inertia: float = 0.0) -> float:
+def crank_throw_inertia(engine, cylinder: int, throw_inertia: float = 0.0, *,
+                        exact: bool = True) -> float:
     """Equivalent inertia of one crank throw with its crank-train masses, kg·m².
 
-    ``J = J_throw + m_rot r² + m_rec r² (1/2 + λ²/8)``: the rotating mass at the crank radius
-    plus the mean over a revolution of the reciprocating mass's kinetic-energy factor
-    ``(sin ψ + (λ/2) sin 2ψ)²`` (first-order λ expansion of the piston velocity).
+    ``J = J_throw + m_rot r² + m_rec ⟨x'(ψ)²⟩ + ΔJ ⟨φ'(ψ)²⟩``: the rotating mass at the crank
+    radius plus the mean over a revolution of the kinetic-energy factors of the reciprocating
+    mass (x the piston position, ' = d/dψ) and of the rod's residual inertia ΔJ
+    (``Engine.rod_inertia_correction``, 0 for the two-point rod; φ the rod angle) — the
+    inertia that carries the same mean kinetic energy at constant speed.
+
+    The mean is taken exactly (rectangle rule over 720 equal steps of the exact, smooth and
+    periodic motion: exponentially convergent, round-off here). ``exact=False`` gives the
+    classical truncated form ``m_rec r² (1/2 + λ²/8)`` (Ker Wilson): its series continues
+    ``+ λ⁴/16 + 5λ⁶/128 + …``, so it is low by ≈ λ⁴/8 relative (5.0·10⁻⁴ at λ = 1/4,
+    3.4·10⁻³ at λ = 0.4: ``textbook`` bench rows); it ignores ΔJ and the pin offset.
 
     Parameters
     ----------
@@ -114,6 +123,8 @@ def crank_throw_inertia(engine, cylinder: int, throw_inertia: float = 0.0) -> fl
         Cylinder number, 1-based.
     throw_inertia : float
         Inertia of the throw itself (webs, pin, journal share), kg·m².
+    exact : bool
+        Exact mean (default) or the textbook truncated factor (plain rods only).
 
     References
     ----------
@@ -124,7 +135,9 @@ def crank_throw_inertia(engine, cylinder: int, throw_inertia: float = 0.0) -> fl
     >>> from crankbench.predict.engine import Engine
     >>> e = Engine(crank_angles_deg=[0], crank_radius=0.1, rod_length=0.4,
     ...            reciprocating_mass=10.0, rotating_mass=5.0)
-    >>> print(round(crank_throw_inertia(e, 1, 1.0), 6))
+    >>> print(round(crank_throw_inertia(e, 1, 1.0), 6))   # ⟨x'²⟩ = r²(1/2 + λ²/8 + λ⁴/16 …)
+    1.100807
+    >>> print(round(crank_throw_inertia(e, 1, 1.0, exact=False), 6))
     1.100781
     """
     z = engine.n_cylinders
@@ -132,10 +145,26 @@ def crank_throw_inertia(engine, cylinder: int, throw_inertia: float = 0.0) -> fl
         raise ModelError(f"cylinder={cylinder!r} must be in 1..{z}")
     c = int(cylinder) - 1
     r = engine.crank_radius
-    lam = r / engine.rod_length
     j0 = check_nonnegative(throw_inertia, "throw_inertia", error=ModelError)
-    return (j0 + float(engine.rotating_mass[c]) * r * r
-            + float(engine.reciprocating_mass[c]) * r * r * (0.5 + lam * lam / 8.0))
+    special = engine.articulated[c] is not None or getattr(engine, "rotary", False)
+    if not exact:
+        if special:
+            raise ModelError("exact=False (the truncated 1/2 + λ²/8 factor) is for plain rods "
+                             "only; articulated rods and rotary engines need exact=True")
+        lam = r / engine.rod_length
+        return (j0 + float(engine.rotating_mass[c]) * r * r
+                + float(engine.reciprocating_mass[c]) * r * r * (0.5 + lam * lam / 8.0))
+    th = np.arange(720) * 2 * np.pi / 720
+    x, dx, _ = engine.piston_motion(th)
+    # articulated link rod: x'²; rotary engine: the piston also circles the axis (x'² + x²)
+    factor = np.mean(dx[c] ** 2 + (x[c] ** 2 if getattr(engine, "rotary", False) else 0.0))
+    out = j0 + float(engine.rotating_mass[c]) * r * r + float(
+        engine.reciprocating_mass[c]) * float(factor)
+    corr = float(engine.rod_inertia_correction[c])
+    if corr != 0.0:
+        d1, _ = engine.rod_motion(th)
+        out += corr * float(np.mean(d1[c] ** 2))
+    return out
 
 
 class ShaftLine:
@@ -170,6 +199,7 @@ class ShaftLine:
         self._alias: dict[str, tuple[int, float]] = {}
         self._edges: list[dict] = []
         self._cylinders: dict[int, int] = {}
+        self._friction: list[dict] = []
 
     # ---------------------------------------------------------------- nodes -------------
     def _port(self, name: str) -> tuple[int, float]:
@@ -195,8 +225,9 @@ class ShaftLine:
             Speed of the part relative to the crankshaft.
         damping : float
             Absolute viscous damping to ground, N·m·s/rad (propeller, engine).
-        cylinder : int, optional
-            1-based cylinder whose tangential torque acts on this node.
+        cylinder : int or sequence of int, optional
+            1-based cylinder(s) whose tangential torque acts on this node (several for a V
+            throw or a radial row on one crank pin).
         throw_inertia : float, optional
             With ``cylinder``: the throw's own inertia; the node inertia is
             :func:`crank_throw_inertia`.
@@ -208,17 +239,21 @@ class ShaftLine:
         ratio = float(ratio)
         if ratio == 0 or not np.isfinite(ratio):
             raise ModelError(f"{name}: ratio={ratio!r} must be a finite non-zero speed ratio")
+        cylinders = [] if cylinder is None else (
+            [int(c) for c in cylinder] if np.ndim(cylinder) else [int(cylinder)])
         if throw_inertia is not None:
-            if cylinder is None or self.engine is None:
+            if not cylinders or self.engine is None:
                 raise ModelError(f"{name}: throw_inertia needs cylinder= and an engine")
-            inertia = crank_throw_inertia(self.engine, cylinder, throw_inertia)
+            # one throw carrying several cylinders (V, radial row): its own inertia once, the
+            # crank-train masses of every cylinder on it
+            inertia = throw_inertia + sum(
+                crank_throw_inertia(self.engine, c, 0.0) for c in cylinders)
         inertia = check_positive(inertia, f"{name}: inertia", error=ModelError)
         damping = check_nonnegative(damping, f"{name}: damping", error=ModelError)
         self._alias[name] = (len(self._nodes), ratio)
         self._nodes.append(dict(name=name, inertia=inertia * ratio ** 2, ratio=ratio,
                                 damping=damping * ratio ** 2, eigen=bool(eigen)))
-        if cylinder is not None:
-            c = int(cylinder)
+        for c in cylinders:
             if c in self._cylinders:
                 raise ModelError(f"{name}: cylinder {c} already sits on another node")
             self._cylinders[c] = len(self._nodes) - 1
@@ -249,15 +284,48 @@ class ShaftLine:
 
     def add_shaft(self, a: str, b: str, *, stiffness=None, length=None, diameter=None,
                   bore=0.0, segments=None, shear_modulus=None, damping=0.0, loss_factor=0.0,
-                  name=None) -> None:
+                  name=None, throw=None, throw_method="wilson", density=None, inertia=None,
+                  elements=None) -> None:
         """Add a shaft section between nodes ``a`` and ``b`` (same speed).
 
         Give ``stiffness`` (N·m/rad) — optionally with ``diameter``/``bore`` for stress — or
         ``length``/``diameter``/``bore`` (m), or ``segments`` [(L, D, d), ...] for a stepped
-        shaft (stress at its smallest section). ``damping`` is relative viscous (N·m·s/rad),
-        ``loss_factor`` hysteretic η.
+        shaft (stress at its smallest section), or ``throw`` (a
+        :class:`~predict.torsion.throws.CrankThrow`, stiffness by ``throw_method`` "carter" or
+        "wilson", stress at the smaller of journal and pin). ``damping`` is relative viscous
+        (N·m·s/rad), ``loss_factor`` hysteretic η.
+
+        Distributed inertia: with ``density`` (kg/m³, needs ``length``/``diameter`` or
+        ``segments``) or ``inertia`` (the shaft's own polar inertia, kg·m²) the shaft is split
+        into ``elements`` equal-stiffness pieces (default: enough for its first own free-free
+        mode to be within 0.1 %, see :func:`predict.torsion.throws.lumping_error`), half an
+        element's inertia at each end, internal nodes named ``"<name> [i]"``.
         """
         g = self.shear_modulus if shear_modulus is None else shear_modulus
+        own_inertia = None
+        if throw is not None:
+            from .throws import throw_stiffness
+
+            if stiffness is not None or length is not None or segments is not None:
+                raise ModelError(f"shaft {a}-{b}: give throw or stiffness/length/segments, "
+                                 "not both")
+            stiffness = throw_stiffness(throw, method=throw_method, shear_modulus=g).stiffness
+            small = min((throw.journal_diameter, throw.journal_bore),
+                        (throw.pin_diameter, throw.pin_bore))
+            diameter, bore = small
+        if density is not None:
+            rho = check_positive(density, f"shaft {a}-{b}: density", error=ModelError)
+            if segments is not None:
+                own_inertia = sum(rho * np.pi * (s[1] ** 4 - (s[2] if len(s) > 2 else 0.0) ** 4)
+                                  / 32.0 * s[0] for s in segments)
+            elif length is not None and diameter is not None:
+                own_inertia = rho * np.pi * (diameter ** 4 - bore ** 4) / 32.0 * length
+            else:
+                raise ModelError(f"shaft {a}-{b}: density needs length+diameter or segments")
+        if inertia is not None:
+            if own_inertia is not None:
+                raise ModelError(f"shaft {a}-{b}: give density or inertia, not both")
+            own_inertia = check_positive(inertia, f"shaft {a}-{b}: inertia", error=ModelError)
         if segments is not None:
             r = stepped_shaft(segments, shear_modulus=g)
             k_geo, d_out, d_in = r["stiffness"], r["min_diameter"], r["bore"]
@@ -274,8 +342,41 @@ class ShaftLine:
             raise ModelError(f"shaft {a}-{b}: give stiffness, length+diameter or segments")
         k = k_geo if stiffness is None else check_positive(stiffness, f"shaft {a}-{b}: "
                                                            "stiffness", error=ModelError)
-        self._spring(a, b, stiffness=k, damping=damping, loss_factor=loss_factor,
-                     diameter=d_out, bore=d_in, name=name)
+        if own_inertia is None:
+            if elements is not None:
+                raise ModelError(f"shaft {a}-{b}: elements needs density or inertia")
+            self._spring(a, b, stiffness=k, damping=damping, loss_factor=loss_factor,
+                         diameter=d_out, bore=d_in, name=name)
+            return
+        self._distributed(a, b, k, own_inertia, elements, damping=damping,
+                          loss_factor=loss_factor, d_out=d_out, d_in=d_in, name=name)
+
+    def _distributed(self, a, b, k, inertia, elements, *, damping, loss_factor, d_out, d_in,
+                     name):
+        """Split a shaft of stiffness k and own inertia into equal lumped elements."""
+        from .._validate import check_int
+
+        label = name or f"{a}-{b}"
+        if elements is None:
+            # first own free-free mode ω = π√(k_total/J_total)·... of the uniform shaft:
+            # x = π/(2N) for it; 1 − sin x/x <= 1e-3 needs N >= 21
+            elements = 21
+        n = check_int(elements, f"shaft {label}: elements", minimum=1, error=ModelError)
+        ia, ra = self._port(a)
+        ib, rb = self._port(b)
+        if not np.isclose(ra, rb, rtol=1e-12):
+            raise ModelError(f"{self.name}: {a!r} turns at ratio {ra:g} and {b!r} at {rb:g}; "
+                             "join different speeds with add_gear")
+        piece = inertia / n
+        self._nodes[ia]["inertia"] += 0.5 * piece * ra ** 2
+        self._nodes[ib]["inertia"] += 0.5 * piece * rb ** 2
+        names = [a] + [f"{label} [{i}]" for i in range(1, n)] + [b]
+        for nm in names[1:-1]:
+            self.add_mass(nm, piece, ratio=ra)
+        for i, (u, v) in enumerate(zip(names[:-1], names[1:])):
+            self._spring(u, v, stiffness=k * n, damping=damping * n, loss_factor=loss_factor,
+                         diameter=d_out, bore=d_in,
+                         name=label if n == 1 else f"{label} ({i + 1}/{n})")
 
     def add_coupling(self, a: str, b: str, *, stiffness: float, damping: float = 0.0,
                      loss_factor: float = 0.0, name=None) -> None:
@@ -387,6 +488,17 @@ class ShaftLine:
                     raise ModelError(f"{self.name}: cylinders {sorted(self._cylinders)} on the "
                                      f"shaft line, engine has 1..{self.engine.n_cylinders}")
                 firing = self.engine.firing_angles_deg()
+        from .friction import FrictionDamper
+
+        friction = []
+        for fr in self._friction:
+            idx, ratio = self._port(fr["node"])
+            if not np.isclose(ratio, 1.0):
+                raise ModelError(f"{self.name}: friction damper {fr['name']!r} on "
+                                 f"{fr['node']!r} (speed ratio {ratio:g}): the non-linear "
+                                 "friction ring must sit on a node at crankshaft speed")
+            friction.append(FrictionDamper(int(new[idx]), fr["ring_inertia"],
+                                           fr["slip_torque"], fr["name"]))
         return TorsionalSystem(
             [n["inertia"] for n in nodes], e, [d["k"] for d in edges],
             node_names=[n["name"] for n in nodes], edge_names=[d["name"] for d in edges],
@@ -398,4 +510,4 @@ class ShaftLine:
             edge_inner_diameter=[d["d_in"] for d in edges],
             eigen_nodes=[n["eigen"] for n in nodes], cylinder_nodes=cylinders,
             firing_angles_deg=firing, cycle=cycle, engine=self.engine, limits=limits,
-            name=self.name)
+            name=self.name, friction_dampers=friction)

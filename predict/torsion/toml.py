@@ -11,7 +11,8 @@ Layout (SI unless the key names another unit; values at each part's own speed)::
 
     [[shaftline.mass]]                     # disks, flywheel, propeller, crank throws
     name = "cyl 1"
-    cylinder = 1                           # the cylinder acting on this node
+    cylinder = 1                           # the cylinder acting on this node (an array for
+                                           # a V throw or a radial row on one crank pin)
     throw_inertia = 30.0                   # throw only: crank-train masses are added
     # inertia = 41.0                       # ... or the total inertia
     ratio = 1.0                            # speed relative to the crankshaft
@@ -20,7 +21,11 @@ Layout (SI unless the key names another unit; values at each part's own speed)::
     [[shaftline.shaft]]
     from = "cyl 1"
     to = "cyl 2"
-    stiffness = 6.0e7                      # or length + diameter [+ bore], or segments
+    stiffness = 6.0e7                      # or length + diameter [+ bore], or segments,
+                                           # or a [shaftline.shaft.throw] table (journal_*,
+                                           # pin_*, web_*, crank_radius, method)
+    # density = 7850 (kg/m³) or inertia = 1.2 (kg·m²): distributed inertia, split into
+    # elements = N pieces (default 21)
     diameter = 0.30                        # for stress (with stiffness given)
     loss_factor = 0.02                     # hysteretic η (and/or damping, N·m·s/rad)
 
@@ -28,6 +33,20 @@ Layout (SI unless the key names another unit; values at each part's own speed)::
     [[shaftline.gear]]      driver, driven, ratio, mesh_stiffness (optional: rigid mesh)
     [[shaftline.ground]]    node, stiffness, damping
     [[shaftline.damper]]    type = "viscous" | "tuned" | "pendulum" | "friction", node, ...
+                            (friction: ring_inertia, slip_torque and either
+                            model = "harmonic-balance" — the default without a design point:
+                            the non-linear slip/stick ring, forced response by harmonic
+                            balance — or design_frequency + design_amplitude, the linearised
+                            equivalent viscous damper)
+
+    [excitation]                           # a bench without an engine (motor-driven):
+    node = "motor"                         # where the exciting torque acts
+    orders = [1, 2, 6]                     # excitation orders (per turn of the reference shaft)
+    torque = [12.0, 4.0, 1.5]              # N·m amplitudes; leave out when unknown (criticals
+                                           #   are then compared by speed, not amplitude)
+    phase_deg = [0, 0, 0]                  # optional
+    law = "constant"                       # or "speed_squared" (torque ∝ speed², e.g. a fan)
+    reference_rpm = 1500.0                 # speed where the torques apply for speed_squared
 
     [limits]                               # rule data, see load_limits
     application = "propulsion"
@@ -52,7 +71,7 @@ _DAMPER_KEYS = {
     "viscous": ("ring_inertia", "damping"),
     "tuned": ("ring_inertia", "stiffness", "damping", "loss_factor"),
     "pendulum": ("mass", "pivot_radius", "length", "damping"),
-    "friction": ("ring_inertia", "slip_torque", "design_frequency", "design_amplitude"),
+    "friction": ("ring_inertia", "slip_torque"),
 }
 
 
@@ -262,8 +281,15 @@ def from_toml(path):
             raise ModelError(f"{table.where()}: {exc}") from None
 
     for t in sl.tables("mass", []):
+        cyl = t.raw("cylinder", None)
+        if isinstance(cyl, list):
+            if not cyl or not all(isinstance(c, int) and not isinstance(c, bool) and c >= 1
+                                  for c in cyl):
+                t.fail("cylinder", f"= {cyl!r} must be a cylinder number or an array of them")
+        else:
+            cyl = t.integer("cylinder", None, minimum=1)
         kw = dict(ratio=t.number("ratio", 1.0), damping=t.number("damping", 0.0, low=0.0),
-                  cylinder=t.integer("cylinder", None, minimum=1))
+                  cylinder=cyl)
         if "throw_inertia" in t:
             kw["throw_inertia"] = t.number("throw_inertia", low=0.0)
             inertia = None
@@ -288,7 +314,21 @@ def from_toml(path):
                   segments=segs, shear_modulus=t.positive("shear_modulus", None),
                   damping=t.number("damping", 0.0, low=0.0),
                   loss_factor=t.number("loss_factor", 0.0, low=0.0),
-                  name=t.string("name", None))
+                  name=t.string("name", None), density=t.positive("density", None),
+                  inertia=t.positive("inertia", None),
+                  elements=t.integer("elements", None, minimum=1))
+        tt = t.table("throw", None)
+        if tt is not None:
+            from .throws import THROW_METHODS, CrankThrow
+
+            kw["throw_method"] = tt.string("method", "wilson", options=THROW_METHODS)
+            dims = {key: tt.positive(key) for key in (
+                "journal_diameter", "journal_length", "pin_diameter", "pin_length",
+                "web_thickness", "web_width", "crank_radius")}
+            dims.update(journal_bore=tt.number("journal_bore", 0.0, low=0.0),
+                        pin_bore=tt.number("pin_bore", 0.0, low=0.0))
+            tt.check_unknown()
+            kw["throw"] = wrap(tt, CrankThrow, **dims)
         a, b = t.string("from"), t.string("to")
         t.check_unknown()
         wrap(t, line.add_shaft, a, b, **kw)
@@ -315,6 +355,20 @@ def from_toml(path):
                 kw[key] = t.number(key, 0.0, low=0.0)
             else:
                 kw[key] = t.positive(key)
+        if kind == "friction":
+            kw["design_frequency"] = t.positive("design_frequency", None)
+            kw["design_amplitude"] = t.positive("design_amplitude", None)
+            lin = kw["design_frequency"] is not None or kw["design_amplitude"] is not None
+            kw["model"] = t.string("model", "linearised" if lin else "harmonic-balance",
+                                   options=("harmonic-balance", "linearised"))
+            if kw["model"] == "linearised" and not (kw["design_frequency"] and
+                                                    kw["design_amplitude"]):
+                t.fail("model", '= "linearised" needs design_frequency (rad/s) and '
+                                "design_amplitude (rad)")
+            if kw["model"] == "harmonic-balance" and lin:
+                t.fail("design_frequency" if kw["design_frequency"] else "design_amplitude",
+                       'belongs to model = "linearised"; the harmonic-balance friction '
+                       "damper has no design point")
         t.check_unknown()
         func = {"viscous": _dampers.add_viscous_damper, "tuned": _dampers.add_tuned_damper,
                 "pendulum": _dampers.add_pendulum_absorber,
@@ -325,10 +379,34 @@ def from_toml(path):
     lt = doc.table("limits", None)
     if lt is not None:
         limits = load_limits(lt, engine=engine)
+    excitation = _excitation(doc.table("excitation", None), line)
     doc.check_unknown(["description", "engine"])
     system = wrap(sl, line.build, limits=limits)
     if limits is not None:
         system = system.replace(limits=_complete_limits(limits, system, lt))
     return system.replace(operating=dict(
         speed_range_rpm=None if speed_range is None else tuple(speed_range), imep=imep,
-        source=str(path)))
+        source=str(path), excitation=excitation))
+
+
+def _excitation(t, line):
+    """The ``[excitation]`` table of a bench without an engine, as a plain dict (or None)."""
+    if t is None:
+        return None
+    nodes = list(getattr(line, "_alias", {})) or None
+    node = t.string("node", None, options=nodes) if nodes else t.string("node", None)
+    orders = t.numbers("orders", low=0.0, strict_low=True)
+    torque = t.numbers("torque", None, length=orders.size, low=0.0)
+    phase = t.numbers("phase_deg", None, length=orders.size)
+    law = t.string("law", "constant", options=["constant", "speed_squared"])
+    ref = t.positive("reference_rpm", None)
+    if law == "speed_squared" and ref is None:
+        t.fail("reference_rpm", "is needed for law = 'speed_squared' (the speed at which the "
+                                "torques apply)")
+    if len(set(orders.tolist())) != orders.size:
+        t.fail("orders", f"= {orders.tolist()} repeats an order")
+    t.check_unknown(["description"])
+    return {"node": node, "orders": orders.tolist(),
+            "torque": None if torque is None else torque.tolist(),
+            "phase_deg": None if phase is None else phase.tolist(), "law": law,
+            "reference_rpm": ref, "source": t.where()}
