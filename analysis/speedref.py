@@ -16,7 +16,7 @@ analysed channel. A Record carries them as
   the mean speed): the speed from it, the angle by integration.
 
 The angle attached to the speed (the ``shaft_angle`` coordinate, rad) is the source's angle
-averaged over whole engine cycles (:func:`analysis.trend.cycle_average`): the shaft's mean
+averaged over whole engine cycles (:func:`analysis.trend.mean_rotation`): the shaft's mean
 rotation, without its torsional vibration or tooth-spacing errors, which would otherwise
 modulate the resampling. A pulse train anywhere in the record gives this angle (and the TDC
 reference) even when the speed comes from a speed channel. ``attrs['angle_reference']`` says
@@ -324,7 +324,7 @@ def speed_reference(record, channel: str, *, speed_channel: str | None = None,
     # over whole cycles (the mean rotation)
     angle = None
     from .resample import shaft_angle
-    from .trend import cycle_average
+    from .trend import cycle_average, mean_rotation
 
     if angle_trace is not None:
         angle = np.interp(t_out, *angle_trace)
@@ -343,7 +343,8 @@ def speed_reference(record, channel: str, *, speed_channel: str | None = None,
     coords = {}
     dim = record[channel].dims[0]
     if angle is not None and np.all(np.diff(angle) > 0) and rpm.min() > 0:
-        smooth = cycle_average(angle, angle, fs)
+        # windows from the integrated speed: the edge angle carries its node's vibration
+        smooth = mean_rotation(angle, rpm, fs)
         if np.all(np.diff(smooth) > 0):
             coords["shaft_angle"] = (dim, smooth, {"units": "rad", "reference": reference,
                                                    "long_name": "shaft angle (mean rotation)"})
