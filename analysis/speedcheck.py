@@ -6,9 +6,11 @@ time offset) or in the wrong unit gives order amplitudes that look plausible and
 spectral lines of an engine channel move with the shaft speed, each at a fixed order. So,
 frame by frame of a short-time spectrum, the strongest lines are compared with the reference:
 
-* **locked** frames: one of the frame's three strongest lines lies at the record's dominant
-  apparent order ``o*`` (the mode of ``f/(rpm/60)`` of each frame's strongest line), within
-  2 % or one frequency bin;
+* **locked** frames: one of the frame's three strongest lines lies at one of the record's
+  orders — the dominant apparent order ``o*`` (the mode of ``f/(rpm/60)`` of each frame's
+  strongest line) or any apparent order held in consecutive frames while the reference speed
+  changes by 20 % (the strongest line of an I4 run-up moves from order 2 to 4, 3.5, 6) —,
+  within 2 % or one frequency bin;
 * on a record that sweeps (speed range ≥ 10 % of the median), where the lines move (the
   strongest line's frequency spans ≥ 10 %), fewer than half the frames locked means the reference
   does not follow the signal: :class:`AnalysisError`;
@@ -137,8 +139,32 @@ def check_speed_reference(values, fs: float, speed_rpm, *, label: str = "signal"
     k = int(np.argmax(hist))
     centre = float(np.median(logs[(logs >= edges[k]) & (logs < edges[k + 1])]))
     o_star = float(np.exp(centre))
-    locked = np.array([np.any(np.abs(np.log(ln / (r / 60.0)) - centre)
-                              <= np.maximum(0.02, df / np.maximum(ln, df)))
+    # the record's order set: besides o*, every apparent order (of a frame's three strongest
+    # lines) held in consecutive frames while the reference speed changes by 20 % or more —
+    # the strongest line may move from order to order over a run-up (an I4: 2, then 4, 3.5,
+    # 6), each still at a fixed order of the true speed; on a wrong speed law the apparent
+    # orders drift through any one order (and a fixed-frequency line against a reference that
+    # stands still proves nothing)
+    logs_all = [np.log(ln / (r / 60.0)) for ln, r in zip(lines, frame_rpm)]
+    every = np.concatenate(logs_all)
+    grid = np.arange(every.min(), every.max() + 0.03, 0.03)
+    log_rpm = np.log(frame_rpm)
+    centres = []
+    for c in grid:
+        hit = np.array([np.any(np.abs(lg - c) <= 0.02) for lg in logs_all])
+        hit[1:-1] |= hit[:-2] & hit[2:]            # one frame's line off by more: bridged
+        run_start, best = None, 0.0
+        for i, h in enumerate(np.append(hit, False)):
+            if h and run_start is None:
+                run_start = i
+            elif not h and run_start is not None:
+                best = max(best, float(np.ptp(log_rpm[run_start:i])))
+                run_start = None
+        if best >= np.log(1.2):
+            centres.append(float(c))
+    centres = np.array(sorted(set(centres) | {centre}))
+    locked = np.array([np.any(np.abs(np.log(ln / (r / 60.0))[:, None] - centres[None, :])
+                              <= np.maximum(0.02, df / np.maximum(ln, df))[:, None])
                        for ln, r in zip(lines, frame_rpm)])
     frac = float(locked.mean())
     out.update(locked_fraction=frac, dominant_order=o_star)
