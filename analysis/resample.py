@@ -26,8 +26,9 @@ frequency of ``o`` cycles per revolution whatever the speed does. Steps:
 
 Interpolation error for a tone at ``f`` sampled at ``fs`` (``h = 2π f/fs``), peak relative,
 measured by the bench suite ``orders`` against the closed form: linear ≈ h²/8, cubic ≈ 3h⁴/128,
-band-limited ≤ 5e-6 for ``f ≤ fs/4`` (1.6e-3 at 0.3 fs, 0.1 at 0.4 fs — the decimation keeps
-every component the filter passes below ``fs_out/4``).
+band-limited ≤ 5e-6 for ``f ≤ fs/4`` (1.7e-3 at 0.3 fs, 0.15 at 0.4 fs — the decimation keeps
+every component the filter passes below ``fs_out/4``); checked at these figures by
+``tests/analysis/test_resample_interp.py``.
 
 Half orders of a four-stroke engine (one cycle = 720°) need no separate grid: the angle samples
 run continuously from the angle reference, and an analysis block of an even number of
