@@ -313,7 +313,11 @@ def speed_reference(record, channel: str, *, speed_channel: str | None = None,
         t_in, omega = t_in[good], omega[good]
     if t_in.shape[0] == 0:
         raise AnalysisError(f"{source} holds no usable speed values")
-    _check_overlap(t_in, t_out, source, channel, omega)
+    cover = None
+    if _is_pulses(var) and var.shape[0] > 1:
+        edges = np.asarray(var.values, float)
+        cover = (float(np.nanmin(edges)), float(np.nanmax(edges)))
+    _check_overlap(t_in, t_out, source, channel, omega, cover)
     rpm = np.interp(t_out, t_in, omega) * (60.0 / _TWO_PI)
     if rpm.max() <= 0 or rpm.min() < 0:
         i = int(np.argmin(rpm))
@@ -375,10 +379,12 @@ def _rate(record, channel, t_out) -> float:
     return 1.0
 
 
-def _check_overlap(t_in, t_out, source, channel, omega):
-    """Refuse a source that misses the channel; warn when it covers it only in part."""
+def _check_overlap(t_in, t_out, source, channel, omega, cover=None):
+    """Refuse a source that misses the channel; warn when it covers it only in part.
+    ``cover``: the source's own time span when wider than its speed trace (a pulse train's
+    first and last edges: its averaged speed starts a window later)."""
     a, b = float(t_out[0]), float(t_out[-1])
-    lo, hi = float(t_in[0]), float(t_in[-1])
+    lo, hi = (float(t_in[0]), float(t_in[-1])) if cover is None else cover
     span = max(b - a, 1e-300)
     covered = max(0.0, min(b, hi) - max(a, lo))
     where = (f"{source} covers {lo:.6g}–{hi:.6g} s but channel {channel!r} spans "
