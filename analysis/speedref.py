@@ -168,6 +168,13 @@ def _pulse_speed(var, name):
 
 def _pulse_angle(var, name, t_out):
     """Crankshaft angle (rad) at ``t_out`` from the edges, and what its zero is."""
+    at, reference = _pulse_angle_function(var, name)
+    return at(t_out), reference
+
+
+def _pulse_angle_function(var, name):
+    """``(at, reference)``: ``at(t)`` the crankshaft angle (rad) from the edges at times ``t``
+    (the same numbers for the whole channel or any span of it), ``reference`` its zero."""
     from crankbench.measure.tacho import angle_from_pulses
 
     missing = var.attrs.get("missing_teeth", 0)
@@ -176,7 +183,11 @@ def _pulse_angle(var, name, t_out):
                               pulses_per_rev=int(var.attrs["pulses_per_rev"]),
                               missing_teeth=0 if missing is None else int(missing),
                               tdc_offset_deg=tdc)
-    angle = trace.at(t_out) / _ratio(var, name)
+    ratio = _ratio(var, name)
+
+    def at(t):
+        return trace.at(t) / ratio
+
     if trace.reference in ("gap", "reference mark"):
         what = "wheel gap" if trace.reference == "gap" else "reference mark"
         reference = (f"TDC of cylinder 1: the {what} of pulse train {name!r} moved by "
@@ -184,7 +195,7 @@ def _pulse_angle(var, name, t_out):
     else:
         reference = (f"first edge of pulse train {name!r} (no gap or reference mark: not TDC)"
                      + (f", moved by tdc_offset_deg {tdc:g}" if tdc else ""))
-    return angle, reference
+    return at, reference
 
 
 def _channel_angle(var, name, t_in):

@@ -46,6 +46,8 @@ _TWO_PI = 2.0 * np.pi
 #: revolutions of the successive cycle-average windows, and their total half-reach
 CYCLE_WINDOWS = (2.0, 3.0)
 CYCLE_REACH_REVOLUTIONS = 0.5 * sum(CYCLE_WINDOWS)
+#: reach of :func:`mean_rotation`: two twiced cycle averages in a row
+MEAN_ROTATION_REACH_REVOLUTIONS = 4.0 * CYCLE_REACH_REVOLUTIONS
 
 
 def cycle_average(values: np.ndarray, phi: np.ndarray, fs: float, *,
@@ -97,6 +99,10 @@ def cycle_average(values: np.ndarray, phi: np.ndarray, fs: float, *,
     values = np.asarray(values, dtype=float)
     first, last = (phi[0], phi[-1]) if ends is None else ends
     room = np.minimum(phi - first, last - phi)              # angle to the nearer record end
+    return _twiced(values, phi, room, revolutions)
+
+
+def _twiced(values, phi, room, revolutions):
     once = _smooth(values, phi, room, revolutions)
     # twicing (Tukey): smooth the residual too, which cancels the smoother's own bias on a
     # curved trend (a time average over angle windows lags an accelerating shaft by
@@ -104,18 +110,20 @@ def cycle_average(values: np.ndarray, phi: np.ndarray, fs: float, *,
     return once + _smooth(values - once, phi, room, revolutions)
 
 
-def mean_rotation(angle: np.ndarray, speed_rpm: np.ndarray, fs: float, *,
+def mean_rotation(angle: np.ndarray, speed_rpm: np.ndarray, fs: float, *, ends=None,
                   revolutions=CYCLE_WINDOWS) -> np.ndarray:
     """Mean rotation of a measured shaft angle: its torsional vibration averaged out.
 
     A pulse-edge or encoder angle carries the vibration of the node it is measured at. Averaged
     over windows bounded by *that same* angle it would come back unchanged (the windows move
-    with the vibration), so the windows here are set by the integrated speed
-    ``φ_s = ∫ 2π n̄/60 dt`` of the cycle-averaged speed ``n̄`` (smooth; its slow drift does
-    not matter) and the average is taken
-    of the difference: ``θ̄ = φ_s + cycle_average(θ − φ_s, φ_s)``. Every multiple of 1/2 (and
-    1/3) of the shaft order is nulled at steady speed; the result stays anchored to the
-    measured angle (counted edges do not drift).
+    with the vibration), so the windows here are set by the integrated speed ``φ_s`` (the
+    pulse train's revolution-averaged speed: little vibration left, and only its differences
+    over a window matter), and the average is taken of the difference from a smooth reference
+    ``θ_r = ∫ n̄`` (``n̄`` the cycle-averaged speed): ``θ̄ = θ_r + cycle_average(θ − θ_r)``.
+    Every multiple of 1/2 (and 1/3) of the shaft order is nulled at steady speed; the result
+    stays anchored to the measured angle (counted edges do not drift). Each value depends only
+    on the samples within :data:`MEAN_ROTATION_REACH_REVOLUTIONS` of it (and on the record
+    ends), so a span read with that margin gives the whole record's values (streaming).
 
     Parameters
     ----------
@@ -125,6 +133,9 @@ def mean_rotation(angle: np.ndarray, speed_rpm: np.ndarray, fs: float, *,
         Shaft speed at each sample, rpm (> 0), e.g. the pulse train's revolution-averaged speed.
     fs : float
         Sample rate, Hz.
+    ends : (float, float), optional
+        The measured angle at the record's first and last samples when ``angle`` is a span of
+        a longer record (the windows shrink near the record's ends only).
     revolutions : sequence of float
         Window lengths, revolutions (:func:`cycle_average`).
 
@@ -139,19 +150,21 @@ def mean_rotation(angle: np.ndarray, speed_rpm: np.ndarray, fs: float, *,
     >>> t = np.arange(10000) / fs
     >>> phi0 = 2 * np.pi * (10.0 * t + 0.1 * t ** 2)            # 600 → 720 rpm
     >>> theta = phi0 + 2e-3 * np.cos(4.5 * phi0) + 1e-3 * np.cos(3 * phi0)
-    >>> rpm = 60.0 * (10.0 + 0.2 * t)
+    >>> rpm = 60.0 * (10.0 + 0.2 * t) * (1 + 0.01 * np.cos(4.5 * phi0))   # part of it in n
     >>> err = mean_rotation(theta, rpm, fs) - phi0
-    >>> bool(np.abs(err[2000:-2000]).max() < 2e-6)
+    >>> bool(np.abs(err[2000:-2000]).max() < 1e-6)
     True
     """
-    from .resample import shaft_angle
+    from .resample import integrate_angle
 
     angle = np.asarray(angle, dtype=float)
     rpm = np.asarray(speed_rpm, dtype=float)
-    # the speed's own vibration (a revolution average keeps part of the half orders) is
-    # averaged out first, so the integrated reference is smooth
-    ref = shaft_angle(cycle_average(rpm, shaft_angle(rpm, fs), fs, revolutions=revolutions), fs)
-    return ref + cycle_average(angle - ref, ref, fs, revolutions=revolutions)
+    first, last = (angle[0], angle[-1]) if ends is None else ends
+    room = np.minimum(angle - first, last - angle)     # the measured angle: span-independent
+    start = float(angle[0])
+    phi = integrate_angle(rpm, fs, start)
+    ref = integrate_angle(_twiced(rpm, phi, room, revolutions), fs, start)
+    return ref + _twiced(angle - ref, phi, room, revolutions)
 
 
 def _smooth(values, phi, room, revolutions):
