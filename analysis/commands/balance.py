@@ -92,16 +92,17 @@ def _toml_run(path: Path) -> list[dict]:
     doc = load_toml(path, error=RecordError)
     r = doc.table("run", {})
     name = r.string("name", path.stem)
-    speed = r.number("speed_rpm", None, low=0.0)
-    trials = [(t.integer("plane", minimum=1), t.positive("mass"), t.number("angle_deg", 0.0))
+    speed = r.number("speed_rpm", None, low=0.0, unit="rpm", plausible=(1.0, 1e6))
+    trials = [(t.integer("plane", minimum=1), t.positive("mass", unit="kg", plausible=(1e-6, 100.0)),
+               t.number("angle_deg", 0.0, unit="deg", plausible=(1e-3, 360.0)))
               for t in r.tables("trial", [])]
     for t in r.tables("trial", []):
         t.check_unknown(["plane", "mass", "angle_deg"])
     r.check_unknown()
     meas = []
     for m in doc.tables("measurement"):
-        meas.append((m.integer("plane", minimum=1), m.number("amplitude", low=0.0),
-                     m.number("phase_deg")))
+        meas.append((m.integer("plane", minimum=1), m.number("amplitude", low=0.0, unit=None),
+                     m.number("phase_deg", unit="deg", plausible=(1e-3, 720.0))))
         m.check_unknown()
     doc.check_unknown()
     if not meas:

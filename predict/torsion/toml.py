@@ -35,6 +35,10 @@ Layout (SI unless the key names another unit; values at each part's own speed)::
     transient_mpa = [100, 100]
     sections = ["cyl 6-flywheel"]          # optional, default every section with a diameter
     source = "..."
+
+Any number may be written with its unit as a string, converted by pint
+(``diameter = "300 mm"``, ``shear_modulus = "81 GPa"``, ``stiffness = "60 MN*m/rad"``); a
+value far outside the key's plausible range warns with the likely slip.
 """
 
 from __future__ import annotations
@@ -57,11 +61,33 @@ _DAMPER_KEYS = {
 }
 
 
+# unit and plausible range of the shaft-line keys (plain numbers are in these units)
+_SPEED = (1.0, 1e5)
+_SHEAR = dict(unit="Pa", plausible=(1e9, 3e11))          # shafts: composites to steel
+_INERTIA = dict(unit="kg*m^2", plausible=(1e-7, 1e7))    # model engine throw to ship propeller
+_STIFFNESS = dict(unit="N*m/rad", plausible=(10.0, 1e12))
+_DAMPING = dict(unit="N*m*s/rad", plausible=(1e-6, 1e9))
+_DIAMETER = dict(unit="m", plausible=(1e-3, 3.0))
+_RATIO = dict(unit="1", plausible=(1e-3, 1e3))
+_LOSS = dict(unit="1", plausible=(1e-5, 1.0))
+_DAMPER_UNITS = {
+    "ring_inertia": _INERTIA, "damping": _DAMPING, "stiffness": _STIFFNESS, "loss_factor": _LOSS,
+    "mass": dict(unit="kg", plausible=(1e-3, 1e4)),
+    "pivot_radius": dict(unit="m", plausible=(1e-3, 3.0)),
+    "length": dict(unit="m", plausible=(1e-4, 3.0)),
+    "slip_torque": dict(unit="N*m", plausible=(1e-2, 1e7)),
+    "design_frequency": dict(unit="rad/s", plausible=(0.1, 1e5)),   # "50 Hz" = 314 rad/s
+    "design_amplitude": dict(unit="rad", plausible=(1e-7, 0.5)),
+}
+
+
 def load_limits(table) -> StressLimits:
     """Build :class:`StressLimits` from a ``[limits]`` :class:`~predict._toml.Table`."""
-    speeds = table.numbers("speed_rpm", low=0.0)
-    cont = table.numbers("continuous_mpa", length=speeds.size, low=0.0, strict_low=True)
-    trans = table.numbers("transient_mpa", length=speeds.size, low=0.0, strict_low=True)
+    speeds = table.numbers("speed_rpm", low=0.0, unit="rpm", plausible=_SPEED)
+    cont = table.numbers("continuous_mpa", length=speeds.size, low=0.0, strict_low=True,
+                         unit="MPa", plausible=(0.1, 3000.0))
+    trans = table.numbers("transient_mpa", length=speeds.size, low=0.0, strict_low=True,
+                          unit="MPa", plausible=(0.1, 3000.0))
     sections = table.raw("sections", [])
     if not isinstance(sections, list) or not all(isinstance(s, str) for s in sections):
         table.fail("sections", "must be an array of section names")
@@ -118,9 +144,10 @@ def from_toml(path):
         engine = Engine.from_toml(path)
     doc.raw("engine", None)
     line = ShaftLine(sl.string("name", path.stem), engine=engine,
-                     shear_modulus=sl.positive("shear_modulus", 80.0e9))
-    speed_range = sl.numbers("speed_range_rpm", None, length=2, low=0.0)
-    imep = sl.positive("imep", None)
+                     shear_modulus=sl.positive("shear_modulus", 80.0e9, **_SHEAR))
+    speed_range = sl.numbers("speed_range_rpm", None, length=2, low=0.0, unit="rpm",
+                             plausible=_SPEED)
+    imep = sl.positive("imep", None, unit="Pa", plausible=(1e4, 1e7))
 
     def wrap(table, func, *args, **kwargs):
         try:
@@ -129,18 +156,20 @@ def from_toml(path):
             raise ModelError(f"{table.where()}: {exc}") from None
 
     for t in sl.tables("mass", []):
-        kw = dict(ratio=t.number("ratio", 1.0), damping=t.number("damping", 0.0, low=0.0),
+        kw = dict(ratio=t.number("ratio", 1.0, **_RATIO),
+                  damping=t.number("damping", 0.0, low=0.0, **_DAMPING),
                   cylinder=t.integer("cylinder", None, minimum=1))
         if "throw_inertia" in t:
-            kw["throw_inertia"] = t.number("throw_inertia", low=0.0)
+            kw["throw_inertia"] = t.number("throw_inertia", low=0.0, **_INERTIA)
             inertia = None
         else:
-            inertia = t.positive("inertia")
+            inertia = t.positive("inertia", **_INERTIA)
         name = t.string("name")
         t.check_unknown()
         wrap(t, line.add_mass, name, inertia, **kw)
     for t in sl.tables("gear", []):
-        kw = dict(ratio=t.positive("ratio"), mesh_stiffness=t.positive("mesh_stiffness", None))
+        kw = dict(ratio=t.positive("ratio", **_RATIO),
+                  mesh_stiffness=t.positive("mesh_stiffness", None, **_STIFFNESS))
         a, b = t.string("driver"), t.string("driven")
         t.check_unknown(["name"])
         wrap(t, line.add_gear, a, b, name=t.data.get("name"), **kw)
@@ -150,23 +179,31 @@ def from_toml(path):
                 isinstance(s, list) and 2 <= len(s) <= 3 for s in segs)):
             t.fail("segments", "must be an array of [length, diameter] or "
                                "[length, diameter, bore] arrays (m)")
-        kw = dict(stiffness=t.positive("stiffness", None), length=t.positive("length", None),
-                  diameter=t.positive("diameter", None), bore=t.number("bore", 0.0, low=0.0),
-                  segments=segs, shear_modulus=t.positive("shear_modulus", None),
-                  damping=t.number("damping", 0.0, low=0.0),
-                  loss_factor=t.number("loss_factor", 0.0, low=0.0),
+        if segs is not None:
+            segs = [[t.quantity(f"segments[{i}][{j}]", v, unit="m") for j, v in enumerate(seg)]
+                    for i, seg in enumerate(segs)]
+        kw = dict(stiffness=t.positive("stiffness", None, **_STIFFNESS),
+                  length=t.positive("length", None, unit="m", plausible=(1e-3, 100.0)),
+                  diameter=t.positive("diameter", None, **_DIAMETER),
+                  bore=t.number("bore", 0.0, low=0.0, **_DIAMETER),
+                  segments=segs, shear_modulus=t.positive("shear_modulus", None, **_SHEAR),
+                  damping=t.number("damping", 0.0, low=0.0, **_DAMPING),
+                  loss_factor=t.number("loss_factor", 0.0, low=0.0, **_LOSS),
                   name=t.string("name", None))
         a, b = t.string("from"), t.string("to")
         t.check_unknown()
         wrap(t, line.add_shaft, a, b, **kw)
     for t in sl.tables("coupling", []):
-        kw = dict(stiffness=t.positive("stiffness"), damping=t.number("damping", 0.0, low=0.0),
-                  loss_factor=t.number("loss_factor", 0.0, low=0.0), name=t.string("name", None))
+        kw = dict(stiffness=t.positive("stiffness", **_STIFFNESS),
+                  damping=t.number("damping", 0.0, low=0.0, **_DAMPING),
+                  loss_factor=t.number("loss_factor", 0.0, low=0.0, **_LOSS),
+                  name=t.string("name", None))
         a, b = t.string("from"), t.string("to")
         t.check_unknown()
         wrap(t, line.add_coupling, a, b, **kw)
     for t in sl.tables("ground", []):
-        kw = dict(stiffness=t.positive("stiffness"), damping=t.number("damping", 0.0, low=0.0),
+        kw = dict(stiffness=t.positive("stiffness", **_STIFFNESS),
+                  damping=t.number("damping", 0.0, low=0.0, **_DAMPING),
                   name=t.string("name", None))
         node = t.string("node")
         t.check_unknown()
@@ -179,9 +216,9 @@ def from_toml(path):
         for key in _DAMPER_KEYS[kind]:
             optional = key in ("damping", "loss_factor") and kind != "viscous"
             if optional:
-                kw[key] = t.number(key, 0.0, low=0.0)
+                kw[key] = t.number(key, 0.0, low=0.0, **_DAMPER_UNITS[key])
             else:
-                kw[key] = t.positive(key)
+                kw[key] = t.positive(key, **_DAMPER_UNITS[key])
         t.check_unknown()
         func = {"viscous": _dampers.add_viscous_damper, "tuned": _dampers.add_tuned_damper,
                 "pendulum": _dampers.add_pendulum_absorber,
