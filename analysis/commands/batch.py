@@ -9,6 +9,16 @@ Resuming: each finished record's row is cached as JSON in ``<summary>.cache/`` u
 made of the record's SHA-256, the model file's SHA-256 and the options, written atomically;
 a re-run skips records whose row is cached (``--no-cache`` recomputes everything). Failed
 records are not cached, so a re-run retries them.
+
+Nothing lost. Every path is resolved before the work is submitted (a worker may run in
+another directory); no output (summary, cache, report) may be a record, a record's sidecar
+or the model, whatever ``--overwrite`` says; reports are named after each record's path
+relative to the records' common folder (``a/run.h5`` → ``DIR/a/run.html``, ``b/run.h5`` →
+``DIR/b/run.html``; ``run.h5`` beside ``run.csv`` → ``run.h5.html``), so no two records share
+a report, and an existing report is refused before any work unless ``--overwrite``.
+
+Cluster. ``--scheduler ADDRESS`` is checked before anything is submitted: a scheduler that
+does not answer within a few seconds is a one-line error.
 """
 
 from __future__ import annotations
@@ -16,7 +26,12 @@ from __future__ import annotations
 HELP = "run compare on many records in parallel (dask) into one summary table"
 
 
+#: seconds to wait for a --scheduler to answer before giving up
+CONNECT_TIMEOUT_S = 5.0
+
+
 def configure(parser) -> None:
+    from crankbench.analysis.commands._args import integer
     from crankbench.analysis.commands._pipeline_cli import add_common_arguments
 
     parser.add_argument("pattern", metavar="PATTERN", nargs="+",
@@ -29,7 +44,7 @@ def configure(parser) -> None:
                         help="replace an existing summary (cached rows are still reused)")
     parser.add_argument("--scheduler", metavar="ADDRESS", default=None,
                         help="address of a dask.distributed scheduler (default: local threads)")
-    parser.add_argument("--workers", type=int, default=None,
+    parser.add_argument("--workers", type=integer(low=1, high=1024), default=None,
                         help="threads for the local scheduler (default: dask's choice)")
     parser.add_argument("--no-cache", action="store_true", help="ignore and do not write cache")
     parser.add_argument("--reports", metavar="DIR", default=None,
@@ -60,8 +75,33 @@ def expand(patterns) -> list:
     return out
 
 
-def cache_key(record_path, model_sha, options) -> str:
-    """Key of a record's cached row: record hash + model hash + options."""
+def report_names(files) -> list:
+    """Report file name (relative path ending in ``.html``) of each record: its path relative
+    to the records' common folder without the suffix, or with it where two records of one
+    folder share a stem (``run.h5`` and ``run.csv``).
+
+    Examples
+    --------
+    >>> [str(p) for p in report_names(["/d/a/run.h5", "/d/b/run.h5"])]
+    ['a/run.html', 'b/run.html']
+    >>> [str(p) for p in report_names(["/d/run.h5", "/d/run.csv", "/d/x.h5"])]
+    ['run.h5.html', 'run.csv.html', 'x.html']
+    """
+    import os
+    from pathlib import Path
+
+    files = [Path(os.path.abspath(f)) for f in files]
+    if not files:
+        return []
+    root = Path(os.path.commonpath([str(f.parent) for f in files]))
+    rel = [f.relative_to(root) for f in files]
+    stems = [r.parent / r.stem for r in rel]
+    return [(st.parent / (st.name + ".html")) if stems.count(st) == 1 else
+            (r.parent / (r.name + ".html")) for r, st in zip(rel, stems)]
+
+
+def cache_key(record_path, model_sha, options, report=None) -> str:
+    """Key of a record's cached row: record hash + model hash + options (+ report path)."""
     import hashlib
     import json
 
@@ -71,15 +111,18 @@ def cache_key(record_path, model_sha, options) -> str:
     h.update(file_sha256(record_path).encode())
     h.update(model_sha.encode())
     h.update(json.dumps(options, sort_keys=True, default=str).encode())
+    if report is not None:
+        h.update(str(report).encode())
     return h.hexdigest()[:20]
 
 
-def process_one(record_path, model_path, options, cache_file=None, report_dir=None,
-                overwrite=False) -> dict:
+def process_one(record_path, model_path, options, cache_file=None, report_path=None,
+                overwrite=False, display=None) -> dict:
     """Analyse one record; return its summary row (``status`` 'ok' or 'error').
 
     Never raises for a bad record: the error is returned in the row (``error``) so the batch
-    goes on.
+    goes on. Paths are absolute (resolved before submission); ``display`` is the record as
+    the user named it (the row's ``record``).
     """
     import json
     import logging
@@ -90,6 +133,7 @@ def process_one(record_path, model_path, options, cache_file=None, report_dir=No
     from crankbench.measure._atomic import atomic_path
 
     log = logging.getLogger("crankbench")
+    display = str(display or record_path)
     t0 = time.perf_counter()
     try:
         opts = dict(options)
@@ -100,18 +144,17 @@ def process_one(record_path, model_path, options, cache_file=None, report_dir=No
         result = analyse(record_path, model_path, **opts)
         row = {"status": "ok", "error": ""}
         row.update(result.summary())
-        row["record"] = str(record_path)
-        if report_dir is not None:
+        row["record"] = display
+        if report_path is not None:
             from crankbench.analysis.report.build import build_report
 
-            out = Path(report_dir) / (Path(record_path).stem + ".html")
             build_report(result, record_path=record_path, model_path=model_path).save(
-                out, overwrite=overwrite, option="--overwrite")
-            row["report"] = str(out)
+                report_path, overwrite=overwrite, option="--overwrite")
+            row["report"] = str(report_path)
     except Exception as exc:  # noqa: BLE001 - a failing record is reported, never fatal
-        log.warning("%s: failed: %s", record_path, exc)
-        return {"record": str(record_path), "status": "error",
-                "error": f"{type(exc).__name__}: {exc}",
+        log.warning("%s: failed: %s", display, exc)
+        return {"record": display, "status": "error",
+                "error": f"{type(exc).__name__}: {exc}".replace(str(record_path), display),
                 "elapsed_s": time.perf_counter() - t0}
     row["elapsed_s"] = time.perf_counter() - t0
     if cache_file is not None:
@@ -124,6 +167,63 @@ def process_one(record_path, model_path, options, cache_file=None, report_dir=No
     return row
 
 
+def check_scheduler(address: str, *, timeout: float = CONNECT_TIMEOUT_S) -> None:
+    """Refuse a ``--scheduler`` address that nothing answers, in one line, before any work.
+
+    A ``tcp://HOST:PORT`` (or ``HOST:PORT``) address is probed with a plain TCP connection
+    (``timeout`` seconds); other protocols are left to the client's own connection timeout.
+
+    Raises
+    ------
+    ConfigError
+        Malformed address, unknown host, refused or timed-out connection.
+    """
+    import socket
+
+    from crankbench.predict.errors import ConfigError
+
+    text = address.strip()
+    proto, sep, rest = text.partition("://")
+    if not sep:
+        proto, rest = "tcp", text
+    if proto not in ("tcp", "tls", "inproc", "ucx", "ws", "wss"):
+        raise ConfigError(f"--scheduler {address!r}: unknown protocol {proto!r}; expected an "
+                          "address such as tcp://HOST:8786")
+    if proto != "tcp":
+        return
+    host, _, port = rest.rstrip("/").rpartition(":")
+    host = host.strip("[]")
+    if not host or not port.isdigit() or not 0 < int(port) < 65536:
+        raise ConfigError(f"--scheduler {address!r}: expected tcp://HOST:PORT (e.g. "
+                          "tcp://127.0.0.1:8786)")
+    try:
+        with socket.create_connection((host, int(port)), timeout=timeout):
+            pass
+    except socket.gaierror:
+        raise ConfigError(f"--scheduler {address!r}: unknown host {host!r}") from None
+    except TimeoutError:
+        raise ConfigError(f"--scheduler {address!r}: no answer within {timeout:g} s; is a "
+                          "dask scheduler running there (dask scheduler)?") from None
+    except OSError as exc:
+        reason = exc.strerror or type(exc).__name__
+        raise ConfigError(f"--scheduler {address!r}: no dask scheduler answers there "
+                          f"({reason.lower()}); start one with `dask scheduler` and workers "
+                          "with `dask worker ADDRESS`, or omit --scheduler to use local "
+                          "threads") from None
+
+
+def _client(distributed, address):
+    """A distributed Client, with connection failures as one-line ConfigErrors."""
+    from crankbench.predict.errors import ConfigError
+
+    try:
+        return distributed.Client(address, timeout=f"{max(CONNECT_TIMEOUT_S, 10.0):g}s",
+                                  set_as_default=False)
+    except (OSError, TimeoutError, ValueError) as exc:
+        first = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
+        raise ConfigError(f"--scheduler {address!r}: could not connect ({first})") from None
+
+
 def _compute(tasks, *, scheduler, workers, progress):
     """Run dask.delayed tasks locally (threads) or on a distributed cluster."""
     import dask
@@ -133,7 +233,7 @@ def _compute(tasks, *, scheduler, workers, progress):
 
         distributed = require("distributed", extra="distributed",
                               feature="crankbench batch --scheduler")
-        client = distributed.Client(scheduler)
+        client = _client(distributed, scheduler)
         try:
             futures = client.compute(tasks)
             rows = []
@@ -155,9 +255,29 @@ def _compute(tasks, *, scheduler, workers, progress):
         return list(dask.compute(*tasks, scheduler="threads", num_workers=workers))
 
 
+def _cached_row(cache_file, report_path):
+    """The cached row of a finished record, or None (missing, unreadable, or its report was
+    asked for and is gone)."""
+    import json
+    import logging
+
+    if cache_file is None or not cache_file.is_file():
+        return None
+    try:
+        row = json.loads(cache_file.read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        logging.getLogger("crankbench").info("%s: unreadable cache entry, recomputing",
+                                             cache_file)
+        return None
+    if report_path is not None and not (row.get("report") and report_path.is_file()):
+        return None
+    return row
+
+
 def run(args) -> int:
     import json
     import logging
+    import os
     from pathlib import Path
 
     import dask
@@ -165,7 +285,8 @@ def run(args) -> int:
     from tqdm import tqdm
 
     from crankbench.analysis._output import print_json, print_table, to_jsonable
-    from crankbench.analysis.commands._pipeline_cli import options_from_args
+    from crankbench.analysis.commands._files import check_outputs, model_inputs, record_inputs
+    from crankbench.analysis.commands._pipeline_cli import check_common, options_from_args
     from crankbench.analysis.report import file_sha256
     from crankbench.measure._atomic import atomic_path, check_overwrite
     from crankbench.predict.errors import ConfigError
@@ -174,34 +295,64 @@ def run(args) -> int:
     out = Path(args.output)
     if out.suffix.lower() not in (".csv", ".json"):
         raise ConfigError(f"-o {args.output!r} must end in .csv or .json")
-    check_overwrite(out, args.overwrite, option="--overwrite")
     model = Path(args.model)
     if not model.is_file():
         raise FileNotFoundError(f"{model}: no such model file")
+    if args.reports is not None and Path(args.reports).exists() and \
+            not Path(args.reports).is_dir():
+        raise ConfigError(f"--reports {args.reports}: exists and is not a folder")
     files = expand(args.pattern)
+    # every path absolute before anything is submitted: a worker may run elsewhere
+    absolute = [Path(os.path.abspath(f)) for f in files]
+    model_abs = Path(os.path.abspath(model))
+    cache_dir = Path(os.path.abspath(out.with_name(out.name + ".cache")))
+    reports = None
+    if args.reports is not None:
+        base = Path(os.path.abspath(args.reports))
+        reports = [base / name for name in report_names(absolute)]
+    inputs = [pair for f in absolute for pair in record_inputs(f)] + model_inputs(model_abs)
+    outputs = [(out, f"-o {out}")]
+    if reports is not None:
+        outputs += [(r, f"the report of {f} ({r})") for f, r in zip(files, reports)]
+    check_outputs(outputs, inputs)
+    for f in absolute:
+        if same_tree(cache_dir, f):
+            raise ConfigError(f"record {f} lies in the batch cache {cache_dir}; move it or "
+                              "choose another -o")
+    check_overwrite(out, args.overwrite, option="--overwrite")
+    check_common(args, records=absolute[:1], model=model_abs)
+    if args.scheduler:
+        from crankbench.predict._validate import require
+
+        require("distributed", extra="distributed", feature="crankbench batch --scheduler")
+        check_scheduler(args.scheduler)
     options = options_from_args(args)  # load per record from its truth when not given
     if options["load"] is not None:
         options["load"] = dict(imep=options["load"].imep, law=options["load"].law,
                                reference_rpm=options["load"].reference_rpm)
-    model_sha = file_sha256(model)
-    cache_dir = out.with_name(out.name + ".cache")
-    rows, tasks = [], []
-    for f in files:
+    model_sha = file_sha256(model_abs)
+    rows, tasks, existing = [], [], []
+    for i, (f, path) in enumerate(zip(files, absolute)):
+        report = None if reports is None else reports[i]
         cache_file = None
         if not args.no_cache:
-            cache_file = cache_dir / f"{Path(f).stem}-{cache_key(f, model_sha, options)}.json"
-            if cache_file.is_file():
-                try:
-                    row = json.loads(cache_file.read_text(encoding="utf-8"))
-                    row["status"] = "cached"
-                    rows.append(row)
-                    continue
-                except (OSError, ValueError):
-                    log.info("%s: unreadable cache entry, recomputing", cache_file)
-        task = dask.delayed(process_one, pure=False, name=f"record-{Path(f).name}")(
-            f, str(model), options, None if cache_file is None else str(cache_file),
-            args.reports, args.overwrite)
+            key = cache_key(path, model_sha, options, None if report is None else report)
+            cache_file = cache_dir / f"{path.stem}-{key}.json"
+            row = _cached_row(cache_file, report)
+            if row is not None:
+                row.update(status="cached", record=str(f))
+                rows.append(row)
+                continue
+        if report is not None and report.exists() and not args.overwrite:
+            existing.append(report)
+        task = dask.delayed(process_one, pure=False, name=f"record-{i}-{path.name}")(
+            str(path), str(model_abs), options, None if cache_file is None else str(cache_file),
+            None if report is None else str(report), args.overwrite, str(f))
         tasks.append(task)
+    if existing:  # refused before any work, never a good record marked failed
+        shown = ", ".join(str(p) for p in existing[:3]) + (" ..." if len(existing) > 3 else "")
+        raise FileExistsError(f"{len(existing)} report(s) exist ({shown}); pass --overwrite "
+                              "to replace them")
     log.info("%d records: %d cached, %d to run", len(files), len(rows), len(tasks))
     quiet = args.json or log.getEffectiveLevel() > logging.INFO
     bar = tqdm(total=len(tasks), desc="batch", unit="record", leave=False, disable=quiet)
@@ -231,3 +382,11 @@ def run(args) -> int:
             print(f"FAILED {r.record}: {r.error}")
         print(f"summary written: {out}")
     return 0 if len(failed) == 0 else 1
+
+
+def same_tree(folder, path) -> bool:
+    """True when ``path`` lies inside ``folder`` (after resolving links)."""
+    import os
+
+    folder, path = os.path.realpath(folder), os.path.realpath(path)
+    return path == folder or path.startswith(folder.rstrip(os.sep) + os.sep)

@@ -31,7 +31,10 @@ def run(args) -> int:
     from crankbench.analysis.commands._pipeline_cli import options_from_args, progress_bar
     from crankbench.analysis.pipeline import analyse
 
+    from crankbench.analysis.commands._pipeline_cli import check_common
+
     log = logging.getLogger("crankbench")
+    check_common(args, records=[args.record], model=args.model)   # before any work
     bar, progress = progress_bar(desc="compare", disable=args.json or
                                  log.getEffectiveLevel() > logging.INFO)
     try:
