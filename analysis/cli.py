@@ -70,7 +70,8 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--version", action="version", version=f"crankbench {ver}")
     verbosity = parser.add_mutually_exclusive_group()
     verbosity.add_argument("-v", "--verbose", action="count", default=0,
-                           help="more log output (-vv for debug, with tracebacks on error)")
+                           help="more log output: each step's details and timings (-vv: with "
+                            "tracebacks on error)")
     verbosity.add_argument("-q", "--quiet", action="store_true", help="only warnings and errors")
     common = verbosity_parent()
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
@@ -121,10 +122,23 @@ def _name_flags(message: str, flags: dict) -> str:
 _LIST_FLAGS = ("--orders", "--shafts", "--channels")
 
 
+class _BarSafeHandler(logging.StreamHandler):
+    """Writes log lines through ``tqdm.write`` so they never break a progress bar."""
+
+    def emit(self, record):
+        try:
+            from tqdm import tqdm
+
+            tqdm.write(self.format(record), file=self.stream)
+        except Exception:  # noqa: BLE001 - logging must never raise
+            self.handleError(record)
+
+
 def _setup_logging(verbose: int, quiet: bool) -> None:
-    level = logging.WARNING if quiet else (logging.DEBUG if verbose >= 2 else
-                                           logging.INFO if verbose == 1 else logging.INFO)
-    handler = logging.StreamHandler(sys.stderr)
+    """-q: warnings and errors; default: progress and results (INFO); -v: also the steps'
+    details and timings (DEBUG); -vv: the same, with tracebacks on error."""
+    level = logging.WARNING if quiet else (logging.DEBUG if verbose >= 1 else logging.INFO)
+    handler = _BarSafeHandler(sys.stderr)
     handler.setFormatter(logging.Formatter("%(levelname)s: %(message)s" if verbose else "%(message)s"))
     log.handlers[:] = [handler]
     log.setLevel(level)

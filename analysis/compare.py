@@ -150,6 +150,63 @@ class CriticalComparison:
         """True when nothing was flagged."""
         return not self.flags
 
+    def verdict(self, *, steady=False, basis=""):
+        """The comparison as a three-state :class:`analysis.verdict.Verdict`.
+
+        Fail when a significant critical disagrees (speed, amplitude, missing, unexplained
+        peak); inconclusive when nothing was compared — a steady run (no critical speed is
+        crossed at constant speed) or no significant predicted critical and no matched
+        resonance in the measured range; pass otherwise.
+
+        Parameters
+        ----------
+        steady : bool
+            The record is a steady-speed run.
+        basis : str
+            The data compared (record, channel, speed range).
+
+        Examples
+        --------
+        >>> import pandas as pd
+        >>> pred = pd.DataFrame({"mode": [1], "order": [6.0], "speed_rpm": [400.0]})
+        >>> meas = pd.DataFrame({"order": [6.0], "speed_rpm": [402.0]})
+        >>> print(match_criticals(meas, pred, speed_range_rpm=(300, 500)).verdict().status)
+        pass
+        >>> empty = pd.DataFrame({"order": [], "speed_rpm": []})
+        >>> v = match_criticals(empty, pred, speed_range_rpm=(600, 700)).verdict()
+        >>> print(v.status, "|", v.reason)
+        inconclusive | no predicted critical speed in the measured range and no resonance matched: nothing was compared
+        """
+        from .verdict import Verdict
+
+        name = "critical speeds against the model"
+        rule = (f"measured critical within ±{100 * self.tolerance:g} % of the predicted, "
+                f"amplitude ratio within [{1 / (1 + self.amplitude_tolerance):.2f}, "
+                f"{1 + self.amplitude_tolerance:.2f}], every significant critical found "
+                f"(gate ±{100 * self.gate:g} %)")
+        m = self.matched
+        n_sig = int(m["significant"].sum()) if len(m) else 0
+        up = self.unmatched_predicted
+        n_sig += int(up["significant"].sum()) if len(up) else 0
+        basis = basis or f"{len(m)} matched resonance(s), {n_sig} significant critical(s)"
+        if steady:
+            return Verdict.inconclusive(
+                name, rule=rule, basis=basis,
+                reason="steady-speed run: no critical speed is crossed, so none can be "
+                       "compared (a steady-state order comparison is needed)")
+        if self.flags:
+            return Verdict.failed(name, rule=rule, basis=basis,
+                                  reason="; ".join(self.flags[:3])
+                                  + (f" (+{len(self.flags) - 3} more)" if len(self.flags) > 3
+                                     else ""))
+        if n_sig == 0 and len(m) == 0:
+            return Verdict.inconclusive(
+                name, rule=rule, basis=basis,
+                reason="no predicted critical speed in the measured range and no resonance "
+                       "matched: nothing was compared")
+        return Verdict.passed(name, rule=rule, basis=basis,
+                              reason=f"{len(m)} critical(s) matched within the tolerances")
+
     def to_frame(self):
         """The matched table (copy)."""
         return self.matched.copy()

@@ -4,9 +4,17 @@ Each check returns a :class:`LimitCheck` — one line of the report's pass/fail 
 worst value, the limit it was held against, where the limit comes from, and the detailed data
 behind it (for the figure).
 
+Each check carries a three-state status (pass / fail / inconclusive, see
+:mod:`analysis.verdict`): a check without the data it needs is "not assessed" (inconclusive),
+never a pass.
+
 * **Vibration severity** — broadband velocity rms on the machine structure against the
-  evaluation zones A/B/C/D. The default zone boundaries are the typical values of
-  ISO 10816-1:1995, Annex B, Table B.1 for machine classes I–IV (velocity rms, mm/s):
+  evaluation zones. For engines the default is ISO 10816-6:1995 (reciprocating machines with
+  power ratings above 100 kW, still in force; ISO 20816-3:2022 excludes them), machine class 1–7
+  chosen from the model's power and mounting (:func:`reciprocating_class`); see
+  :data:`ISO_10816_6_CLASSES` for what was and was not verified. The general ISO 10816-1 table is
+  kept as an option (``standard="ISO 10816-1"``), typical values of Annex B, Table B.1 for machine
+  classes I–IV (velocity rms, mm/s):
 
   ======  =====  =====  =====
   class    A/B    B/C    C/D
@@ -21,9 +29,10 @@ behind it (for the figure).
   own part (ISO 10816-6 / ISO 20816 series) with machine-specific classes: where a contract or
   the current part of the standard gives other boundaries, pass them as
   :class:`ZoneBoundaries` (the report prints the source given).
-* **Torsional vibratory stress** — against user-given continuous and transient limit curves
-  (classification-society rules), with barred speed ranges
-  (:mod:`predict.torsion.stress`).
+* **Torsional vibratory stress** — against the rule limits in the model (IACS UR M68 for
+  shafting, the engine maker's figure for the crankshaft; :mod:`predict.torsion.rules`) or
+  user-given curves, with barred speed ranges judged where the rule allows them
+  (:func:`check_torsional_stress`, in :mod:`analysis.torsional_limits`).
 * **Residual unbalance** — against the permissible unbalance ``U_per = G m / Ω`` of a balance
   grade (ISO 21940-11:2016 §5; :func:`predict.rotor_balance.grade_check`).
 """
@@ -43,7 +52,8 @@ from crankbench.predict._validate import (
 from crankbench.predict.errors import AnalysisError
 from crankbench.predict._deprecate import renamed
 
-__all__ = ["ZoneBoundaries", "ISO_10816_1_CLASSES", "zone_boundaries", "LimitCheck",
+__all__ = ["ZoneBoundaries", "ISO_10816_1_CLASSES", "ISO_10816_6_GRADES",
+           "ISO_10816_6_CLASSES", "zone_boundaries", "reciprocating_class", "LimitCheck",
            "vibration_severity", "check_vibration_severity", "check_torsional_stress",
            "check_residual_unbalance"]
 
@@ -57,6 +67,20 @@ ISO_10816_1_CLASSES = {
 _ISO_SOURCE = ("ISO 10816-1:1995 Annex B Table B.1 (typical zone boundaries; superseded by "
                "ISO 20816-1:2016)")
 ZONES = ("A", "B", "C", "D")
+
+#: ISO 10816-6:1995 Annex A, vibration severity grades: upper velocity rms of each grade, m/s
+#: (the preferred-number series 1.12, 1.78, 2.82 ... mm/s, ratio 10^0.2)
+ISO_10816_6_GRADES = (1.12e-3, 1.78e-3, 2.82e-3, 4.46e-3, 7.07e-3, 11.2e-3, 17.8e-3, 28.2e-3,
+                      44.6e-3, 70.7e-3, 112e-3, 178e-3)
+#: ISO 10816-6 machine classes 1–7: (A/B–C, C–D) velocity rms boundaries, m/s. Zones A and B
+#: are one zone (A/B) in this part. NOT VERIFIED: the search for the published Table A.1 found
+#: no copy; these are the boundaries as recalled (each class one severity grade above the one
+#: before: class 1 at grades 1.78/2.82 mm/s ... class 7 at 28.2/44.6 mm/s). Check them against
+#: your copy of the standard or pass your own ZoneBoundaries; the report says so.
+ISO_10816_6_CLASSES = {k: (ISO_10816_6_GRADES[k], ISO_10816_6_GRADES[k + 1])
+                       for k in range(1, 8)}
+_ISO6_SOURCE = ("ISO 10816-6:1995 Annex A Table A.1, velocity rms 2–1000 Hz (boundaries NOT "
+                "verified against the published table: confirm, or give boundaries_mm_s)")
 
 
 @dataclass(frozen=True)
@@ -83,37 +107,47 @@ class ZoneBoundaries:
     cd: float
     machine_class: str = ""
     source: str = "user-given"
+    verified: bool = True
 
     def __post_init__(self):
         ab = check_positive(self.ab, "ab", error=AnalysisError)
         bc = check_positive(self.bc, "bc", error=AnalysisError)
         cd = check_positive(self.cd, "cd", error=AnalysisError)
-        if not ab < bc < cd:
+        if not ab <= bc < cd:
             raise AnalysisError(f"zone boundaries must ascend: ab={ab!r} < bc={bc!r} < "
                                 f"cd={cd!r} (m/s rms)")
 
+    @property
+    def merged_ab(self) -> bool:
+        """Zones A and B are one zone 'A/B' (ISO 10816-6)."""
+        return self.ab == self.bc
+
     def zone(self, velocity_rms):
-        """Zone letter(s) 'A'..'D' of a velocity rms (m/s); arrays give an array."""
+        """Zone letter(s) 'A'..'D' ('A/B' when merged) of a velocity rms (m/s)."""
         v = np.asarray(velocity_rms, float)
         idx = np.searchsorted([self.ab, self.bc, self.cd], v, side="right")
-        letters = np.array(ZONES)[idx]
-        return str(letters) if letters.ndim == 0 else letters
+        names = np.array(("A/B", "A/B", "C", "D") if self.merged_ab else ZONES, dtype=object)
+        letters = np.asarray(names[idx], dtype=object)
+        return str(letters) if letters.ndim == 0 else letters.astype(str)
 
     def upper(self, zone: str) -> float:
         """Upper boundary of ``zone`` (m/s rms; inf for D)."""
+        zone = "B" if zone == "A/B" else zone
         check_option(zone, "zone", ZONES, error=AnalysisError)
         return {"A": self.ab, "B": self.bc, "C": self.cd, "D": np.inf}[zone]
 
 
-def zone_boundaries(machine_class: str) -> ZoneBoundaries:
-    """Typical zone boundaries of ISO 10816-1:1995 Annex B (Table B.1) for a machine class.
+def zone_boundaries(machine_class, *, standard: str = "ISO 10816-1") -> ZoneBoundaries:
+    """Zone boundaries of a machine class.
 
     Parameters
     ----------
-    machine_class : {'I', 'II', 'III', 'IV'}
-        Case-insensitive; 1–4 are accepted too. I: small machines (motors to 15 kW); II: medium machines (15–75 kW, or up to 300 kW on
-        special foundations); III: large prime movers on rigid foundations; IV: large prime
-        movers on soft foundations.
+    machine_class : str or int
+        ISO 10816-1: 'I'..'IV' (case-insensitive; 1–4 accepted). I: small machines (motors to
+        15 kW); II: medium machines (15–75 kW, or up to 300 kW on special foundations); III:
+        large prime movers on rigid foundations; IV: large prime movers on soft foundations.
+        ISO 10816-6: 1..7 (reciprocating machines above 100 kW).
+    standard : {'ISO 10816-1', 'ISO 10816-6'}
 
     Returns
     -------
@@ -121,16 +155,32 @@ def zone_boundaries(machine_class: str) -> ZoneBoundaries:
 
     References
     ----------
-    ISO 10816-1:1995, *Mechanical vibration — Evaluation of machine vibration by
-    measurements on non-rotating parts — Part 1: General guidelines*, Annex B, Table B.1
-    (superseded by ISO 20816-1:2016).
+    ISO 10816-1:1995, *Mechanical vibration — Evaluation of machine vibration by measurements
+    on non-rotating parts — Part 1: General guidelines*, Annex B, Table B.1 (superseded by
+    ISO 20816-1:2016). ISO 10816-6:1995, *Part 6: Reciprocating machines with power ratings
+    above 100 kW*, Annex A, Table A.1 (see :data:`ISO_10816_6_CLASSES`).
 
     Examples
     --------
     >>> z = zone_boundaries("II")
     >>> print(round(z.ab * 1e3, 3), round(z.bc * 1e3, 3), round(z.cd * 1e3, 3))
     1.12 2.8 7.1
+    >>> z6 = zone_boundaries(5, standard="ISO 10816-6")
+    >>> print(z6.zone(9e-3), z6.zone(15e-3), round(z6.bc * 1e3, 1), z6.verified)
+    A/B C 11.2 False
     """
+    check_option(standard, "standard", ("ISO 10816-1", "ISO 10816-6"), error=AnalysisError)
+    if standard == "ISO 10816-6":
+        try:
+            k = int(str(machine_class).strip())
+        except ValueError:
+            k = 0
+        if k not in ISO_10816_6_CLASSES:
+            raise AnalysisError(f"machine_class={machine_class!r} is not an ISO 10816-6 class "
+                                "(1 to 7)")
+        bc, cd = ISO_10816_6_CLASSES[k]
+        return ZoneBoundaries(bc, bc, cd, machine_class=str(k), source=_ISO6_SOURCE,
+                              verified=False)
     key = str(machine_class).strip().upper()
     key = {"1": "I", "2": "II", "3": "III", "4": "IV"}.get(key, key)
     if key not in ISO_10816_1_CLASSES:
@@ -138,6 +188,50 @@ def zone_boundaries(machine_class: str) -> ZoneBoundaries:
     machine_class = key
     ab, bc, cd = ISO_10816_1_CLASSES[machine_class]
     return ZoneBoundaries(ab, bc, cd, machine_class=machine_class, source=_ISO_SOURCE)
+
+
+def reciprocating_class(*, power_w=None, rated_speed_rpm=None, resilient=None):
+    """ISO 10816-6 machine class (1–7) from power, speed and mounting, with the reason.
+
+    crankbench's rule, stated in the report, not the standard's text: the standard classes
+    machines by type, power, speed and mounting (Annex A/B), so the class agreed in the
+    contract should be given in the model (``[limits.vibration] machine_class``). Here:
+    rigidly mounted engines class 2 up to 600 rpm rated, else 3; resiliently mounted class 5
+    up to 1000 rpm, 6 up to 1800 rpm, else 7.
+
+    Parameters
+    ----------
+    power_w : float, optional
+        Rated power, W (the part covers machines above 100 kW).
+    rated_speed_rpm : float, optional
+    resilient : bool, optional
+        Mounted on resilient (rubber, spring) mounts.
+
+    Returns
+    -------
+    (int or None, str)
+        The class (None when the data are missing or the machine is outside the part), and why.
+
+    Examples
+    --------
+    >>> reciprocating_class(power_w=3.1e6, rated_speed_rpm=720, resilient=True)
+    (5, 'class 5: resiliently mounted, rated 720 rpm, 3100 kW (crankbench rule, not the standard: give the contract class)')
+    """
+    if power_w is None or rated_speed_rpm is None or resilient is None:
+        missing = [n for n, v in (("power", power_w), ("rated speed", rated_speed_rpm),
+                                  ("mounting", resilient)) if v is None]
+        return None, f"no {', '.join(missing)} in the model to choose an ISO 10816-6 class"
+    if power_w <= 100e3:
+        return None, (f"rated power {power_w / 1e3:.0f} kW is not above 100 kW: outside "
+                      "ISO 10816-6")
+    n = float(rated_speed_rpm)
+    if resilient:
+        k = 5 if n <= 1000 else 6 if n <= 1800 else 7
+    else:
+        k = 2 if n <= 600 else 3
+    return k, (f"class {k}: {'resiliently' if resilient else 'rigidly'} mounted, rated "
+               f"{n:.0f} rpm, {power_w / 1e3:.0f} kW (crankbench rule, not the standard: give "
+               "the contract class)")
 
 
 @dataclass(frozen=True)
@@ -151,15 +245,20 @@ class LimitCheck:
     quantity : str
         e.g. "velocity rms", "shear stress", "residual unbalance".
     value : float
-        Worst value found, in ``units`` (SI).
+        Worst value found, in ``units`` (SI); NaN when not assessed.
     limit : float
-        The limit the worst value is held against, same units.
+        The limit the worst value is held against, same units; NaN when not assessed.
     units : str
-    passed : bool
+    status : {'pass', 'fail', 'inconclusive'}
+        Inconclusive ("not assessed") when the data the rule needs are missing.
     detail : str
-        Zone reached, barred ranges, smallest grade met...
+        Zone reached, barred ranges, smallest grade met, or what was missing.
     source : str
-        Where the limit comes from.
+        The rule and clause the limit comes from.
+    basis : str
+        The data the check rests on (channel, speed range, model).
+    required : bool
+        Counts towards the overall verdict.
     data : object
         Detailed result (DataFrame, StressCheck, GradeCheck) for tables and figures.
     """
@@ -169,16 +268,41 @@ class LimitCheck:
     value: float
     limit: float
     units: str
-    passed: bool
+    status: str
     detail: str = ""
     source: str = ""
+    basis: str = ""
+    required: bool = True
     data: object = field(default=None, compare=False, repr=False)
+
+    def __post_init__(self):
+        from .verdict import STATUSES
+
+        if self.status not in STATUSES:
+            raise AnalysisError(f"LimitCheck status {self.status!r}: expected one of "
+                                f"{', '.join(STATUSES)}")
+
+    @property
+    def passed(self) -> bool:
+        """True only for a pass (an inconclusive check is not a pass)."""
+        return self.status == "pass"
+
+    @property
+    def verdict(self):
+        """The check as a :class:`analysis.verdict.Verdict`."""
+        from .verdict import Verdict
+
+        reason = self.detail or ("not assessed" if self.status == "inconclusive" else "")
+        return Verdict(self.name, self.status, self.source or "—",
+                       self.basis or self.detail or "—",
+                       reason if self.status != "pass" else self.detail, self.required)
 
     def as_dict(self) -> dict:
         """Row for tables and JSON (without ``data``)."""
         return {"check": self.name, "quantity": self.quantity, "value": self.value,
-                "limit": self.limit, "units": self.units, "passed": self.passed,
-                "detail": self.detail, "source": self.source}
+                "limit": self.limit, "units": self.units, "verdict": self.status,
+                "detail": self.detail, "source": self.source, "basis": self.basis,
+                "required": self.required}
 
     def to_frame(self):
         import pandas as pd
@@ -308,7 +432,8 @@ def vibration_severity(x, *, fs, speed_rpm=None, quantity="velocity", band_hz=(1
 
 
 def check_vibration_severity(velocity_rms, *, speed_rpm=None, machine_class="III",
-                             boundaries=None, allowed_zone="B", name="vibration severity"):
+                             boundaries=None, allowed_zone="B", name="vibration severity",
+                             standard="ISO 10816-1", basis="", class_reason=""):
     """Hold velocity rms against ISO evaluation zones; pass if no point exceeds the allowed
     zone.
 
@@ -318,13 +443,19 @@ def check_vibration_severity(velocity_rms, *, speed_rpm=None, machine_class="III
         Velocity rms, m/s (or the output of :func:`vibration_severity`).
     speed_rpm : array_like, optional
         Speed per value, rpm (for the figure and the worst-speed detail).
-    machine_class : {'I', 'II', 'III', 'IV'}
-        ISO 10816-1 Annex B class, used when ``boundaries`` is not given.
+    machine_class : str or int or None
+        Class of ``standard``, used when ``boundaries`` is not given ('I'..'IV' for
+        ISO 10816-1, 1..7 for ISO 10816-6). None: not assessed (inconclusive).
     boundaries : ZoneBoundaries, optional
-        Other zone boundaries (e.g. from the machine-specific part of ISO 20816).
+        Other zone boundaries (a contract's, or the machine-specific part of ISO 20816).
     allowed_zone : {'A', 'B', 'C'}
-        Highest acceptable zone (B: unrestricted long-term operation).
+        Highest acceptable zone (B, or A/B: unrestricted long-term operation).
     name : str
+    standard : {'ISO 10816-1', 'ISO 10816-6'}
+    basis : str
+        The data the check rests on (channel, band, speed range), for the verdict.
+    class_reason : str
+        How the class was chosen (printed with the source).
 
     Returns
     -------
@@ -335,10 +466,18 @@ def check_vibration_severity(velocity_rms, *, speed_rpm=None, machine_class="III
     Examples
     --------
     >>> c = check_vibration_severity([2e-3, 3.9e-3, 5e-3], machine_class="III")
-    >>> print(c.passed, c.detail)
-    False worst 5 mm/s rms is in zone C (allowed up to B, 4.5 mm/s)
+    >>> print(c.status, c.detail)
+    fail worst 5 mm/s rms is in zone C (allowed up to B, 4.5 mm/s)
+    >>> print(check_vibration_severity([2e-3], machine_class=None).status)
+    inconclusive
     """
     import pandas as pd
+
+    if boundaries is None and machine_class is None:
+        return LimitCheck(name=name, quantity="velocity rms", value=float("nan"),
+                          limit=float("nan"), units="m/s", status="inconclusive",
+                          detail="not assessed: " + (class_reason or "no machine class"),
+                          source=standard, basis=basis)
 
     if hasattr(velocity_rms, "data_vars"):
         ds = velocity_rms
@@ -353,7 +492,8 @@ def check_vibration_severity(velocity_rms, *, speed_rpm=None, machine_class="III
     if np.any(values < 0):
         raise AnalysisError("velocity_rms must be >= 0 (m/s rms)")
     check_option(allowed_zone, "allowed_zone", ("A", "B", "C"), error=AnalysisError)
-    b = boundaries if boundaries is not None else zone_boundaries(machine_class)
+    b = boundaries if boundaries is not None else zone_boundaries(machine_class,
+                                                                   standard=standard)
     if not isinstance(b, ZoneBoundaries):
         raise AnalysisError(f"boundaries must be a ZoneBoundaries, got {type(b).__name__}")
     speed = (np.full(values.size, np.nan) if speed_rpm is None
@@ -370,100 +510,13 @@ def check_vibration_severity(velocity_rms, *, speed_rpm=None, machine_class="III
     passed = worst <= limit
     at = f" at {speed[k]:.0f} rpm" if np.isfinite(speed[k]) else ""
     cls = f"class {b.machine_class}, " if b.machine_class else ""
+    shown = "A/B" if b.merged_ab and allowed_zone in ("A", "B") else allowed_zone
     detail = (f"worst {worst * 1e3:.3g} mm/s rms{at} is in zone {worst_zone} (allowed up to "
-              f"{allowed_zone}, {limit * 1e3:.3g} mm/s)")
+              f"{shown}, {limit * 1e3:.3g} mm/s)")
+    source = f"{cls}{b.source}" + (f"; {class_reason}" if class_reason else "")
     return LimitCheck(name=name, quantity="velocity rms", value=worst, limit=float(limit),
-                      units="m/s", passed=bool(passed), detail=detail,
-                      source=f"{cls}{b.source}", data=frame)
-
-
-def check_torsional_stress(speed_rpm, stress, limits, *, section="", operating_range_rpm=None,
-                           name="torsional vibratory stress"):
-    """Hold a vibratory shear stress over speed against continuous and transient limits.
-
-    Parameters
-    ----------
-    speed_rpm : array_like
-        Speeds, rpm, ascending.
-    stress : array_like
-        Vibratory shear stress amplitude at each speed, Pa (measured via the torsiograph and
-        the mode's stress per unit amplitude, or predicted).
-    limits : predict.torsion.stress.StressLimits
-        User-given continuous and transient limit curves.
-    section : str
-        Shaft section the stress belongs to.
-    operating_range_rpm : (float, float), optional
-        Continuous-operation speed range: exceeding the continuous limit inside it fails the
-        check; outside it the continuous limit only bars the speed range.
-    name : str
-
-    Returns
-    -------
-    LimitCheck
-        ``value`` the worst ratio stress/limit (dimensionless, the limit is 1); passed when
-        the transient limit is never exceeded and the continuous limit is not exceeded inside
-        the operating range; ``data`` the :class:`predict.torsion.stress.StressCheck`.
-
-    References
-    ----------
-    内燃机动力学 (1958), 第二篇 第四章 §4 (additional stresses at critical speeds).
-
-    Examples
-    --------
-    >>> from crankbench.predict.torsion.stress import StressLimits
-    >>> lim = StressLimits([0, 1000], [30e6, 30e6], [60e6, 60e6])
-    >>> c = check_torsional_stress([100, 200, 300], [10e6, 45e6, 10e6], lim)
-    >>> print(c.passed, c.detail)
-    True barred 157–243 rpm (continuous limit exceeded); transient limit held
-    """
-    from types import SimpleNamespace
-
-    from crankbench.predict.torsion.stress import StressLimits, check_stress
-
-    if not isinstance(limits, StressLimits):
-        raise AnalysisError(f"limits must be a predict.torsion.stress.StressLimits, got "
-                            f"{type(limits).__name__}")
-    speed = check_finite_array(speed_rpm, "speed_rpm", ndim=1, min_length=2, error=AnalysisError)
-    tau = check_finite_array(stress, "stress", ndim=1, error=AnalysisError)
-    if tau.size != speed.size:
-        raise AnalysisError(f"stress has {tau.size} values, speed_rpm {speed.size}")
-    if np.any(np.diff(speed) <= 0):
-        raise AnalysisError("speed_rpm must be strictly ascending")
-    label = section or "section"
-    response = SimpleNamespace(speed_rpm=speed, stress_total=tau[:, None], edge_names=(label,))
-    lim = StressLimits(limits.speed_rpm, limits.continuous, limits.transient, sections=(),
-                       source=limits.source)
-    result = check_stress(response, lim)
-    cont, trans = lim.at(speed)
-    ratio_c = tau / cont
-    ratio_t = tau / trans
-    passed = result.passed
-    inside_fail = []
-    if operating_range_rpm is not None:
-        lo, hi = map(float, operating_range_rpm)
-        inside = (speed >= lo) & (speed <= hi) & (ratio_c > 1)
-        if inside.any():
-            passed = False
-            inside_fail = speed[inside]
-    parts = []
-    if result.barred_ranges_rpm:
-        ranges = ", ".join(f"{a:.0f}–{b:.0f}" for a, b in result.barred_ranges_rpm)
-        parts.append(f"barred {ranges} rpm (continuous limit exceeded)")
-    else:
-        parts.append("continuous limit held")
-    if result.transient_exceeded_rpm:
-        ranges = ", ".join(f"{a:.0f}–{b:.0f}" for a, b in result.transient_exceeded_rpm)
-        parts.append(f"TRANSIENT LIMIT EXCEEDED {ranges} rpm")
-    else:
-        parts.append("transient limit held")
-    if len(inside_fail):
-        parts.append(f"continuous limit exceeded inside the operating range at "
-                     f"{inside_fail.min():.0f}–{inside_fail.max():.0f} rpm")
-    k = int(np.argmax(ratio_t))
-    return LimitCheck(name=f"{name} ({section})" if section else name,
-                      quantity="stress / transient limit", value=float(ratio_t[k]), limit=1.0,
-                      units="1", passed=bool(passed), detail="; ".join(parts),
-                      source=lim.source, data=result)
+                      units="m/s", status="pass" if passed else "fail", detail=detail,
+                      source=source, basis=basis, data=frame)
 
 
 def check_residual_unbalance(residual, *, rotor_mass, speed_rpm, grade=6.3, plane_shares=None,
@@ -512,5 +565,16 @@ def check_residual_unbalance(residual, *, rotor_mass, speed_rpm, grade=6.3, plan
     detail = (f"achieved G {g.achieved_grade:.3g} (smallest standard grade met: "
               f"G {g.smallest_grade:g}; required G {g.grade:g})")
     return LimitCheck(name=name, quantity="residual / permissible unbalance",
-                      value=float(ratio[k]), limit=1.0, units="1", passed=g.passed,
-                      detail=detail, source="ISO 21940-11:2016 §5, U_per = G m / Ω", data=g)
+                      value=float(ratio[k]), limit=1.0, units="1",
+                      status="pass" if g.passed else "fail", detail=detail,
+                      source="ISO 21940-11:2016 §5, U_per = G m / Ω",
+                      basis=f"{len(g.residual)} correction plane(s), {rotor_mass:g} kg, "
+                            f"{speed:g} rpm", data=g)
+
+
+def __getattr__(name):
+    if name == "check_torsional_stress":  # lives beside the rule verdicts
+        from .torsional_limits import check_torsional_stress
+
+        return check_torsional_stress
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

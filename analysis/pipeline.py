@@ -33,7 +33,7 @@ from pathlib import Path
 import numpy as np
 
 from crankbench.predict._validate import check_option, check_positive, suggest
-from crankbench.predict.errors import AnalysisError, ConfigError, RecordError
+from crankbench.predict.errors import AnalysisError, ConfigError, ModelError, RecordError
 
 __all__ = ["LoadCase", "PipelineResult", "analyse", "torsional_channel"]
 
@@ -163,11 +163,50 @@ class PipelineResult:
     settings: dict = field(default_factory=dict)
     timings: dict = field(default_factory=dict)
     balance: tuple = ()
+    extra_verdicts: tuple = ()
+
+    @property
+    def steady(self) -> bool:
+        """The record is a steady-speed run (speed span under 3 % of the mean speed)."""
+        lo, hi = self.speed_range_rpm
+        return (hi - lo) < 0.03 * max(0.5 * (hi + lo), 1e-9)
+
+    @property
+    def verdicts(self) -> tuple:
+        """Every check as a :class:`analysis.verdict.Verdict`: the comparison with the model,
+        each limit check, the balance comparisons (informational) and any added by other
+        steps (``extra_verdicts``, e.g. a steady-state order comparison)."""
+        from .verdict import Verdict
+
+        lo, hi = self.speed_range_rpm
+        out = [self.comparison.verdict(
+            steady=self.steady,
+            basis=f"record {self.source}, channel {self.channel} at {self.node}, "
+                  f"{lo:.0f}–{hi:.0f} rpm, {len(self.resonances)} resonance(s) found")]
+        out += [c.verdict for c in self.limits]
+        for channel, comp, _ in self.balance:
+            if comp is None:
+                continue
+            detail = ", ".join(f"order {r.order:g}: ×{r.median_ratio:.2f}"
+                               for _, r in comp.table.iterrows())
+            out.append(Verdict.from_bool(
+                f"balance residuals at {channel}", comp.passed,
+                rule=f"median measured/predicted within a factor {comp.factor:g}",
+                basis=f"channel {channel}, orders 1 and 2 against the mount model",
+                reason=detail, required=False))
+        return tuple(out) + tuple(self.extra_verdicts)
+
+    @property
+    def verdict(self):
+        """The overall verdict: :func:`analysis.verdict.combine` of :attr:`verdicts`."""
+        from .verdict import combine
+
+        return combine(self.verdicts)
 
     @property
     def passed(self) -> bool:
-        """True when prediction and measurement agree and every limit check passed."""
-        return self.comparison.agrees and all(c.passed for c in self.limits)
+        """True only when the overall verdict is a pass (inconclusive is not)."""
+        return self.verdict.status == "pass"
 
     def to_frame(self):
         """The summary as a one-row DataFrame."""
@@ -180,10 +219,17 @@ class PipelineResult:
         return self.comparison.plot(ax=ax)
 
     def summary(self) -> dict:
-        """One flat row for batch tables and ``--json``."""
+        """One flat row for batch tables and ``--json``: the overall verdict and its reason,
+        the comparison's and the limits' verdicts, counts and worst deviations."""
+        from .verdict import combine
+
         s = self.comparison.summary()
-        worst = max((c.value for c in self.limits if c.units == "1"), default=float("nan"))
-        return {"record": self.source, "sha256": self.record_sha256, "channel": self.channel,
+        overall = self.verdict
+        limits = combine([c.verdict for c in self.limits], name="limits")
+        comp = self.comparison.verdict(steady=self.steady)
+        return {"verdict": overall.status, "verdict_reason": overall.reason,
+                "comparison_verdict": comp.status, "limits_verdict": limits.status,
+                "record": self.source, "sha256": self.record_sha256, "channel": self.channel,
                 "node": self.node, "speed_min_rpm": self.speed_range_rpm[0],
                 "speed_max_rpm": self.speed_range_rpm[1],
                 "sweep_rate_rpm_per_s": self.sweep_rate_rpm_per_s,
@@ -192,8 +238,6 @@ class PipelineResult:
                 "unmatched_predicted_significant": s["unmatched_predicted_significant"],
                 "max_abs_deviation_pct": s["max_abs_deviation_pct"],
                 "model_agrees": s["agrees"],
-                "limits_passed": all(c.passed for c in self.limits),
-                "worst_limit_ratio": worst, "passed": self.passed,
                 "elapsed_s": float(sum(self.timings.values()))}
 
 
@@ -381,8 +425,8 @@ def _track(x, fs, rpm, orders, *, method, bandwidth_orders, revolutions):
 
 def analyse(record, model, *, channel=None, speed_channel=None, orders=None, max_order=12.0,
             method="vkf", bandwidth_orders=None, revolutions=4, load=None, gate=0.15,
-            tolerance=0.03, amplitude_tolerance=0.5, machine_class="III",
-            operating_range_rpm=None, base_points=1500, order_fraction=0.05, max_tracked=8,
+            tolerance=0.03, amplitude_tolerance=0.5, machine_class=None,
+            vibration_standard=None, operating_range_rpm=None, base_points=1500, order_fraction=0.05, max_tracked=8,
             resonance_options=None, progress=None) -> PipelineResult:
     """Run the chain on one record against one shaft-line model.
 
@@ -414,10 +458,16 @@ def analyse(record, model, *, channel=None, speed_channel=None, orders=None, max
         Load law of the predicted excitation (default: the model's imep, constant).
     gate, tolerance, amplitude_tolerance : float
         Matching settings (:func:`analysis.match_criticals`).
-    machine_class : str
-        ISO 10816-1 class for vibrograph channels.
+    machine_class : str or int, optional
+        Vibration-severity class of ``vibration_standard`` (default: the model's
+        ``[limits.vibration] machine_class``, else for ISO 10816-6 chosen from the engine's
+        power and mounting, see :func:`analysis.limits.reciprocating_class`).
+    vibration_standard : {'ISO 10816-6', 'ISO 10816-1'}, optional
+        Default: the model's ``[limits.vibration] standard``, else ISO 10816-6 (reciprocating
+        machines).
     operating_range_rpm : (float, float), optional
-        Continuous-operation range for the stress check.
+        Continuous-operation range for the stress check (default: the model's
+        ``[limits] operating_range_rpm``).
     base_points : int
         Fidelity of the predicted resonance curves: speeds over the range (uniform).
     order_fraction : float
@@ -464,6 +514,7 @@ def analyse(record, model, *, channel=None, speed_channel=None, orders=None, max
 
     def done(name):
         timings[name] = time.perf_counter() - timings[name]
+        log.debug("step %-15s %.2f s", name, timings[name])
 
     step("read")
     rec, source = _load_record(record)
@@ -487,6 +538,11 @@ def analyse(record, model, *, channel=None, speed_channel=None, orders=None, max
                           "not finite (or outside the speed reference)")
     x, rpm_ok = np.where(ok, x, 0.0), np.where(ok, rpm, np.nanmedian(rpm))
     lo, hi = float(np.nanmin(rpm)), float(np.nanmax(rpm))
+    if hi - lo < 0.005 * max(hi, 1.0):
+        # a steady run: predict over ±0.5 % so the model's curves exist; no critical is crossed
+        # and the comparison says so (inconclusive)
+        mid = 0.5 * (lo + hi)
+        lo, hi = mid * 0.995, mid * 1.005
     t = np.arange(x.size) / fs
     rate = np.abs(np.gradient(rpm_ok, t))
     moving = rate > 0.2
@@ -515,7 +571,7 @@ def analyse(record, model, *, channel=None, speed_channel=None, orders=None, max
         orders = sorted(float(o) for o in ranked.index[:max_tracked]) or all_orders
         dropped = [float(o) for o in ranked.index[max_tracked:]]
         if dropped:
-            log.info("tracking the %d strongest orders; not tracked: %s", max_tracked,
+            log.debug("tracking the %d strongest orders; not tracked: %s", max_tracked,
                      ", ".join(f"{o:g}" for o in sorted(dropped)))
         # criticals of orders not tracked cannot be found: not expected
         predicted.loc[~predicted["order"].isin(orders), "significant"] = False
@@ -554,7 +610,8 @@ def analyse(record, model, *, channel=None, speed_channel=None, orders=None, max
 
     step("limits")
     limits = _limit_checks(rec, system, track, grid, pred_stress, response_da, all_orders,
-                           channel, machine_class, operating_range_rpm)
+                           channel, machine_class, operating_range_rpm, load=load,
+                           standard=vibration_standard, speed_range=(lo, hi))
     done("limits")
 
     ppr = next((int(rec[n].attrs["pulses_per_rev"]) for n in rec.data_vars
@@ -658,34 +715,90 @@ def _balance(rec, system, lo, hi, orders=(1.0, 2.0)):
                 comp = compare_balance(track, predicted, orders=live,
                                        channel=f"{name} ({v.attrs['location']} {direction})")
             except AnalysisError as exc:
-                log.info("balance comparison at %s skipped: %s", name, exc)
+                log.debug("balance comparison at %s skipped: %s", name, exc)
         table = pd.DataFrame(rows)
         table.attrs["units"] = v.attrs.get("units", "")
         out.append((str(name), comp, table))
     return out
 
 
-def _limit_checks(rec, system, track, grid, pred_stress, response, orders, channel, machine_class,
-                  operating_range_rpm):
-    """Measured stress vs the model's limits; vibration severity of vibrograph channels.
+def _superpose(stress, orders):
+    """Peak superposed stress over one engine cycle, (n_s, n_o, n_sec) complex → (n_s, n_sec).
 
-    Stress: the predicted complex stress of each order in each section, scaled by the ratio
-    of measured to predicted amplitude of that order at the measured node (ratio 1 for orders
-    not tracked, or where the prediction is below 5 % of its maximum over speed; clipped to
-    [0, 10]), superposed over one engine cycle with the model's phases (32 samples per period
-    of the highest order: peak under-estimated by at most 1 − cos(π/32) = 0.5 %).
+    32 samples per period of the highest order: the peak is under-estimated by at most
+    1 − cos(π/32) = 0.5 %.
     """
-    from .limits import check_torsional_stress, check_vibration_severity, vibration_severity
+    q = np.asarray(orders, float)
+    cycle = 4.0 * np.pi if np.any(np.abs(q - np.round(q)) > 1e-9) else 2.0 * np.pi
+    theta = np.linspace(0.0, cycle, int(32 * q.max() * cycle / (2 * np.pi)), endpoint=False)
+    basis = np.exp(1j * np.outer(q, theta))  # (n_o, n_theta)
+    out = np.empty((stress.shape[0], stress.shape[2]))
+    for c in range(stress.shape[2]):
+        out[:, c] = np.max(np.abs(np.real(stress[:, :, c] @ basis)), axis=1)
+    return out
+
+
+def _misfire_stress(system, speed_rpm, orders, load, sections):
+    """Predicted superposed stress with one cylinder misfiring: the worst over the cylinders.
+
+    The misfiring cylinder keeps its inertia torque and loses its gas torque (motored
+    pressure neglected: a slight over-estimate of the unbalance between cylinders).
+    Returns (n_s, n_sections) Pa and the worst cylinder per speed.
+    """
+    from crankbench.predict.torsion.excitation import engine_excitation
+    from crankbench.predict.torsion.forced import stress_factor
+
+    imep = load.imep if load.imep is not None else system.operating.get("imep")
+    exc = engine_excitation(system, imep=imep, orders=orders)
+    omega = np.asarray(speed_rpm, float) * np.pi / 30.0
+    scale = load.scale(speed_rpm)
+    names = list(system.edge_names)
+    cols = [names.index(n) for n in sections]
+    factor = stress_factor(system)[cols]
+    worst = np.zeros((omega.size, len(cols)))
+    which = np.zeros(omega.size, int)
+    for cyl in range(1, exc.n_cylinders + 1):
+        gas = np.repeat(exc.gas[None, :, None] * scale[:, None, None], exc.n_cylinders, axis=2)
+        gas[:, :, cyl - 1] = 0.0
+        torque = gas + (omega**2)[:, None, None] * exc.inertia[None, :, None]
+        res = system.forced_response(speed_rpm, torque=torque, orders=orders, superpose=False)
+        tau = _superpose(res.torque[:, :, cols] * factor[None, None, :], orders)
+        better = tau.max(axis=1) > worst.max(axis=1)
+        which[better] = cyl
+        worst = np.maximum(worst, tau)
+    return worst, which
+
+
+def _limit_checks(rec, system, track, grid, pred_stress, response, orders, channel, machine_class,
+                  operating_range_rpm, *, load=None, standard=None, speed_range=None):
+    """Torsional stress against the rule limits (measured; predicted with a cylinder
+    misfiring); vibration severity of vibrograph channels.
+
+    Measured stress: the predicted complex stress of each order in each section, scaled by the
+    ratio of measured to predicted amplitude of that order at the measured node (ratio 1 for
+    orders not tracked, or where the prediction is below 5 % of its maximum over speed;
+    clipped to [0, 10]), superposed over one engine cycle with the model's phases
+    (:func:`_superpose`).
+    """
+    from .torsional_limits import check_torsional_stress, not_assessed
 
     checks = []
     limits = getattr(system, "limits", None)
-    if limits is not None:
+    rpm = np.asarray(track["rpm"].values, float)
+    lo, hi = (float(rpm.min()), float(rpm.max())) if speed_range is None else speed_range
+    if limits is None or not getattr(limits, "has_rule_data", True):
+        checks.append(not_assessed(
+            f"measured torsional stress ({channel})",
+            "the model has no stress limit data ([limits] with IACS UR M68 shafting data "
+            "[[limits.shafting]] or the engine maker's crankshaft figure [limits.crankshaft])",
+            basis=f"model {system.operating.get('source', '')}"))
+    else:
         names = list(system.edge_names)
-        pred_amp = np.asarray(response.values, float).T  # (n_s, n_o)
-        cols = [names.index(s) for s in limits.sections] if limits.sections else \
+        lim_secs = list(limits.sections)
+        cols = [names.index(s) for s in lim_secs] if lim_secs else \
             [i for i in range(len(names)) if np.isfinite(pred_stress[:, :, i]).all()]
-        rpm = np.asarray(track["rpm"].values, float)
-        edges = np.linspace(rpm.min(), rpm.max(), 301)
+        pred_amp = np.asarray(response.values, float).T  # (n_s, n_o)
+        edges = np.linspace(lo, hi, 301)
         centre = 0.5 * (edges[1:] + edges[:-1])
         idx = np.clip(np.searchsorted(edges, rpm) - 1, 0, 299)
         ratio = np.ones((centre.size, len(orders)))
@@ -698,24 +811,87 @@ def _limit_checks(rec, system, track, grid, pred_stress, response, orders, chann
             pred = np.interp(centre, grid, pred_amp[:, j])
             ok = np.isfinite(meas) & (pred >= 0.05 * pred_amp[:, j].max()) & (pred > 0)
             ratio[ok, j] = np.clip(meas[ok] / pred[ok], 0.0, 10.0)
-        # one engine cycle, 32 samples per period of the highest order
-        q = np.asarray(orders, float)
-        cycle = 4.0 * np.pi if np.any(np.abs(q - np.round(q)) > 1e-9) else 2.0 * np.pi
-        theta = np.linspace(0.0, cycle, int(32 * q.max() * cycle / (2 * np.pi)), endpoint=False)
-        basis = np.exp(1j * np.outer(q, theta))  # (n_o, n_theta)
-        best = None
-        for c in cols:
-            sc = pred_stress[:, :, c]
-            at = np.stack([np.interp(centre, grid, sc[:, j].real)
-                           + 1j * np.interp(centre, grid, sc[:, j].imag)
-                           for j in range(len(orders))], axis=1)
-            total = np.max(np.abs(np.real((ratio * at) @ basis)), axis=1)
-            if best is None or total.max() > best[1].max():
-                best = (names[c], total)
-        if best is not None:
-            checks.append(check_torsional_stress(
-                centre, best[1], limits, section=best[0], operating_range_rpm=operating_range_rpm,
-                name=f"measured torsional stress ({channel})"))
+        at = np.empty((centre.size, len(orders), len(cols)), complex)
+        for k, c in enumerate(cols):
+            for j in range(len(orders)):
+                sc = pred_stress[:, j, c]
+                at[:, j, k] = np.interp(centre, grid, sc.real) + 1j * np.interp(centre, grid,
+                                                                                 sc.imag)
+        total = _superpose(ratio[:, :, None] * at, orders)
+        basis = (f"record channel {channel} at {response.attrs.get('node', '')}, "
+                 f"{lo:.0f}–{hi:.0f} rpm: measured/predicted order amplitude × model stress "
+                 "per section, superposed over the cycle")
+        checks.extend(check_torsional_stress(
+            centre, total, limits, sections=[names[c] for c in cols],
+            operating_range_rpm=operating_range_rpm, name=f"measured torsional stress",
+            basis=basis, covered_rpm=(lo, hi)))
+        if getattr(system, "engine", None) is not None and load is not None and \
+                hasattr(limits, "misfire_operation"):
+            try:
+                sgrid = np.linspace(lo, hi, 240)
+                mis, _ = _misfire_stress(system, sgrid, orders, load, [names[c] for c in cols])
+                checks.extend(check_torsional_stress(
+                    sgrid, mis, limits, sections=[names[c] for c in cols], misfire=True,
+                    operating_range_rpm=operating_range_rpm,
+                    name="predicted torsional stress, one cylinder misfiring",
+                    basis=(f"model, worst single misfiring cylinder (gas torque removed), "
+                           f"{lo:.0f}–{hi:.0f} rpm, run's load law"),
+                    required=bool(limits.misfire_operation), covered_rpm=(lo, hi)))
+            except (ModelError, AnalysisError) as exc:
+                log.debug("misfire case not computed: %s", exc)
+    checks.extend(_severity_checks(rec, system, machine_class, standard))
+    return checks
+
+
+def _engine_power_and_mounting(system):
+    """(rated power W or None, resilient mounting or None, rated speed rpm or None)."""
+    engine = getattr(system, "engine", None)
+    if engine is None:
+        return None, None, None
+    rated = getattr(engine, "rated_speed_rpm", None)
+    power = None
+    imep = (getattr(engine, "combustion", None) or {})
+    imep = imep.get("imep") if isinstance(imep, dict) else getattr(imep, "imep", None)
+    bore, stroke = getattr(engine, "bore", None), getattr(engine, "stroke", None)
+    if stroke is None and getattr(engine, "crank_radius", None) is not None:
+        stroke = 2.0 * engine.crank_radius
+    if None not in (imep, bore, stroke, rated):
+        # P = p_mi V_d z n / (60 i), i = 2 revolutions per cycle for a 4-stroke (indicated)
+        swept = np.pi / 4.0 * bore**2 * stroke * engine.n_cylinders
+        power = imep * swept * rated / 60.0 / (getattr(engine, "cycle", 4) / 2.0)
+    resilient = None
+    source = getattr(engine, "source", None)
+    if source:
+        try:
+            from crankbench.predict.mounts import MountedEngine
+
+            MountedEngine.from_toml(source)
+            resilient = True
+        except (ValueError, OSError, KeyError):
+            resilient = None
+    return power, resilient, rated
+
+
+def _severity_checks(rec, system, machine_class, standard):
+    """Vibration severity of each vibrograph channel: ISO 10816-6 (class from the model's
+    power and mounting) by default for engines, ISO 10816-1 on request."""
+    from .limits import check_vibration_severity, reciprocating_class, vibration_severity
+
+    out = []
+    reason = ""
+    std = standard
+    vib = getattr(getattr(system, "limits", None), "vibration", None) or {}
+    cls = machine_class
+    if std is None:
+        std = vib.get("standard", "ISO 10816-6")
+    if cls is None:
+        cls = vib.get("machine_class")
+    if std == "ISO 10816-6" and cls is None:
+        power, resilient, rated = _engine_power_and_mounting(system)
+        cls, reason = reciprocating_class(power_w=power, rated_speed_rpm=rated,
+                                          resilient=resilient)
+    elif std == "ISO 10816-1" and cls is None:
+        cls, reason = "III", "class III (default)"
     for name in rec.data_vars:
         v = rec[name]
         q = v.attrs.get("quantity")
@@ -727,16 +903,27 @@ def _limit_checks(rec, system, track, grid, pred_stress, response, orders, chann
             except (AnalysisError, RecordError):
                 rpm = None
             fs = float(v.attrs["sample_rate"])
-            band = (2.0, 1000.0) if (rpm is not None and np.nanmax(rpm) <= 600) else (10.0, 1000.0)
-            band = (band[0], min(band[1], 0.45 * fs))
+            # ISO 10816-6: 2–1000 Hz; ISO 10816-1: 10–1000 Hz (2 Hz at 600 rpm or below)
+            low = 2.0 if std == "ISO 10816-6" or (rpm is not None and np.nanmax(rpm) <= 600) \
+                else 10.0
+            band = (low, min(1000.0, 0.45 * fs))
             window = min(1.0, v.size / fs)
             sev = vibration_severity(np.asarray(v.values, float), fs=fs, speed_rpm=rpm, quantity=q,
                                      band_hz=band, window_s=window)
-            checks.append(check_vibration_severity(
-                sev, machine_class=machine_class,
-                name=f"vibration severity {name}" + (f" ({v.attrs['location']})"
-                                                     if v.attrs.get("location") else "")))
-    return checks
+            loc = f" ({v.attrs['location']})" if v.attrs.get("location") else ""
+            basis = (f"channel {name}{loc}, {q}, velocity rms {band[0]:g}–{band[1]:g} Hz in "
+                     f"{window:g} s windows")
+            bounds = None
+            if vib.get("boundaries_mm_s") is not None:
+                from .limits import ZoneBoundaries
+
+                b = [float(x) * 1e-3 for x in vib["boundaries_mm_s"]]
+                bounds = ZoneBoundaries(*b, machine_class=str(cls or ""),
+                                        source=vib.get("source", "model [limits.vibration]"))
+            out.append(check_vibration_severity(
+                sev, machine_class=cls, boundaries=bounds, standard=std,
+                name=f"vibration severity {name}{loc}", basis=basis, class_reason=reason))
+    return out
 
 
 def load_from_record_file(path):

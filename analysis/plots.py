@@ -1,4 +1,4 @@
-"""Figures of order-analysis results: order map, Campbell (rpm–frequency) map, order tracks.
+"""Figures of order-analysis results: order map, Campbell diagram, order tracks, mode shapes.
 
 Each function takes a result of :mod:`analysis.orders` and an optional matplotlib ``ax``, draws
 on it, and returns the figure; none calls ``show()``.
@@ -10,7 +10,7 @@ import numpy as np
 
 from crankbench.predict.errors import AnalysisError
 
-__all__ = ["plot_order_map", "plot_campbell", "plot_order_tracks"]
+__all__ = ["plot_order_map", "plot_campbell", "plot_order_tracks", "plot_mode_shapes"]
 
 
 def _axes(ax, figsize=(7.0, 4.5)):
@@ -71,7 +71,7 @@ def plot_order_map(order_map, ax=None, *, db: bool = True, floor_db: float = -80
     speed = _speed_axis(order_map)
     shown = _db(values, floor_db) if db else values
     mesh = ax.pcolormesh(order_map["order"].values, speed, shown, shading="nearest",
-                         cmap="viridis")
+                         cmap="viridis", rasterized=True)
     units = order_map.attrs.get("units", "")
     label = (f"dB re max" if db else f"{order_map.attrs.get('amplitude_convention', '')} "
              f"[{units}]")
@@ -82,21 +82,33 @@ def plot_order_map(order_map, ax=None, *, db: bool = True, floor_db: float = -80
     return fig
 
 
-def plot_campbell(campbell, ax=None, *, orders=None, db: bool = True, floor_db: float = -80.0,
-                  critical_frequencies_hz=()):
-    """Campbell diagram: speed (rpm) against frequency (Hz), with order rays.
+def plot_campbell(campbell=None, ax=None, *, orders=None, db: bool = True,
+                  floor_db: float = -80.0, critical_frequencies_hz=(), speed_range_rpm=None,
+                  frequency_max_hz=None, crossings=None):
+    """Torsional Campbell diagram in the usual axes: speed (rpm) on x, frequency (Hz) on y.
+
+    Order rays ``f = q · n / 60`` run from the origin, each labelled inside the axes at its
+    end; the natural frequencies are horizontal lines, labelled inside the axes; measured
+    crossings are markers. A measured short-time spectrum (:func:`analysis.campbell_map`) may
+    lie underneath as a colour map.
 
     Parameters
     ----------
-    campbell : xarray.DataArray
-        From :func:`analysis.campbell_map`.
+    campbell : xarray.DataArray, optional
+        From :func:`analysis.campbell_map` (dims (time|rpm, frequency), ``rpm`` coordinate).
     ax : matplotlib Axes, optional
     orders : sequence of float, optional
-        Order rays ``f = o · rpm / 60`` to draw (default ``attrs['order_lines']``).
+        Order rays (default ``campbell.attrs['order_lines']``).
     db, floor_db
         As in :func:`plot_order_map`.
-    critical_frequencies_hz : sequence of float
-        Natural frequencies drawn as vertical lines (e.g. predicted torsional modes).
+    critical_frequencies_hz : sequence of float or dict
+        Natural frequencies, Hz (a dict ``{label: frequency}`` names them).
+    speed_range_rpm : (float, float), optional
+        x range (default: the map's speeds).
+    frequency_max_hz : float, optional
+        Top of the y axis (default: the map's highest frequency).
+    crossings : pandas.DataFrame, optional
+        Measured crossings with ``speed_rpm`` and ``frequency_hz`` columns.
 
     Returns
     -------
@@ -109,33 +121,100 @@ def plot_campbell(campbell, ax=None, *, orders=None, db: bool = True, floor_db: 
     ...                  coords={"rpm": ("time", [1000., 1500., 2000.]),
     ...                          "frequency": np.arange(5.) * 25},
     ...                  attrs={"units": "m", "order_lines": [1, 2]})
-    >>> len(plot_campbell(c).axes[0].lines)
-    2
+    >>> ax = plot_campbell(c).axes[0]
+    >>> len(ax.lines), ax.get_xlabel(), ax.get_ylabel()
+    (2, 'engine speed (rpm)', 'frequency (Hz)')
     """
-    if "frequency" not in campbell.dims or "rpm" not in campbell.coords:
+    if campbell is not None and ("frequency" not in campbell.dims or
+                                 "rpm" not in campbell.coords):
         raise AnalysisError("plot_campbell needs a map with dim 'frequency' and an 'rpm' "
                             "coordinate (analysis.campbell_map)")
-    fig, ax = _axes(ax)
-    speed = _speed_axis(campbell)
-    values = campbell.transpose(..., "frequency").values
-    mesh = ax.pcolormesh(campbell["frequency"].values, speed,
-                         _db(values, floor_db) if db else values, shading="nearest",
-                         cmap="magma")
-    fig.colorbar(mesh, ax=ax, label="dB re max" if db else f"[{campbell.attrs.get('units', '')}]")
-    lines = campbell.attrs.get("order_lines", []) if orders is None else orders
-    rpm_line = np.array([np.nanmin(speed), np.nanmax(speed)])
-    f_top = float(campbell["frequency"].values[-1])
-    for o in lines:
-        ax.plot(o * rpm_line / 60.0, rpm_line, color="w", lw=0.8, ls="--")
-        f_end = o * rpm_line[-1] / 60.0
-        if f_end <= f_top:
-            ax.annotate(f"{o:g}", (f_end, rpm_line[-1]), color="w", fontsize=8)
-    for fc in critical_frequencies_hz:
-        ax.axvline(fc, color="c", lw=0.8)
-    ax.set_xlim(campbell["frequency"].values[0], f_top)
-    ax.set_xlabel("frequency [Hz]")
-    ax.set_ylabel("speed [rpm]")
-    ax.set_title(str(campbell.name or "Campbell diagram"))
+    fig, ax = _axes(ax, figsize=(7.5, 5.0))
+    if campbell is not None:
+        speed = _speed_axis(campbell)
+        values = campbell.transpose(..., "frequency").values
+        mesh = ax.pcolormesh(speed, campbell["frequency"].values,
+                             (_db(values, floor_db) if db else values).T, shading="nearest",
+                             cmap="Greys", rasterized=True,
+                             alpha=0.55)
+        fig.colorbar(mesh, ax=ax, label="measured spectrum, dB re max" if db else
+                     f"[{campbell.attrs.get('units', '')}]", shrink=0.8)
+        lo_default = (float(np.nanmin(speed)), float(np.nanmax(speed)))
+        f_default = float(campbell["frequency"].values[-1])
+        lines = campbell.attrs.get("order_lines", []) if orders is None else orders
+    else:
+        lo_default, f_default, lines = (0.0, 1.0), None, orders or ()
+    x0, x1 = speed_range_rpm if speed_range_rpm is not None else lo_default
+    nat = (dict(critical_frequencies_hz) if isinstance(critical_frequencies_hz, dict) else
+           {f"{f:.1f} Hz": f for f in critical_frequencies_hz})
+    f_top = frequency_max_hz or f_default or 1.2 * max(
+        [max(nat.values(), default=1.0)] + [q * x1 / 60 for q in lines])
+    xs = np.array([0.0, x1])
+    for q in lines:
+        ax.plot(xs, q * xs / 60.0, color="tab:blue", lw=0.8)
+        # label inside the axes: at the ray's end, or where it leaves the top
+        x_end = min(x1, 60.0 * f_top / q) if q > 0 else x1
+        y_end = q * x_end / 60.0
+        ax.text(x_end - 0.01 * (x1 - x0), y_end - 0.015 * f_top, f"{q:g}", color="tab:blue",
+                fontsize=7, ha="right", va="top", clip_on=True)
+    for label, f in nat.items():
+        if f <= f_top:
+            ax.axhline(f, color="tab:red", lw=0.9, ls="--")
+            ax.text(x0 + 0.01 * (x1 - x0), f + 0.01 * f_top, label, color="tab:red",
+                    fontsize=7, ha="left", va="bottom", clip_on=True)
+    if crossings is not None and len(crossings):
+        ax.plot(crossings["speed_rpm"], crossings["frequency_hz"], "o", mfc="none", mec="k",
+                ms=6, mew=1.2, label="measured crossings", zorder=5)
+        ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(0.0, 0.93))
+    ax.set_xlim(x0, x1)
+    ax.set_ylim(0.0, f_top)
+    ax.set_xlabel("engine speed (rpm)")
+    ax.set_ylabel("frequency (Hz)")
+    ax.set_title(str(getattr(campbell, "name", None) or "Campbell diagram"), fontsize=9)
+    return fig
+
+
+def plot_mode_shapes(system, ax=None, *, modes=(1, 2, 3, 4)):
+    """Relative mode shapes along the shaft line, nodes in model order.
+
+    Nodes outside the undamped eigen-problem (a viscous damper's seismic ring, which has no
+    spring) hold no mode-shape value and are left out; every other node is drawn at its place
+    in the model's node list (free end first, as the model is written).
+
+    Parameters
+    ----------
+    system : TorsionalSystem
+    ax : matplotlib Axes, optional
+    modes : sequence of int
+        Elastic mode numbers to draw.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+
+    Examples
+    --------
+    >>> from crankbench.predict.torsion import chain
+    >>> fig = plot_mode_shapes(chain([1.0, 2.0, 1.0], [1e4, 1e4], names=["a", "b", "c"]))
+    >>> [t.get_text() for t in fig.axes[0].get_xticklabels()]
+    ['a', 'b', 'c']
+    """
+    m = system.mode_shapes()
+    keep = np.flatnonzero(np.asarray(getattr(system, "eigen_nodes",
+                                             np.ones(len(m.node_names), bool)), bool))
+    rel = m.relative()[keep]
+    names = [m.node_names[i] for i in keep]
+    fig, ax = _axes(ax, figsize=(7.5, 4.2))
+    for i, k in enumerate(m.mode_numbers):
+        if k in modes:
+            ax.plot(range(len(names)), rel[:, i], marker="o", ms=4,
+                    label=f"mode {k}: {m.frequencies_hz[i]:.4g} Hz")
+    ax.set_xticks(range(len(names)), names, rotation=55, ha="right", fontsize=7)
+    ax.axhline(0, color="0.6", lw=0.8)
+    ax.set_ylabel("relative amplitude")
+    ax.set_xlabel("shaft line, nodes in model order")
+    ax.legend(fontsize=7)
+    ax.grid(alpha=0.3)
     return fig
 
 

@@ -13,9 +13,6 @@ __all__ = ["add_common_arguments", "check_common", "options_from_args", "progres
 
 log = logging.getLogger("crankbench")
 
-#: ISO 10816-1 machine classes accepted by --machine-class
-MACHINE_CLASSES = ("I", "II", "III", "IV")
-
 #: highest order the pipeline predicts (analysis.pipeline.analyse max_order)
 MAX_ORDER = 12.0
 
@@ -51,9 +48,14 @@ def add_common_arguments(parser) -> None:
                         default=0.03,
                         help="relative speed deviation flagged as disagreement, (0, --gate] "
                              "(default 0.03)")
-    parser.add_argument("--machine-class", default="III", type=str.upper,
-                        choices=MACHINE_CLASSES,
-                        help="ISO 10816-1 machine class for vibrograph channels (default III)")
+    parser.add_argument("--vibration-standard", choices=("ISO 10816-6", "ISO 10816-1"),
+                        default=None,
+                        help="vibration-severity zones (default: the model's "
+                             "[limits.vibration], else ISO 10816-6 for reciprocating machines)")
+    parser.add_argument("--machine-class", default=None,
+                        help="class of that standard (ISO 10816-6: 1-7, ISO 10816-1: I-IV; "
+                             "default: the model's, else chosen from the engine's power and "
+                             "mounting)")
 
 
 def check_common(args, *, records=(), model=None) -> None:
@@ -75,6 +77,16 @@ def check_common(args, *, records=(), model=None) -> None:
                           "which --imep holds)")
     if args.bandwidth_orders is not None and args.method != "vkf":
         raise ConfigError("--bandwidth-orders applies to --method vkf only")
+    if args.machine_class is not None:
+        from crankbench.analysis.limits import zone_boundaries
+        from crankbench.predict.errors import CrankbenchError
+
+        standard = getattr(args, "vibration_standard", None) or "ISO 10816-6"
+        try:
+            zone_boundaries(args.machine_class, standard=standard)
+        except CrankbenchError as exc:
+            raise ConfigError(f"--machine-class {args.machine_class!r} is not a class of "
+                              f"{standard} ({exc})") from None
     system = None
     if model is not None:
         from crankbench.predict.torsion import from_toml
@@ -127,11 +139,12 @@ def options_from_args(args, record_path=None) -> dict:
     elif record_path is not None:
         load = load_from_record_file(record_path)
         if load is not None:
-            log.info("load from the record's scene: %s, imep %s Pa", load.law, load.imep)
+            log.debug("load from the record's scene: %s, imep %s Pa", load.law, load.imep)
     return dict(channel=args.channel, speed_channel=args.speed_channel, orders=args.orders,
                 method=args.method, bandwidth_orders=args.bandwidth_orders, load=load,
                 gate=args.gate, tolerance=args.tolerance,
-                machine_class=args.machine_class)
+                machine_class=args.machine_class,
+                vibration_standard=getattr(args, "vibration_standard", None))
 
 
 def progress_bar(total_steps: int = 7, *, desc: str = "", disable: bool = False):

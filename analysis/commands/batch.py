@@ -374,8 +374,8 @@ def run(args) -> int:
     if args.json:
         print_json({"summary": str(out), "records": rows})
     else:
-        cols = [c for c in ("record", "status", "resonances", "matched",
-                            "max_abs_deviation_pct", "model_agrees", "limits_passed",
+        cols = [c for c in ("record", "status", "verdict", "resonances", "matched",
+                            "max_abs_deviation_pct", "comparison_verdict", "limits_verdict",
                             "elapsed_s") if c in table]
         print_table(table[cols], title=f"{len(files)} records ({len(failed)} failed)")
         for _, r in failed.iterrows():

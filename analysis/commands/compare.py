@@ -19,8 +19,8 @@ def configure(parser) -> None:
     parser.add_argument("model", metavar="MODEL.toml", help="shaft-line model (TOML)")
     add_common_arguments(parser)
     parser.add_argument("--strict", action="store_true",
-                        help="exit with status 1 when measurement and model disagree or a "
-                             "limit check fails")
+                        help="exit with status 1 unless the overall verdict is a pass (a "
+                             "failed or inconclusive check)")
     parser.add_argument("--json", action="store_true", help="print JSON instead of tables")
 
 
@@ -50,6 +50,8 @@ def run(args) -> int:
                     "unmatched_measured": comp.unmatched_measured,
                     "unmatched_predicted": comp.unmatched_predicted,
                     "resonances": result.resonances.to_frame(), "limits": limits,
+                    "verdict": result.verdict.as_dict(),
+                    "checks": [v.as_dict() for v in result.verdicts],
                     "flags": list(comp.flags), "settings": result.settings})
     else:
         print(f"record   {result.source}  channel {result.channel} at {result.node}")
@@ -73,15 +75,17 @@ def run(args) -> int:
             print()
             print_table(comp.unmatched_measured, title="measured resonances without a critical")
         print()
-        for c in result.limits:
-            print(f"{'PASS' if c.passed else 'FAIL'}  {c.name}: {c.detail}")
-        print()
         if comp.flags:
             print("disagreements:")
             for f in comp.flags:
                 print(f"  - {f}")
-        else:
-            print("measurement and model agree within the tolerances")
+            print()
+        for c in result.verdicts:
+            print(f"{c.status.upper():<12} {c.name}: {c.reason or c.basis}"
+                  + ("" if c.required else "  (for information)"))
+        v = result.verdict
+        print(f"verdict: {v.status.upper()}" + (f" — {v.reason}" if v.status != "pass" else
+                                                "  (every required check passed)"))
     if args.strict and not result.passed:
         return 1
     return 0

@@ -107,9 +107,13 @@ def run(args) -> int:
           f"{len(m)} matched to the model's criticals"
           + (f"; the {len(sig)} significant ones within {sig.deviation_pct.abs().max():.2f} %"
              if len(sig) else ""))
-    print(f"comparison   {'model and measurement agree' if result.comparison.agrees else 'DISAGREEMENTS: ' + '; '.join(result.comparison.flags[:3])}")
-    for c in result.limits:
-        print(f"limit check  {'PASS' if c.passed else 'FAIL'}  {c.name}")
+    v = result.verdict
+    for c in result.verdicts:
+        if c.required:
+            print(f"check        {c.status.upper():<12} {c.name}"
+                  + (f": {c.reason}" if c.status != "pass" else ""))
+    print(f"verdict      {v.status.upper()}" + (f" — {v.reason}" if v.status != "pass" else
+                                                "  (every required check passed)"))
     for p in paths:
         print(f"report       {p.resolve()}")
     print(f"done in {elapsed:.1f} s — open the report in a browser")

@@ -2,7 +2,7 @@
 
 Runs the chain of :mod:`analysis.pipeline` and writes the self-contained HTML report (figures
 embedded, no network) built by :func:`analysis.report.build.build_report`; ``--pdf`` also
-writes a PDF beside it (weasyprint when installed, else a matplotlib layout). Outputs are
+writes a PDF beside it, typeset from the same HTML by WeasyPrint. Outputs are
 written atomically and never replace an existing file without ``--overwrite``.
 """
 
@@ -108,7 +108,9 @@ def run(args) -> int:
     finally:
         bar.close()
     params = {"channel": result.channel, "method": args.method, "gate": args.gate,
-              "tolerance": args.tolerance, "machine class": args.machine_class}
+              "tolerance": args.tolerance}
+    if args.machine_class is not None:
+        params["machine class"] = args.machine_class
     bench_rows = None
     if args.bench:
         from crankbench.analysis.bench import run_suites
@@ -123,7 +125,7 @@ def run(args) -> int:
     else:
         for p in paths:
             print(f"report written: {p}")
-        verdict = "all checks passed" if result.passed else "see the disagreements and " \
-                                                            "failed checks in the report"
-        print(f"verdict: {verdict}")
+        v = result.verdict
+        print(f"verdict: {v.status.upper()}" + (f" — {v.reason}" if v.status != "pass" else
+                                                "  (every required check passed)"))
     return 0

@@ -1,10 +1,12 @@
 """Assemble the test report from a :class:`analysis.pipeline.PipelineResult`.
 
-Sections: verdict; test metadata; provenance (file hashes, model, version, parameters);
-analysis settings (window, resolution, amplitude convention, tacho pulses/rev, sweep rate and
-the estimated peak loss); order map and Campbell diagram with the predicted criticals overlaid;
-order tracks with the predicted resonance curves; mode shapes; the comparison tables; the
-limit checks.
+Sections, each added by ``Report.add_*`` calls (other steps add theirs the same way): the
+verdict (every check pass / fail / inconclusive with its rule and data); test metadata;
+provenance (file hashes, model, version, parameters); analysis settings; order map and
+torsional Campbell diagram (speed on x, frequency on y, order rays, natural frequencies,
+measured crossings); order tracks with the predicted resonance curves; mode shapes along the
+shaft line in model order; the one critical-speed table; the limit checks with their rules and
+clauses.
 """
 
 from __future__ import annotations
@@ -51,12 +53,14 @@ def _order_map_figure(result):
                 label="measured resonance")
     ax.legend(fontsize=7, loc="upper right")
     ax.set_title(f"order map of {result.channel}", fontsize=9)
+    ax.set_xlabel("order")
+    ax.set_ylabel("engine speed (rpm)")
     return fig
 
 
 def _campbell_figure(result):
-    import matplotlib.pyplot as plt
-
+    """Torsional Campbell diagram: speed on x, frequency on y, the tracked orders' rays, the
+    model's natural frequencies, the measured crossings, the measured spectrum underneath."""
     from ..orders import campbell_map
     from ..plots import plot_campbell
     from ..speedref import speed_reference
@@ -67,21 +71,26 @@ def _campbell_figure(result):
     rpm = speed_reference(rec, result.channel, speed_channel=result.speed_channel)
     x = np.nan_to_num(np.asarray(var.values, float))
     nat = result.comparison.natural_frequencies
-    f_top = float(max(nat["frequency_hz_predicted"].max() * 1.5 if len(nat) else 80.0, 40.0))
+    orders = sorted(set(float(o) for o in result.track["order"].values))
+    lo, hi = result.speed_range_rpm
+    f_top = float(max(max(orders) * hi / 60.0 * 1.05,
+                      nat["frequency_hz_predicted"].max() * 1.1 if len(nat) else 0.0))
     nperseg = int(2 ** np.ceil(np.log2(fs * 1.0)))  # ≈ 1 Hz resolution
     c = campbell_map(x, fs=fs, speed_rpm=np.nan_to_num(rpm, nan=float(np.nanmedian(rpm))),
                      nperseg=nperseg, max_frequency=min(f_top, fs / 2.5), speed_bins_rpm=120,
-                     orders=sorted(set(float(o) for o in result.track["order"].values)))
-    fig, ax = plt.subplots(figsize=(7.5, 5.0))
-    plot_campbell(c, ax=ax, critical_frequencies_hz=[f for f in nat["frequency_hz_predicted"]
-                                                     if f < f_top])
+                     orders=orders)
+    c.name = f"Campbell diagram, {result.channel}"
+    labels = {f"mode {int(r['mode'])}: {r.frequency_hz_predicted:.1f} Hz":
+              float(r.frequency_hz_predicted) for _, r in nat.iterrows()}
     mt = result.comparison.matched
+    crossings = None
     if len(mt):
-        ax.plot(mt["frequency_hz_measured"] * 1.0, mt["speed_rpm_measured"], "x", color="c",
-                ms=7, mew=1.5, label="measured crossings")
-        ax.legend(fontsize=7, loc="lower right")
-    ax.set_title("Campbell diagram (lines: predicted natural frequencies)", fontsize=9)
-    return fig
+        import pandas as pd
+
+        crossings = pd.DataFrame({"speed_rpm": mt["speed_rpm_measured"],
+                                  "frequency_hz": mt["frequency_hz_measured"]})
+    return plot_campbell(c, critical_frequencies_hz=labels, speed_range_rpm=(0.0, hi * 1.02),
+                         frequency_max_hz=f_top, crossings=crossings)
 
 
 def _tracks_figure(result):
@@ -93,7 +102,7 @@ def _tracks_figure(result):
     n = len(orders)
     cols = 2 if n > 1 else 1
     rows = int(np.ceil(n / cols))
-    fig, axes = plt.subplots(rows, cols, figsize=(8.0, 2.4 * rows), squeeze=False,
+    fig, axes = plt.subplots(rows, cols, figsize=(8.0, 2.1 * rows), squeeze=False,
                              layout="constrained")
     resp = result.response
     scale = 1.0
@@ -113,13 +122,13 @@ def _tracks_figure(result):
                 ax.axvline(r.speed_rpm, color="c", lw=0.7, ls=":")
         ax.set_title(f"order {q:g}", fontsize=8)
         ax.tick_params(labelsize=7)
-        ax.set_ylabel(units, fontsize=7)
+        ax.set_ylabel(f"amplitude ({units})", fontsize=7)
         if k == 0:
             ax.legend(fontsize=7)
     for k in range(n, rows * cols):
         axes[k // cols][k % cols].axis("off")
     for ax in axes[-1]:
-        ax.set_xlabel("speed (rpm)", fontsize=7)
+        ax.set_xlabel("engine speed (rpm)", fontsize=7)
     return fig
 
 
@@ -154,15 +163,13 @@ def build_report(result, *, title=None, parameters=None, record_path=None, model
     title = title or f"Torsional vibration test report — {rec.attrs.get('test_id', result.source)}"
     rep = Report(title, subtitle=f"{rec.attrs.get('engine_id', '')} · record {result.source} · "
                                  f"model {Path(result.model_path).name}")
-    rep.add_summary("measurement analysed", None,
-                    f"{len(result.resonances)} resonances found in {result.channel} at "
-                    f"{result.node}; {len(result.comparison.matched)} matched to predicted "
-                    "criticals")
     meta = {"engine": rec.attrs.get("engine_id", "—"), "test": rec.attrs.get("test_id", "—"),
             "start time": rec.attrs.get("start_time", "—"), "record": result.source,
             "channel": f"{result.channel} ({result.quantity}, {result.units}) at {result.node}",
             "speed range (rpm)": f"{result.speed_range_rpm[0]:.1f} – "
                                  f"{result.speed_range_rpm[1]:.1f}",
+            "measured": f"{len(result.resonances)} resonances found; "
+                        f"{len(result.comparison.matched)} matched to predicted criticals",
             "synthetic record": "yes" if rec.attrs.get("synthetic") else "no"}
     rep.add_metadata(meta)
     files = []
@@ -174,66 +181,72 @@ def build_report(result, *, title=None, parameters=None, record_path=None, model
     if result.record_sha256:
         params.setdefault("record sha256 (from the reader)", result.record_sha256)
     rep.add_provenance(files=files, model=mp if mp.is_file() else None, parameters=params)
-    settings = {k: v for k, v in result.settings.items() if k != "resonance finder"}
-    settings["resonance finder"] = ", ".join(f"{k}={v}" for k, v in
+    settings = {k: _setting(v) for k, v in result.settings.items() if k != "resonance finder"}
+    settings["resonance finder"] = ", ".join(f"{k}={_setting(v)}" for k, v in
                                              result.settings.get("resonance finder", {}).items())
     settings["timings (s)"] = ", ".join(f"{k} {v:.2f}" for k, v in result.timings.items())
     rep.add_settings(settings)
 
+    sec = "Measurement and prediction"
     if figures:
         for maker, name, caption in (
                 (_order_map_figure, "Order map",
                  "Computed order tracking (8-revolution blocks), dB re max. Circles: predicted "
                  "critical speeds (red: significant); crosses: measured resonances."),
                 (_campbell_figure, "Campbell diagram",
-                 "Short-time spectra against speed; dashed rays: tracked orders; vertical "
-                 "lines: predicted natural frequencies; crosses: measured crossings."),
+                 "Engine speed against frequency. Blue rays: engine orders tracked (labelled "
+                 "by order); dashed red lines: the model's natural frequencies; circles: "
+                 "measured crossings (resonances); grey: the measured short-time spectrum."),
                 (_tracks_figure, "Order tracks against prediction",
                  "Measured order amplitude (solid) and the model's steady-state resonance "
                  "curve at the same node (dashed); dotted: identified critical speeds.")):
             try:
-                rep.add_figure(maker(result), title=name, caption=caption,
-                               section="Measurement and prediction")
+                rep.add_figure(maker(result), title=name, caption=caption, section=sec)
             except Exception as exc:  # a figure must never sink the report
                 log.warning("figure %r skipped: %s", name, exc)
-                rep.add_text(f"Figure '{name}' could not be drawn: {exc}",
-                             section="Measurement and prediction")
+                rep.add_text(f"Figure '{name}' could not be drawn: {exc}", section=sec)
         try:
+            from ..plots import plot_mode_shapes
+
             modes = result.system.mode_shapes()
-            rep.add_figure(modes.plot(), title="Mode shapes (model)",
-                           caption=f"Relative mode shapes, {modes.method}; relative error bound "
-                                   f"{modes.relative_error_bound:.1e}.",
-                           section="Measurement and prediction")
+            rep.add_figure(plot_mode_shapes(result.system), title="Mode shapes (model)",
+                           caption=f"Relative mode shapes along the shaft line in model order, "
+                                   f"{modes.method}; relative error bound "
+                                   f"{modes.relative_error_bound:.1e}. Nodes outside the "
+                                   "undamped problem (a viscous damper's seismic ring) are not "
+                                   "drawn.", section=sec)
         except Exception as exc:
             log.warning("mode-shape figure skipped: %s", exc)
-    rep.add_resonances(result.resonances, section="Measured resonances",
-                       figure=figures)
-    rep.add_comparison(result.comparison, figure=figures)
-    pred = result.predicted
-    cols = [c for c in ("mode", "order", "speed_rpm", "speed_rpm_undamped", "frequency_hz",
-                        "amplitude", "damping_ratio", "vector_sum", "major", "significant")
-            if c in pred]
-    rep.add_table(pred[cols], title="Predicted critical speeds in the measured range",
-                  section="Measurement against prediction",
-                  caption="speed_rpm: the model's resonance identified like the measurement "
-                          "(SDOF fit of the predicted response at the measured node); "
-                          "speed_rpm_undamped: 60 f_n / order of the undamped model.")
+    # the identified resonances are drawn on the order-track figure (in display units)
+    rep.add_resonances(result.resonances, section="Measured resonances", figure=False)
+    lo, hi = result.speed_range_rpm
+    rep.add_comparison(result.comparison, figure=figures, amplitude_units=result.units,
+                       verdict=result.verdicts[0])
+    for v in result.verdicts[1 + len(result.limits):]:
+        rep.add_verdict(v)
     for channel, comp, table in getattr(result, "balance", ()):
-        sec = "Balance residuals at the mounts"
+        bsec = "Balance residuals at the mounts"
         units = table.attrs.get("units", "")
-        rep.add_table(table, title=f"{channel}: orders 1 and 2", section=sec,
-                      caption=f"Amplitudes in {units} (peak). Predicted: free inertia forces "
+        table = table.copy()
+        # a prediction that is zero by design is printed as 0, not as its round-off
+        table.loc[table["balanced_by_design"], "predicted_max"] = 0.0
+        rep.add_table(table, title=f"{channel}: orders 1 and 2", section=bsec,
+                      amplitude_units=units,
+                      caption="Peak amplitudes. Predicted: free inertia forces "
                               "and moments of the engine model through the mount model; "
                               "orders balanced by design show the measured residual only.")
         if comp is not None:
-            rep.add_table(comp.table, title=f"{channel}: measured / predicted", section=sec,
+            rep.add_table(comp.table, title=f"{channel}: measured / predicted", section=bsec,
                           caption=f"passed: median ratio within a factor {comp.factor:g}")
-            rep.add_summary(f"balance residuals at {channel}", comp.passed,
-                            ", ".join(f"order {r.order:g}: ×{r.median_ratio:.2f}"
-                                      for _, r in comp.table.iterrows()))
             if figures:
                 rep.add_figure(comp.plot(), title=f"{channel}: balance orders against speed",
-                               section=sec)
-    if result.limits:
-        rep.add_limit_checks(result.limits, figures=figures)
+                               section=bsec)
+    rep.add_limit_checks(result.limits, figures=figures)
     return rep
+
+
+def _setting(value):
+    """A setting for the table: floats to 4 significant digits."""
+    if isinstance(value, float):
+        return f"{value:.4g}"
+    return value

@@ -1,9 +1,15 @@
 """The test report: built by ``Report.add_*`` calls, saved as self-contained HTML or PDF.
 
-Every figure is rendered when it is added (PNG as base64, or inline SVG), so the saved HTML
-needs no network and no side files, and the figure can be closed at once. Tables are pandas
-DataFrames rendered with escaping; limit checks get pass/fail marks. ``save(path)`` writes
-atomically and refuses to replace an existing file unless ``overwrite=True``.
+One HTML source serves the screen and paper: print CSS sets A4 pages with page numbers
+("page n of N"), keeps headings with their figures and tables, wraps wide tables (the widest on
+landscape pages) and repeats table headers. Every figure is rendered when it is added — inline
+vector SVG by default (text kept as text), PNG on request — so the saved HTML needs no network
+and no side files. Tables are pandas DataFrames printed under human headers with units and the
+digits of each quantity (:mod:`analysis.report.columns`). Every check is a three-state
+:class:`analysis.verdict.Verdict` (pass / fail / inconclusive) naming its rule and its data; the
+overall verdict is their :func:`analysis.verdict.combine`. The PDF is typeset from the same HTML
+by WeasyPrint. ``save(path)`` writes atomically and refuses to replace an existing file unless
+``overwrite=True``.
 """
 
 from __future__ import annotations
@@ -107,7 +113,7 @@ class Report:
     >>> rep.add_table(pd.DataFrame({"order": [6.0], "speed_rpm": [400.0]}), title="Criticals")
     >>> out = pathlib.Path(tempfile.mkdtemp()) / "r.html"
     >>> _ = rep.save(out)
-    >>> print(rep.n_figures, out.read_text().count("<img"))
+    >>> print(rep.n_figures, out.read_text().count("<svg"))
     1 1
     """
 
@@ -116,7 +122,7 @@ class Report:
         self.subtitle = str(subtitle)
         self.created = _dt.datetime.now(_dt.timezone.utc).replace(microsecond=0)
         self._sections: list[_Section] = []
-        self._summary: list[tuple[str, bool | None, str]] = []
+        self._verdicts: list = []
 
     # -- structure --------------------------------------------------------------------------
     def _section(self, title: str | None) -> _Section:
@@ -140,9 +146,41 @@ class Report:
         return sum(1 for s in self._sections for i in s.items if i.kind == "figure")
 
     # -- adders -----------------------------------------------------------------------------
-    def add_summary(self, label: str, passed: bool | None, detail: str = "") -> None:
-        """One line of the verdict box at the top (passed None = informational)."""
-        self._summary.append((str(label), None if passed is None else bool(passed), str(detail)))
+    def add_verdict(self, verdict) -> None:
+        """One check in the verdict box (:class:`analysis.verdict.Verdict`)."""
+        from ..verdict import Verdict
+
+        if not isinstance(verdict, Verdict):
+            raise ConfigError(f"add_verdict: expected an analysis.verdict.Verdict, got "
+                              f"{type(verdict).__name__}")
+        self._verdicts.append(verdict)
+
+    def add_verdicts(self, verdicts) -> None:
+        """Several checks in the verdict box."""
+        for v in verdicts:
+            self.add_verdict(v)
+
+    def add_summary(self, label: str, passed: bool | None, detail: str = "", *,
+                    rule: str = "—") -> None:
+        """A line of the verdict box from a boolean: True pass, False fail, None an
+        informational line that does not count (prefer :meth:`add_verdict`)."""
+        from ..verdict import Verdict
+
+        detail = str(detail)
+        if passed is None:
+            self._verdicts.append(Verdict.inconclusive(str(label), rule=rule, basis=detail or "—",
+                                                       reason="for information",
+                                                       required=False))
+        else:
+            self._verdicts.append(Verdict.from_bool(str(label), bool(passed), rule=rule,
+                                                    basis=detail or "—", reason=detail))
+
+    @property
+    def verdict(self):
+        """The overall verdict of the checks added (:func:`analysis.verdict.combine`)."""
+        from ..verdict import combine
+
+        return combine(self._verdicts)
 
     def add_metadata(self, items: dict, *, title: str = "Test metadata",
                      section: str | None = None) -> None:
@@ -193,8 +231,8 @@ class Report:
         self._section(section).items.append(_Item("kv", title, payload={"rows": rows}))
 
     def add_figure(self, fig, *, title: str, caption: str = "", section: str | None = None,
-                   image_format: str = "png", dpi: int = 110, close: bool = True) -> None:
-        """Embed a matplotlib figure (rendered now: PNG base64 or inline SVG).
+                   image_format: str = "svg", dpi: int = 150, close: bool = True) -> None:
+        """Embed a matplotlib figure (rendered now: inline vector SVG, or PNG base64).
 
         Parameters
         ----------
@@ -202,9 +240,11 @@ class Report:
         title, caption : str
         section : str, optional
             Section title (created on first use); default "Figures".
-        image_format : {'png', 'svg'}
+        image_format : {'svg', 'png'}
+            SVG (default) keeps lines and text vector; artists marked ``rasterized`` (dense
+            colour maps) are embedded as images inside it at ``dpi``.
         dpi : int
-            Resolution of PNG output (the PDF fallback always uses the PNG).
+            Resolution of PNG output and of rasterized artists.
         close : bool
             Close the figure afterwards (frees memory in long batch runs).
         """
@@ -215,15 +255,24 @@ class Report:
         if not hasattr(fig, "savefig"):
             raise ConfigError(f"add_figure: fig must be a matplotlib Figure, got "
                               f"{type(fig).__name__}")
-        buf = io.BytesIO()
-        fig.savefig(buf, format="png", dpi=dpi, bbox_inches="tight")
-        png = buf.getvalue()
-        payload = {"png": png, "png_b64": base64.b64encode(png).decode("ascii")}
-        if image_format == "svg":
+        payload = {}
+        if image_format == "png":
+            buf = io.BytesIO()
+            fig.savefig(buf, format="png", dpi=dpi, bbox_inches="tight")
+            png = buf.getvalue()
+            payload = {"png": png, "png_b64": base64.b64encode(png).decode("ascii")}
+        else:
+            import matplotlib
+
             sbuf = io.StringIO()
-            fig.savefig(sbuf, format="svg", bbox_inches="tight")
+            with matplotlib.rc_context({"svg.fonttype": "none", "svg.hashsalt": "crankbench"}):
+                fig.savefig(sbuf, format="svg", bbox_inches="tight", dpi=dpi)
             svg = sbuf.getvalue()
             svg = svg[svg.find("<svg"):]  # drop the XML prolog and DOCTYPE
+            # unique ids per figure: several inline SVGs share one document
+            n = self.n_figures + 1
+            svg = svg.replace('id="', f'id="f{n}-').replace("url(#", f"url(#f{n}-") \
+                .replace('xlink:href="#', f'xlink:href="#f{n}-')
             payload["svg"] = svg
         if close:
             plt.close(fig)
@@ -231,22 +280,43 @@ class Report:
             _Item("figure", str(title), str(caption), payload))
 
     def add_table(self, frame, *, title: str, caption: str = "", section: str | None = None,
-                  float_format: str = "{:.4g}", max_rows: int = 500) -> None:
-        """Embed a pandas DataFrame (escaped; floats formatted; NaN shown as —)."""
+                  amplitude_units: str = "", columns: dict | None = None, max_rows: int = 500,
+                  row_classes=None, filter_label: str = "", float_format=None) -> None:
+        """Embed a pandas DataFrame under human headers with units (NaN shown as —).
+
+        Parameters
+        ----------
+        frame : pandas.DataFrame
+        title, caption, section : str
+        amplitude_units : str
+            SI units of the amplitude columns (rad is shown in mdeg, m/s in mm/s, Pa in MPa).
+        columns : dict, optional
+            ``{name: (header, unit, kind)}`` overrides of :data:`analysis.report.columns.COLUMNS`.
+        max_rows : int
+        row_classes : sequence of str, optional
+            A CSS class per row; rows of class ``minor`` are hidden by the table's filter.
+        filter_label : str
+            With ``row_classes``: a check box of this label that hides the minor rows on screen
+            (CSS only; printed pages show the state of the check box).
+        """
         import pandas as pd
+
+        from .columns import format_table
 
         if not isinstance(frame, pd.DataFrame):
             raise ConfigError(f"add_table: frame must be a pandas DataFrame, got "
                               f"{type(frame).__name__}")
         max_rows = check_int(max_rows, "max_rows", minimum=1, error=ConfigError)
         shown = frame.head(max_rows)
-        columns = [str(c) for c in shown.columns]
-        rows = [[_fmt(v, float_format) for v in row] for row in shown.itertuples(index=False)]
+        headers, rows = format_table(shown, amplitude_units=amplitude_units, columns=columns)
         note = f"first {max_rows} of {len(frame)} rows" if len(frame) > max_rows else ""
+        classes = list(row_classes)[:len(rows)] if row_classes is not None else [""] * len(rows)
+        self._table_count = getattr(self, "_table_count", 0) + 1
         self._section(section or title).items.append(_Item(
             "table", str(title), str(caption),
-            {"columns": columns, "rows": rows, "note": note,
-             "bool_columns": [c for c in columns if str(shown[c].dtype) == "bool"]}))
+            {"columns": headers, "rows": rows, "note": note, "classes": classes,
+             "filter": str(filter_label), "id": f"t{self._table_count}",
+             "wide": len(headers) > 9}))
 
     def add_text(self, text: str, *, title: str = "", section: str | None = None) -> None:
         """A paragraph of plain text (escaped; blank lines separate paragraphs)."""
@@ -256,21 +326,30 @@ class Report:
 
     def add_limit_checks(self, checks, *, title: str = "Limit checks",
                          section: str | None = None, figures: bool = True) -> None:
-        """Pass/fail table of :class:`analysis.limits.LimitCheck` rows (and their figures)."""
+        """Table of :class:`analysis.limits.LimitCheck` rows (verdict, worst value and limit
+        in display units, rule and clause, basis), their verdicts, and their figures."""
+        from .columns import amplitude_display, format_value
+
         checks = list(checks)
         rows = []
         for c in checks:
-            d = c.as_dict()
-            rows.append({"check": d["check"], "quantity": d["quantity"],
-                         "value": _fmt(d["value"]), "limit": _fmt(d["limit"]),
-                         "units": d["units"], "passed": bool(d["passed"]),
-                         "detail": d["detail"], "source": d["source"]})
-            self.add_summary(d["check"], d["passed"], d["detail"])
+            unit, scale = amplitude_display(c.units)
+            unit = "" if unit == "1" else unit
+            value = format_value(c.value, "sig3", scale=scale)
+            limit = format_value(c.limit, "sig3", scale=scale)
+            rows.append({"check": c.name, "quantity": c.quantity,
+                         "value": f"{value} {unit}".strip() if value != "—" else "—",
+                         "limit": f"{limit} {unit}".strip() if limit != "—" else "—",
+                         "status": c.status, "detail": c.detail, "source": c.source,
+                         "basis": c.basis})
+            self.add_verdict(c.verdict)
         sec = section or title
         self._section(sec).items.append(_Item("checks", title, payload={"rows": rows}))
         if figures:
+            drawn = []
             for c in checks:
-                if c.data is not None:
+                if c.data is not None and not any(c.data is d for d in drawn):
+                    drawn.append(c.data)
                     try:
                         fig = c.plot()
                     except (TypeError, ValueError, KeyError, AttributeError) as exc:
@@ -289,39 +368,50 @@ class Report:
         units = f" Amplitudes in {resonances.units} ({resonances.amplitude_convention})." \
             if resonances.units else ""
         self.add_table(frame[[c for c in cols if c in frame]], title=title, section=sec,
-                       caption="Critical speed = natural frequency × 60 / order; "
-                               "amplitude_corrected restores the estimated sweep peak loss."
-                               + units)
+                       amplitude_units=resonances.units,
+                       caption="Critical speed = natural frequency × 60 / order; the "
+                               "sweep-corrected amplitude restores the estimated sweep peak "
+                               "loss." + units)
         if figure and resonances.curves:
             self.add_figure(resonances.plot(), title=f"{title}: order amplitude against speed",
                             section=sec)
 
     def add_comparison(self, comparison, *, title: str = "Measurement against prediction",
-                       section: str | None = None, figure: bool = True) -> None:
-        """Tables of a :class:`analysis.compare.CriticalComparison` with its verdict."""
+                       section: str | None = None, figure: bool = True, amplitude_units="",
+                       predicted=None, verdict=None) -> None:
+        """One critical-speed table (predicted and measured side by side, a filter hiding the
+        weak criticals), the natural frequencies by mode, the disagreements, and the verdict
+        of a :class:`analysis.compare.CriticalComparison`."""
+        import pandas as pd
+
         sec = section or title
-        self.add_summary("critical speeds agree with the model", comparison.agrees,
-                         "; ".join(comparison.flags[:3]) + (" …" if len(comparison.flags) > 3
-                                                            else ""))
-        self.add_table(comparison.matched, title="Matched critical speeds", section=sec,
-                       caption=f"Assignment gate ±{100 * comparison.gate:g} %, speed tolerance "
-                               f"±{100 * comparison.tolerance:g} %, amplitude ratio within "
-                               f"[{1 / (1 + comparison.amplitude_tolerance):.2f}, "
-                               f"{1 + comparison.amplitude_tolerance:.2f}].")
+        self.add_verdict(verdict if verdict is not None else comparison.verdict())
+        table = critical_speed_table(comparison, predicted)
+        classes = ["" if s else "minor" for s in table["significant"]]
+        n_minor = classes.count("minor")
+        self.add_table(
+            table, title="Critical speeds: predicted and measured", section=sec,
+            amplitude_units=amplitude_units, row_classes=classes,
+            filter_label="significant criticals only",
+            caption=f"One row per predicted critical in the measured range and per measured "
+                    f"resonance without one. Status: matched, not found, or unexplained. "
+                    f"Assignment gate ±{100 * comparison.gate:g} %, speed tolerance "
+                    f"±{100 * comparison.tolerance:g} %, amplitude ratio within "
+                    f"[{1 / (1 + comparison.amplitude_tolerance):.2f}, "
+                    f"{1 + comparison.amplitude_tolerance:.2f}]; only significant criticals "
+                    "are judged."
+                    + (f" The filter hides {n_minor} weak criticals (predicted amplitude under "
+                       "5 % of the largest); untick it in the HTML report to list them."
+                       if n_minor else ""))
         self.add_table(comparison.natural_frequencies, title="Natural frequencies by mode",
                        section=sec, caption="Measured values are confidence-weighted over "
                                             "every order that excited the mode.")
-        if len(comparison.unmatched_predicted):
-            self.add_table(comparison.unmatched_predicted, title="Predicted criticals not found",
-                           section=sec)
-        if len(comparison.unmatched_measured):
-            self.add_table(comparison.unmatched_measured,
-                           title="Measured resonances without a predicted critical", section=sec)
         if comparison.flags:
             self.add_text("\n\n".join(comparison.flags), title="Disagreements", section=sec)
         if figure and len(comparison.matched):
             self.add_figure(comparison.plot(), title="Measured against predicted critical speeds",
                             section=sec)
+        del pd
 
     def add_html(self, markup: str, *, title: str = "", section: str | None = None) -> None:
         """Trusted raw HTML (not escaped). Must not reference the network."""
@@ -330,20 +420,17 @@ class Report:
 
     # -- output -----------------------------------------------------------------------------
     def to_html(self) -> str:
-        """The report as one self-contained HTML document."""
+        """The report as one self-contained HTML document (screen and print)."""
         from jinja2 import Environment, PackageLoader, select_autoescape
 
         env = Environment(loader=PackageLoader("crankbench.analysis.report", "templates"),
                           autoescape=select_autoescape(["html", "j2"]))
         template = env.get_template("report.html.j2")
-        verdict = None
-        judged = [p for _, p, _ in self._summary if p is not None]
-        if judged:
-            verdict = all(judged)
         return template.render(title=self.title, subtitle=self.subtitle,
                                created=self.created.isoformat(), version=crankbench_version(),
-                               sections=self._sections, summary=self._summary,
-                               verdict=verdict, n_figures=self.n_figures)
+                               sections=self._sections, verdicts=self._verdicts,
+                               overall=self.verdict if self._verdicts else None,
+                               n_figures=self.n_figures)
 
     def save(self, path, *, overwrite: bool = False, option: str = "overwrite=True") -> Path:
         """Write the report: ``.html``/``.htm`` as HTML, ``.pdf`` as PDF.
@@ -377,13 +464,50 @@ class Report:
             with atomic_path(path, overwrite=overwrite, option=option) as tmp:
                 tmp.write_text(text, encoding="utf-8")
                 _readable(tmp)
-        log.info("report written to %s", path)
+        log.debug("report written to %s", path)
         return path
 
-    # -- for the PDF fallback ----------------------------------------------------------------
-    def _iter_items(self):
-        for sec in self._sections:
-            yield sec, sec.items
+
+def critical_speed_table(comparison, predicted=None):
+    """The one critical-speed table: every predicted critical in range beside its measured
+    resonance (or 'not found'), then the measured resonances no critical explains.
+
+    Columns: mode, order, predicted and measured speed (rpm), deviation (%), predicted and
+    measured frequency (Hz), predicted and measured amplitude, their ratio, damping ratio,
+    confidence, significant, status.
+    """
+    import pandas as pd
+
+    cols = ["mode", "order", "speed_rpm_predicted", "speed_rpm_measured", "deviation_pct",
+            "frequency_hz_predicted", "frequency_hz_measured", "amplitude_predicted",
+            "amplitude_measured", "amplitude_ratio", "damping_ratio", "confidence",
+            "significant", "status"]
+    rows = []
+    for _, r in comparison.matched.iterrows():
+        d = {c: r.get(c) for c in cols if c in r}
+        ok = bool(r.speed_ok) and bool(r.amplitude_ok)
+        d["status"] = "matched" if ok or not r.significant else "matched, outside tolerance"
+        rows.append(d)
+    for _, r in comparison.unmatched_predicted.iterrows():
+        rows.append({"mode": r["mode"], "order": r["order"],
+                     "speed_rpm_predicted": r["speed_rpm"],
+                     "frequency_hz_predicted": r.get("frequency_hz"),
+                     "amplitude_predicted": r.get("amplitude"),
+                     "significant": bool(r["significant"]),
+                     "status": "not found" if r["significant"] else "weak, not found"})
+    for _, r in comparison.unmatched_measured.iterrows():
+        rows.append({"mode": None, "order": r["order"], "speed_rpm_measured": r["speed_rpm"],
+                     "frequency_hz_measured": r.get("frequency_hz"),
+                     "amplitude_measured": r.get("amplitude"),
+                     "damping_ratio": r.get("damping_ratio"),
+                     "confidence": r.get("confidence"), "significant": True,
+                     "status": "no predicted critical"})
+    table = pd.DataFrame(rows, columns=cols)
+    if len(table):
+        key = table["speed_rpm_predicted"].fillna(table["speed_rpm_measured"])
+        table = table.assign(_k=key).sort_values("_k").drop(columns="_k").reset_index(drop=True)
+        table["mode"] = table["mode"].astype(object)
+    return table
 
 
 def _readable(tmp: Path) -> None:

@@ -235,7 +235,8 @@ def synthesize(scene, *, method="split", integration_rate=None):
                                  v_tot[i] * ratio[i] if quantity == "angle" else None)
                 data = _read_out(data, ts, s.imperfections, rng, s, quantity)
                 channels[s.name] = dict(data=data, sample_rate=fs, units=units,
-                                        quantity=quantity, attrs=_instrument_attrs(s),
+                                        quantity=quantity,
+                                        attrs={**_instrument_attrs(s), "node": s.params["node"]},
                                         location=s.params.get("location", s.params["node"]),
                                         direction="torsional")
                 truth_rows.append((s.name, units, s.kind, amp, ph, st))

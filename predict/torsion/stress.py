@@ -1,10 +1,12 @@
-"""Vibratory shear stress against user-given limit curves; barred speed ranges.
+"""Vibratory shear stress against continuous and transient limits; barred speed ranges.
 
 Classification rules give two limits for the torsional vibration stress of shafts as
 functions of speed: a *continuous* limit τ_c (steady running) and a *transient* limit τ_t
-(passing through quickly). crankbench does not ship a rule: the user provides the curves
-(speed in rpm, stress in MPa) and the sections they apply to. A speed where the superposed
-stress exceeds τ_c is *barred* (to be passed quickly); exceeding τ_t is not acceptable.
+(passing through quickly). The limits come either from the rule data in the model
+(:class:`predict.torsion.rules.RuleLimits`: IACS UR M68 for shafting, the engine maker's
+figure for the crankshaft) or from user-given curves (:class:`StressLimits`, speed in rpm,
+stress in MPa). A speed where the superposed stress exceeds τ_c is *barred* (to be passed
+quickly); exceeding τ_t is not acceptable.
 
 References
 ----------
@@ -78,6 +80,13 @@ class StressLimits:
         return (np.interp(x, self.speed_rpm, self.continuous),
                 np.interp(x, self.speed_rpm, self.transient))
 
+    def limits_for(self, section, speed_rpm, *, diameter=None):
+        """(continuous, transient, rule text) for ``section`` at the speeds, Pa."""
+        if self.sections and section not in self.sections:
+            raise ModelError(f"limits have no curve for section {section!r}")
+        c, t = self.at(speed_rpm)
+        return c, t, f"user-given curves: {self.source}"
+
     def to_frame(self):
         import pandas as pd
 
@@ -125,6 +134,7 @@ class StressCheck:
     transient: np.ndarray
     barred_ranges_rpm: list
     transient_exceeded_rpm: list
+    rules: dict = None
 
     @property
     def passed(self) -> bool:
@@ -161,29 +171,31 @@ class StressCheck:
 
 def _ranges(speed, excess):
     """Speed intervals where ``excess`` > 0, crossings linearly interpolated."""
-    out = []
-    inside = excess > 0
-    i = 0
-    n = len(speed)
-    while i < n:
-        if not inside[i]:
-            i += 1
-            continue
-        j = i
-        while j + 1 < n and inside[j + 1]:
-            j += 1
-        lo = speed[i] if i == 0 else speed[i - 1] + (speed[i] - speed[i - 1]) * (
-            -excess[i - 1]) / (excess[i] - excess[i - 1])
-        hi = speed[j] if j == n - 1 else speed[j] + (speed[j + 1] - speed[j]) * (
-            excess[j]) / (excess[j] - excess[j + 1])
-        out.append((float(lo), float(hi)))
-        i = j + 1
-    return out
+    from .rules import barred_ranges
+
+    return barred_ranges(speed, excess, np.zeros(len(excess)))
 
 
-def check_stress(response, limits: StressLimits) -> StressCheck:
+def check_stress(response, limits, *, diameters=None) -> StressCheck:
     """Compare a :class:`~predict.torsion.forced.ForcedResponse`'s superposed stresses with
-    the limit curves; return the barred speed ranges.
+    the limits of each section; return the barred speed ranges.
+
+    Parameters
+    ----------
+    response : ForcedResponse
+        Or any object with ``speed_rpm``, ``stress_total`` (n_speeds, n_sections, Pa) and
+        ``edge_names``.
+    limits : StressLimits or predict.torsion.rules.RuleLimits
+        Limits per section (a StressLimits without sections applies to every section with a
+        diameter).
+    diameters : array_like, optional
+        Outer diameter of every section, m (``system.section_diameters[:, 0]``): the M68 size
+        factor of a section whose rule data gives none.
+
+    Returns
+    -------
+    StressCheck
+        At each speed the section closest to (or furthest beyond) its continuous limit.
 
     Examples
     --------
@@ -196,23 +208,38 @@ def check_stress(response, limits: StressLimits) -> StressCheck:
     [(150.0, 250.0)]
     """
     names = list(response.edge_names)
-    if limits.sections:
-        missing = [s for s in limits.sections if s not in names]
+    stress_all = np.asarray(response.stress_total, float)
+    speed = np.asarray(response.speed_rpm, float)
+    sections = tuple(getattr(limits, "sections", ()))
+    if sections:
+        missing = [s for s in sections if s not in names]
         if missing:
             raise ModelError(f"limits.sections {missing} are not sections of the system "
                              f"({', '.join(names)})")
-        cols = [names.index(s) for s in limits.sections]
+        cols = [names.index(s) for s in sections]
     else:
-        cols = [i for i in range(len(names))
-                if np.any(np.isfinite(response.stress_total[:, i]))]
+        cols = [i for i in range(len(names)) if np.any(np.isfinite(stress_all[:, i]))]
     if not cols:
         raise ModelError("no shaft section has a diameter: stresses cannot be checked "
                          "(give diameter= for the shafts)")
-    stress = np.nan_to_num(response.stress_total[:, cols], nan=-np.inf)
-    k = np.argmax(stress, axis=1)
-    worst = stress[np.arange(len(k)), k]
+    if diameters is None and getattr(response, "system", None) is not None:
+        diameters = response.system.section_diameters[:, 0]
+    cont, trans, rules = [], [], {}
+    for c in cols:
+        d = None if diameters is None else float(np.asarray(diameters, float).ravel()[c])
+        tc, tt, rule = limits.limits_for(names[c], speed, diameter=d)
+        cont.append(tc)
+        trans.append(tt)
+        rules[names[c]] = rule
+    cont, trans = np.stack(cont, axis=1), np.stack(trans, axis=1)
+    stress = stress_all[:, cols]
+    with np.errstate(invalid="ignore", divide="ignore"):
+        ratio_c = np.nan_to_num(stress / cont, nan=-np.inf)
+        ratio_t = np.nan_to_num(stress / trans, nan=-np.inf)
+    k = np.argmax(ratio_c, axis=1)
+    rows = np.arange(len(k))
+    worst = np.nan_to_num(stress[rows, k], nan=0.0)
     sec = tuple(names[cols[i]] for i in k)
-    c, t = limits.at(response.speed_rpm)
-    return StressCheck(np.asarray(response.speed_rpm, float), worst, sec, c, t,
-                       _ranges(response.speed_rpm, worst - c),
-                       _ranges(response.speed_rpm, worst - t))
+    return StressCheck(speed, worst, sec, cont[rows, k], trans[rows, k],
+                       _ranges(speed, ratio_c.max(axis=1) - 1.0),
+                       _ranges(speed, ratio_t.max(axis=1) - 1.0), rules)

@@ -29,12 +29,11 @@ Layout (SI unless the key names another unit; values at each part's own speed)::
     [[shaftline.ground]]    node, stiffness, damping
     [[shaftline.damper]]    type = "viscous" | "tuned" | "pendulum" | "friction", node, ...
 
-    [limits]                               # user-given (e.g. from a classification rule)
-    speed_rpm = [0, 800]
-    continuous_mpa = [40, 40]
-    transient_mpa = [100, 100]
-    sections = ["cyl 6-flywheel"]          # optional, default every section with a diameter
-    source = "..."
+    [limits]                               # rule data, see load_limits
+    application = "propulsion"
+    operating_range_rpm = [500, 750]
+    [[limits.shafting]]  section, tensile_strength_mpa, design, kind, material  (IACS UR M68)
+    [limits.crankshaft]  sections, continuous_mpa, transient_mpa, source  (engine maker)
 
 Any number may be written with its unit as a string, converted by pint
 (``diameter = "300 mm"``, ``shear_modulus = "81 GPa"``, ``stiffness = "60 MN*m/rad"``); a
@@ -70,6 +69,7 @@ _DAMPING = dict(unit="N*m*s/rad", plausible=(1e-6, 1e9))
 _DIAMETER = dict(unit="m", plausible=(1e-3, 3.0))
 _RATIO = dict(unit="1", plausible=(1e-3, 1e3))
 _LOSS = dict(unit="1", plausible=(1e-5, 1.0))
+_STRESS_MPA = dict(unit="MPa", plausible=(0.1, 3000.0))
 _DAMPER_UNITS = {
     "ring_inertia": _INERTIA, "damping": _DAMPING, "stiffness": _STIFFNESS, "loss_factor": _LOSS,
     "mass": dict(unit="kg", plausible=(1e-3, 1e4)),
@@ -81,22 +81,160 @@ _DAMPER_UNITS = {
 }
 
 
-def load_limits(table) -> StressLimits:
-    """Build :class:`StressLimits` from a ``[limits]`` :class:`~predict._toml.Table`."""
-    speeds = table.numbers("speed_rpm", low=0.0, unit="rpm", plausible=_SPEED)
-    cont = table.numbers("continuous_mpa", length=speeds.size, low=0.0, strict_low=True,
-                         unit="MPa", plausible=(0.1, 3000.0))
-    trans = table.numbers("transient_mpa", length=speeds.size, low=0.0, strict_low=True,
-                          unit="MPa", plausible=(0.1, 3000.0))
-    sections = table.raw("sections", [])
-    if not isinstance(sections, list) or not all(isinstance(s, str) for s in sections):
-        table.fail("sections", "must be an array of section names")
-    source = table.string("source", "user-given")
+def load_limits(table, *, engine=None):
+    """Build the stress limits from a ``[limits]`` :class:`~predict._toml.Table`.
+
+    Two forms, which may be combined:
+
+    * rule data (IACS UR M68 for shafting, the engine maker's figure for the crankshaft)::
+
+        [limits]
+        application = "propulsion"        # or "auxiliary" (constant-speed generating set)
+        rated_speed_rpm = 720               # n_0 (default: the engine's rated_speed_rpm)
+        operating_range_rpm = [500, 750]    # continuous operation
+        misfire_operation = false           # intended to run on with one cylinder misfiring
+        tachometer_tolerance_rpm = 5
+        source = "IACS UR M68 Rev.2"        # rule edition named in the report
+
+        [[limits.shafting]]                 # one per shaft section under M68
+        section = "propeller shaft"
+        tensile_strength_mpa = 600          # specified minimum σ_B
+        design = "propeller key"            # C_K feature, see predict.torsion.rules.M68_CK
+        kind = "propeller"                  # intermediate | propeller | thrust
+        material = "carbon"                 # carbon | alloy
+        # diameter = 0.34                   # m; default the section's diameter
+
+        [limits.crankshaft]                 # outside M68: the engine maker's figure
+        sections = ["cyl 1-cyl 2", ...]
+        continuous_mpa = 40
+        transient_mpa = 100
+        source = "maker's document and revision"
+
+        [limits.vibration]                  # vibration severity of the engine structure
+        standard = "ISO 10816-6"            # default; or "ISO 10816-1"
+        machine_class = 5                   # the contract's class (default: from the engine)
+        # boundaries_mm_s = [11.2, 11.2, 17.8]   # own A/B, B/C, C/D boundaries, velocity rms
+        source = "contract clause ..."
+
+    * user-given curves (``speed_rpm``, ``continuous_mpa``, ``transient_mpa``, ``sections``,
+      ``source``), held against the sections they name.
+
+    Returns
+    -------
+    RuleLimits
+        With ``curves`` (a :class:`StressLimits`) when user curves are given.
+    """
+    from .rules import MakerLimit, RuleLimits, SectionRule
+
+    curves = None
+    if "speed_rpm" in table or "continuous_mpa" in table or "transient_mpa" in table:
+        speeds = table.numbers("speed_rpm", low=0.0, unit="rpm", plausible=_SPEED)
+        cont = table.numbers("continuous_mpa", length=speeds.size, low=0.0, strict_low=True,
+                             **_STRESS_MPA)
+        trans = table.numbers("transient_mpa", length=speeds.size, low=0.0, strict_low=True,
+                              **_STRESS_MPA)
+        sections = table.raw("sections", [])
+        if not isinstance(sections, list) or not all(isinstance(s, str) for s in sections):
+            table.fail("sections", "must be an array of section names")
+        try:
+            curves = StressLimits(speeds, cont * 1e6, trans * 1e6, sections=sections,
+                                  source=table.string("source", "user-given"))
+        except ModelError as exc:
+            raise ModelError(f"{table.where()} {exc}") from None
+    application = table.string("application", "propulsion", options=("propulsion", "auxiliary"))
+    rated = table.positive("rated_speed_rpm", None, unit="rpm", plausible=_SPEED)
+    if rated is None and engine is not None:
+        rated = getattr(engine, "rated_speed_rpm", None)
+    op = table.numbers("operating_range_rpm", None, length=2, low=0.0, unit="rpm",
+                       plausible=_SPEED)
+    if op is not None and not op[0] < op[1]:
+        table.fail("operating_range_rpm", f"= {op.tolist()!r} must be [low, high] with low < high")
+    misfire = table.raw("misfire_operation", False)
+    if not isinstance(misfire, bool):
+        table.fail("misfire_operation", f"= {misfire!r} must be true or false")
+    tol = table.number("tachometer_tolerance_rpm", 0.0, low=0.0, unit="rpm",
+                       plausible=(1e-3, 1e3))
+    source = table.string("source", None) if curves is None else None
+    shafting = []
+    for t in table.tables("shafting", []):
+        kw = dict(section=t.string("section"),
+                  tensile_strength=t.positive("tensile_strength_mpa", unit="MPa",
+                                              plausible=(100.0, 3000.0)) * 1e6,
+                  design=t.string("design", "integral flange",
+                                  options=list(_m68_ck())),
+                  material=t.string("material", "carbon", options=("carbon", "alloy")),
+                  kind=t.string("kind", "intermediate",
+                                options=("intermediate", "propeller", "thrust")),
+                  diameter=t.positive("diameter", None, **_DIAMETER))
+        t.check_unknown()
+        shafting.append(SectionRule(**kw))
+    crank = None
+    ct = table.table("crankshaft", None)
+    if ct is not None:
+        secs = ct.raw("sections")
+        if not isinstance(secs, list) or not secs or not all(isinstance(s, str) for s in secs):
+            ct.fail("sections", "must be a non-empty array of section names")
+        c = ct.positive("continuous_mpa", **_STRESS_MPA)
+        tr = ct.positive("transient_mpa", **_STRESS_MPA)
+        if tr < c:
+            ct.fail("transient_mpa", f"= {tr:g} must be >= continuous_mpa = {c:g}")
+        crank = MakerLimit(tuple(secs), c * 1e6, tr * 1e6,
+                           source=ct.string("source", "engine maker's figure"))
+        ct.check_unknown()
+    vibration = None
+    vt = table.table("vibration", None)
+    if vt is not None:
+        vibration = {"standard": vt.string("standard", "ISO 10816-6",
+                                           options=("ISO 10816-6", "ISO 10816-1")),
+                     "machine_class": vt.raw("machine_class", None),
+                     "boundaries_mm_s": vt.numbers("boundaries_mm_s", None, length=3, low=0.0,
+                                                   strict_low=True, unit="mm/s",
+                                                   plausible=(0.01, 1000.0)),
+                     "source": vt.string("source", "model [limits.vibration]")}
+        mc = vibration["machine_class"]
+        if mc is not None and not isinstance(mc, (int, str)):
+            vt.fail("machine_class", f"= {mc!r} must be a class name (1-7, or I-IV)")
+        b = vibration["boundaries_mm_s"]
+        if b is not None and not (b[0] <= b[1] < b[2]):
+            vt.fail("boundaries_mm_s", f"= {b.tolist()!r} must ascend (A/B, B/C, C/D, mm/s)")
+        vt.check_unknown()
     table.check_unknown()
-    try:
-        return StressLimits(speeds, cont * 1e6, trans * 1e6, sections=sections, source=source)
-    except ModelError as exc:
-        raise ModelError(f"{table.where()} {exc}") from None
+    extra = {} if source is None else {"source": source}
+    return RuleLimits(application=application, rated_speed_rpm=rated,
+                      operating_range_rpm=None if op is None else (float(op[0]), float(op[1])),
+                      shafting=tuple(shafting), crankshaft=crank, misfire_operation=misfire,
+                      tachometer_tolerance_rpm=tol, curves=curves, vibration=vibration, **extra)
+
+
+def _complete_limits(limits, system, table):
+    """Check the sections named in ``[limits]`` exist; give M68 sections the model's diameter."""
+    import dataclasses
+
+    import numpy as np
+
+    names = list(system.edge_names)
+    for name in limits.sections:
+        if name not in names:
+            table.fail("sections" if limits.curves is not None and name in
+                       limits.curves.sections else "shafting",
+                       f"names section {name!r}, which is not a section of the shaft line "
+                       f"(sections: {', '.join(names)})")
+    rules = []
+    for r in limits.shafting:
+        if r.diameter is None:
+            d = float(system.section_diameters[names.index(r.section), 0])
+            if not np.isfinite(d):
+                table.fail("shafting", f"section {r.section!r} has no diameter in the model: "
+                                       "give diameter (m) in its [[limits.shafting]] entry")
+            r = dataclasses.replace(r, diameter=d)
+        rules.append(r)
+    return dataclasses.replace(limits, shafting=tuple(rules))
+
+
+def _m68_ck():
+    from .rules import M68_CK
+
+    return M68_CK
 
 
 def from_toml(path):
@@ -228,9 +366,11 @@ def from_toml(path):
     limits = None
     lt = doc.table("limits", None)
     if lt is not None:
-        limits = load_limits(lt)
+        limits = load_limits(lt, engine=engine)
     doc.check_unknown(["description", "engine"])
     system = wrap(sl, line.build, limits=limits)
+    if limits is not None:
+        system = system.replace(limits=_complete_limits(limits, system, lt))
     return system.replace(operating=dict(
         speed_range_rpm=None if speed_range is None else tuple(speed_range), imep=imep,
         source=str(path)))

@@ -37,7 +37,8 @@ def test_demo_runs_the_chain_in_under_a_minute(demo_dir):
     n_figures = int(re.search(r'name="crankbench-figures" content="(\d+)"', text).group(1))
     assert n_figures >= 6
     for heading in ("Order map", "Campbell diagram", "Order tracks against prediction",
-                    "Mode shapes (model)", "Matched critical speeds", "Limit checks",
+                    "Mode shapes (model)", "Critical speeds: predicted and measured",
+                    "Limit checks", "Verdict:",
                     "Analysis settings", "Provenance"):
         assert heading in text, heading
     from crankbench.analysis.report import file_sha256
@@ -60,6 +61,8 @@ def test_compare_json(demo_dir, capsys):
     assert main(["-q", "compare", str(out / "marine_6l_runup.h5"), str(MODEL), "--json"]) == 0
     data = json.loads(capsys.readouterr().out)
     assert data["summary"]["model_agrees"] is True
+    assert data["verdict"]["verdict"] == "fail"
+    assert {c["verdict"] for c in data["checks"]} <= {"pass", "fail", "inconclusive"}
     assert len(data["matched"]) >= 8
     assert {"mode", "order", "deviation_pct", "amplitude_ratio"} <= set(data["matched"][0])
     assert data["natural_frequencies"][0]["mode"] >= 1
@@ -111,6 +114,7 @@ def test_batch_reports_failures_and_resumes(demo_dir, tmp_path, capsys):
     assert status == 1  # one record failed, the other was processed
     rows = {Path(r["record"]).name: r for r in csv.DictReader(summary.open())}
     assert rows["a.h5"]["status"] == "ok" and rows["a.h5"]["model_agrees"] == "True"
+    assert rows["a.h5"]["verdict"] == "fail" and rows["a.h5"]["comparison_verdict"] == "pass"
     assert rows["broken.h5"]["status"] == "error"
     assert "broken.h5" in rows["broken.h5"]["error"]
     cache = list((tmp_path / "summary.csv.cache").glob("a-*.json"))

@@ -81,25 +81,89 @@ def test_severity_bad_window():
 
 
 def test_torsional_stress_barred_and_transient():
+    """User curves, propulsion at 1000 rpm rated: a barred range below λ = 0.8 is allowed."""
     lim = StressLimits([0, 1000], [30e6, 30e6], [60e6, 60e6], source="rule X")
     speed = np.array([100.0, 200.0, 300.0, 400.0])
-    ok = check_torsional_stress(speed, [10e6, 45e6, 10e6, 5e6], lim, section="crank 6")
-    assert ok.passed and "barred 157–243 rpm" in ok.detail
-    assert ok.value == pytest.approx(45 / 60)
-    assert ok.source == "rule X"
-    bad = check_torsional_stress(speed, [10e6, 70e6, 10e6, 5e6], lim)
-    assert not bad.passed and "TRANSIENT LIMIT EXCEEDED" in bad.detail
-    inside = check_torsional_stress(speed, [10e6, 45e6, 10e6, 5e6], lim,
-                                    operating_range_rpm=(150, 450))
-    assert not inside.passed and "inside the operating range at 200–200 rpm" in inside.detail
+    trans, cont = check_torsional_stress(speed, [10e6, 45e6, 10e6, 5e6], lim, section="crank 6",
+                                         rated_speed_rpm=1000.0)
+    # crossings of 30 MPa interpolated: 100 + 100·20/35 = 157.1, 200 + 100·15/35 = 242.9
+    assert "barred 157–243 rpm" in cont.detail and "λ = 0.8" in cont.detail
+    # the data stop at 400 rpm: the range up to the rated speed is not assessed
+    assert cont.status == "inconclusive" and "400–1000 rpm" in cont.detail
+    _, full = check_torsional_stress(np.append(speed, 1000.0), [10e6, 45e6, 10e6, 5e6, 5e6],
+                                     lim, section="crank 6", rated_speed_rpm=1000.0)
+    assert full.status == "pass"
+    assert trans.passed and trans.value == pytest.approx(45e6) and trans.limit == 60e6
+    assert trans.units == "Pa" and "rule X" in trans.source
+    bad, _ = check_torsional_stress(speed, [10e6, 70e6, 10e6, 5e6], lim, rated_speed_rpm=1000.0)
+    assert bad.status == "fail" and "transient limit exceeded" in bad.detail
+
+
+def test_barred_range_at_rated_speed_fails():
+    """IACS UR M68.5: no barred range above λ = 0.8 in normal operation; one at the rated
+    speed fails, and the overall verdict with it."""
+    from crankbench.analysis.verdict import combine
+    from crankbench.predict.torsion.rules import MakerLimit, RuleLimits
+
+    lim = RuleLimits(rated_speed_rpm=720.0, operating_range_rpm=(500.0, 750.0),
+                     crankshaft=MakerLimit(("crank",), 42e6, 105e6))
+    speed = np.linspace(400.0, 760.0, 73)
+    tau = 20e6 + 40e6 * np.exp(-((speed - 720.0) / 15.0) ** 2)
+    trans, cont = check_torsional_stress(speed, tau, lim, section="crank")
+    assert trans.status == "pass" and cont.status == "fail"
+    # closed form of the crossings: 20 + 40 exp(−x²) = 42 → x = √ln(40/22) = 0.7732 → ±11.6 rpm
+    half = 15.0 * np.sqrt(np.log(40 / 22))
+    lo, hi = cont.data.barred_ranges_rpm[0]
+    assert lo == pytest.approx(720 - half, abs=0.3) and hi == pytest.approx(720 + half, abs=0.3)
+    assert "contains the rated speed 720 rpm" in cont.detail
+    assert combine([trans.verdict, cont.verdict]).status == "fail"
+    # the same resonance at 300 rpm (λ = 0.42 < 0.8): barred range allowed
+    tau_low = 20e6 + 40e6 * np.exp(-((speed - 450.0) / 15.0) ** 2)
+    _, low = check_torsional_stress(speed, tau_low, lim, section="crank")
+    assert low.status == "pass" and "below λ = 0.8 (576 rpm)" in low.detail
+
+
+def test_model_without_limit_data_is_not_assessed():
+    from crankbench.analysis.torsional_limits import not_assessed
+    from crankbench.analysis.verdict import combine
+
+    c = not_assessed("measured torsional stress", "the model has no stress limit data")
+    assert c.status == "inconclusive" and not c.passed and c.detail.startswith("not assessed")
+    assert combine([c.verdict]).status == "inconclusive"
+
+
+def test_run_not_covering_the_operating_range_is_inconclusive():
+    from crankbench.predict.torsion.rules import MakerLimit, RuleLimits
+
+    lim = RuleLimits(rated_speed_rpm=720.0, operating_range_rpm=(500.0, 750.0),
+                     crankshaft=MakerLimit(("crank",), 42e6, 105e6))
+    speed = np.linspace(200.0, 600.0, 41)
+    _, cont = check_torsional_stress(speed, np.full(41, 10e6), lim, section="crank")
+    assert cont.status == "inconclusive" and "600–750 rpm of the operating range" in cont.detail
 
 
 def test_torsional_stress_bad_inputs():
     lim = StressLimits([0, 1000], [30e6, 30e6], [60e6, 60e6])
     with pytest.raises(AnalysisError, match="stress has 2 values, speed_rpm 3"):
         check_torsional_stress([1, 2, 3], [1, 2], lim)
-    with pytest.raises(AnalysisError, match="limits must be a predict.torsion.stress"):
+    with pytest.raises(AnalysisError, match="limits must be a predict.torsion.rules.RuleLimits"):
         check_torsional_stress([1, 2, 3], [1, 2, 3], {"continuous": 1})
+
+
+def test_iso_10816_6_classes_and_choice():
+    """Severity grades step by 10^0.2 (1.12 ... 178 mm/s); classes are flagged unverified."""
+    from crankbench.analysis.limits import ISO_10816_6_GRADES, reciprocating_class
+
+    g = np.array(ISO_10816_6_GRADES) * 1e3
+    np.testing.assert_allclose(g[1:] / g[:-1], 10 ** 0.2, rtol=0.01)
+    z = zone_boundaries(5, standard="ISO 10816-6")
+    assert not z.verified and "NOT verified" in z.source and z.merged_ab
+    assert list(z.zone([5e-3, 15e-3, 30e-3])) == ["A/B", "C", "D"]
+    assert reciprocating_class(power_w=3.1e6, rated_speed_rpm=720, resilient=True)[0] == 5
+    assert reciprocating_class(power_w=80e3, rated_speed_rpm=3000, resilient=True)[0] is None
+    assert check_vibration_severity([2e-3], machine_class=None).status == "inconclusive"
+    with pytest.raises(AnalysisError, match="not an ISO 10816-6 class"):
+        zone_boundaries(8, standard="ISO 10816-6")
 
 
 def test_residual_unbalance_against_grade():

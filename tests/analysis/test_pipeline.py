@@ -75,9 +75,17 @@ def test_significant_criticals_found_matched_and_accurate(marine):
 def test_correct_model_agrees(marine):
     _, result = marine
     assert result.comparison.agrees, result.comparison.flags
-    assert result.passed
     row = result.summary()
-    assert row["matched"] >= 8 and row["model_agrees"] and row["limits_passed"]
+    assert row["matched"] >= 8 and row["model_agrees"] and row["comparison_verdict"] == "pass"
+    # the model's order-4.5 resonance sits at the rated speed (720 rpm): the crankshaft's
+    # continuous limit is exceeded there, a barred range IACS UR M68.5 does not allow above
+    # λ = 0.8, so the overall verdict fails on that check alone
+    cont = [c for c in result.limits if c.name.startswith("measured torsional stress, cont")]
+    assert len(cont) == 1 and cont[0].status == "fail"
+    lo, hi = cont[0].data.barred_ranges_rpm[-1]
+    assert lo < 720.0 < hi and lo > 0.8 * 720.0
+    assert row["verdict"] == "fail" and not result.passed
+    assert row["verdict_reason"] == "failed: measured torsional stress, continuous and barred ranges"
     # the stress check uses the model's [limits]; the severity checks the two vibrographs
     names = [c.name for c in result.limits]
     assert any(n.startswith("measured torsional stress") for n in names)
@@ -175,3 +183,22 @@ def test_fast_sweep_100_rpm_per_s(tmp_path):
         assert res.amplitude_corrected == pytest.approx(amp, rel=amp_tol), (m["mode"], m.order)
         checked += 1
     assert checked >= 5
+
+
+def test_steady_run_with_nothing_compared_is_inconclusive(tmp_path):
+    """A constant-speed record crosses no critical: the comparison is inconclusive, and so is
+    the overall verdict when nothing else failed — never 'all checks passed'."""
+    import dataclasses
+
+    from crankbench.measure.synth import Scene, synthesize
+    from crankbench.measure.synth.profile import steady
+
+    scene = Scene.from_toml(ROOT / "sample_data/scenes/marine_6l_runup.toml")
+    scene = dataclasses.replace(scene, profile=steady(420.0, duration=6.0))
+    run = synthesize(scene)
+    result = analyse(run.record, ROOT / "sample_data/shaftlines/marine_6l.toml",
+                     load=LoadCase.from_any(scene.load, scene.engine))
+    comp = result.verdicts[0]
+    assert result.steady and comp.status == "inconclusive" and "steady-speed run" in comp.reason
+    assert result.verdict.status in ("inconclusive", "fail") and not result.passed
+    assert result.summary()["comparison_verdict"] == "inconclusive"

@@ -45,24 +45,33 @@ def test_html_is_self_contained_and_escaped(tmp_path):
     assert not re.search(r"""(src|href)\s*=\s*["']?(https?:|//)""", text)
     assert "<script" not in text and "&lt;script&gt;" in text
     assert "6L32 &lt;marine&gt;" in text and "caption &amp; &lt;b&gt;tag&lt;/b&gt;" in text
-    # figures embedded: PNGs decode, SVG inline
+    # figures embedded: the PNG one decodes, the others (default) are inline vector SVG
     pngs = re.findall(r'src="data:image/png;base64,([A-Za-z0-9+/=]+)"', text)
-    assert len(pngs) == rep.n_figures - 1 >= 2  # the svg one is inline, the check plots PNG
+    assert len(pngs) == 1
     assert all(base64.b64decode(p)[:8] == b"\x89PNG\r\n\x1a\n" for p in pngs)
-    assert text.count("<svg") == 1
+    assert text.count("<svg") == rep.n_figures - 1 >= 2
     assert f'<meta name="crankbench-figures" content="{rep.n_figures}">' in text
     # provenance: the record's hash
     assert hashlib.sha256(b"record bytes").hexdigest() in text
     assert file_sha256(record) == hashlib.sha256(b"record bytes").hexdigest()
     # verdict: 2 mm/s is zone B of class III; 5e-3 kg·m < U_per = 6.3e-3·100/62.83 = 1.0e-2
-    assert "all checks passed" in text and text.count(">PASS<") == 4  # verdict list + table
+    assert 'class="status pass">pass<' in text and "every required check passed" in text
+    assert "all checks passed" not in text
 
 
 def test_verdict_reflects_failed_check(tmp_path):
     rep = Report("r")
     rep.add_limit_checks([check_vibration_severity([9e-3], machine_class="II")], figures=False)
     text = rep.to_html()
-    assert "some checks failed" in text and "FAIL" in text
+    assert 'class="status fail">fail<' in text and rep.verdict.status == "fail"
+
+
+def test_nothing_assessed_is_inconclusive_not_green():
+    rep = Report("r")
+    rep.add_limit_checks([check_vibration_severity([1e-3], machine_class=None)], figures=False)
+    assert rep.verdict.status == "inconclusive"
+    assert 'class="status inconclusive">inconclusive<' in rep.to_html()
+    assert Report("empty").verdict.status == "inconclusive"
 
 
 def test_save_refuses_to_overwrite_and_names_option(tmp_path):
@@ -100,12 +109,25 @@ def _pdf_pages(path):
     return len(re.findall(rb"/Type\s*/Page[^s]", path.read_bytes()))
 
 
-def test_pdf_fallback_has_pages(tmp_path):
+def test_pdf_is_weasyprint_only(tmp_path):
     rep, _ = _report(tmp_path)
     path = tmp_path / "r.pdf"
-    assert write_pdf(rep, path, engine="matplotlib") == "matplotlib"
+    assert write_pdf(rep, path) == "weasyprint"
     assert path.read_bytes()[:5] == b"%PDF-"
     assert _pdf_pages(path) >= 2
+
+
+def test_table_headers_units_and_roundoff():
+    rep = Report("r")
+    rep.add_table(pd.DataFrame({"speed_rpm_predicted": [721.04, 540.0],
+                                "amplitude_measured": [2.03e-14, 3.1e-3],
+                                "phase_deg": [33.0, 12.0]}),
+                  title="t", amplitude_units="rad")
+    item = rep._sections[0].items[0].payload
+    assert item["columns"] == ["predicted speed (rpm)", "measured amplitude (mdeg)",
+                               "phase (deg)"]
+    # 3.1e-3 rad = 177.6 mdeg; a 2e-14 residual is round-off: 0, and no phase on it
+    assert item["rows"] == [["721.0", "0", "—"], ["540.0", "178", "12"]]
 
 
 @pytest.mark.skipif(shutil.which("pdftoppm") is None, reason="pdftoppm (poppler) not installed")
