@@ -217,8 +217,7 @@ def _client(distributed, address):
     from crankbench.predict.errors import ConfigError
 
     try:
-        return distributed.Client(address, timeout=f"{max(CONNECT_TIMEOUT_S, 10.0):g}s",
-                                  set_as_default=False)
+        return distributed.Client(address, timeout=f"{max(CONNECT_TIMEOUT_S, 10.0):g}s")
     except (OSError, TimeoutError, ValueError) as exc:
         first = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
         raise ConfigError(f"--scheduler {address!r}: could not connect ({first})") from None
