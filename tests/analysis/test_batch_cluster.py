@@ -170,3 +170,27 @@ def test_paths_are_absolute_before_submission(bench, monkeypatch):
     record, model, report, display = seen[0]
     assert os.path.isabs(record) and os.path.isabs(model) and os.path.isabs(report)
     assert Path(record) == bench / "runs/a/run.h5" and display == "runs/a/run.h5"
+
+
+@pytest.mark.slow
+def test_report_then_report_pdf_do_not_collide(bench, capsys):
+    """``report -o r.html`` then ``report -o r.html --pdf --overwrite`` then
+    ``report -o r.pdf --pdf --overwrite``: each output is what its name says (HTML, PDF),
+    written once, and the record and model are untouched."""
+    from crankbench.analysis.report import file_sha256
+
+    rec, model = bench / "runs/a/run.h5", bench / "models/shaftlines/i4.toml"
+    before = (file_sha256(rec), file_sha256(model))
+    out = bench / "rep"
+    base = ["-q", "report", str(rec), str(model), "--method", "cot"]
+    assert main(base + ["-o", str(out / "r.html")]) == 0
+    first = (out / "r.html").read_bytes()
+    assert main(base + ["-o", str(out / "r.html"), "--pdf", "--overwrite"]) == 0
+    assert (out / "r.html").read_bytes()[:15].lower().startswith(b"<!doctype html")
+    assert (out / "r.pdf").read_bytes()[:5] == b"%PDF-"
+    assert len(first) > 1000
+    assert main(base + ["-o", str(out / "r.pdf"), "--pdf", "--overwrite"]) == 0
+    assert (out / "r.pdf").read_bytes()[:5] == b"%PDF-"
+    assert sorted(p.name for p in out.iterdir()) == ["r.html", "r.pdf"]   # no stray files
+    assert (file_sha256(rec), file_sha256(model)) == before
+    capsys.readouterr()

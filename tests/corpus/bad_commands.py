@@ -72,6 +72,8 @@ def build_workspace(folder: Path) -> dict:
         shutil.copy(SAMPLE / "records" / f"i4_runup{ext}", rec / f"i4_runup{ext}")
     os.symlink(rec / "i4_runup.csv", rec / "link.csv")
     os.link(rec / "i4_runup.csv", rec / "hard.csv")
+    os.symlink(rec / "i4_runup.h5", rec / "report.html")     # outputs that are links to
+    os.symlink(rec / "i4_runup.h5", rec / "both.pdf")        # the record
     models = folder / "models"
     shutil.copytree(SAMPLE / "engines", models / "engines")
     shutil.copytree(SAMPLE / "shaftlines", models / "shaftlines")
@@ -109,6 +111,7 @@ def build_workspace(folder: Path) -> dict:
         "h5": str(rec / "i4_runup.h5"), "csv": str(rec / "i4_runup.csv"),
         "wav": str(rec / "i4_runup.wav"), "link": str(rec / "link.csv"),
         "hard": str(rec / "hard.csv"), "model": str(models / "shaftlines" / "i4.toml"),
+        "report_link": str(rec / "report.html"), "both": str(rec / "both.html"),
         "engine": str(models / "engines" / "i4.toml"),
         "g81": str(models / "shaftlines" / "i4_g81.toml"),
         "scene_1e12": str(models / "scene_1e12.toml"),
@@ -142,6 +145,14 @@ CASES = [
     Case("batch_output_is_a_hard_link_to_the_record",
          ("batch", "{csv}", "--model", "{model}", "-o", "{hard}", "--overwrite"), 2,
          (r"-o \S+hard\.csv resolves to \(is a link to\) an input", _ONE_LINE)),
+    Case("report_output_is_a_symlink_to_the_record",
+         ("report", "{h5}", "{model}", "-o", "{report_link}", "--overwrite"), 2,
+         (r"-o \S+report\.html resolves to \(is a link to\) an input \(the record "
+          r"\S+i4_runup\.h5\)", _ONE_LINE)),
+    Case("report_pdf_beside_is_a_symlink_to_the_record",
+         ("report", "{h5}", "{model}", "-o", "{both}", "--pdf", "--overwrite"), 2,
+         (r"the PDF beside it \(\S+both\.pdf\) resolves to \(is a link to\) an input",
+          _ONE_LINE)),
     Case("synth_output_is_the_scenes_engine",
          ("synth", "{scene_1e12}", "-o", "{engine}", "--overwrite"), 2,
          (r"is an input \(a file named by scene_1e12\.toml: \S+engines/i4\.toml\)",
