@@ -311,6 +311,9 @@ def run(args) -> int:
         for p in args.runs:
             if not Path(p).exists():
                 raise FileNotFoundError(f"{p}: no such record file")
+        stems = [Path(p).stem for p in args.runs]
+        if args.check is not None and args.check not in stems:
+            raise ConfigError(f"--check {args.check!r} names no run; runs: {stems}")
         runs, phasors = read_record_runs(
             args.runs, args.channel, trials,
             speed_channel=args.speed_channel, steady_fraction=args.steady_fraction,

@@ -64,7 +64,11 @@ def expand(patterns) -> list:
         hits = sorted(glob.glob(pat, recursive=True)) if any(c in pat for c in "*?[") else \
             ([pat] if Path(pat).exists() else [])
         if not hits:
-            raise FileNotFoundError(f"no record matches {pat!r}")
+            hint = ""
+            if pat.replace(".", "", 1).replace(",", "").isdigit():
+                hint = ("; a number here is usually a list written with spaces: list options "
+                        "take commas (--orders 2,4) or are repeated (--orders 2 --orders 4)")
+            raise FileNotFoundError(f"no record matches {pat!r}{hint}")
         files.extend(hits)
     seen, out = set(), []
     for f in files:
