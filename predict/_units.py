@@ -71,6 +71,15 @@ def is_quantity_string(value) -> bool:
     return isinstance(value, str)
 
 
+# What a quantity string may look like: a decimal number, then a unit expression of unit names
+# joined by spaces, *, / or · with small integer powers (^2, **-1, ²). Anything else (pint
+# would evaluate arithmetic such as 10**10**10 without bound) is refused before pint sees it.
+_NUMBER = r"[+-]?(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][+-]?\d+)?"
+_NAME = r"[A-Za-zµμΩ°%][A-Za-z0-9_µμΩ°]*(?:\s*(?:\^|\*\*)\s*[+-]?\d{1,2}|[²³])?"
+_UNIT = rf"(?:1\s*/\s*)?{_NAME}(?:(?:\s*[*/·]\s*|\s+){_NAME}){{0,15}}"
+_QUANTITY = re.compile(rf"\s*{_NUMBER}\s*(?:{_UNIT})?\s*")
+
+
 def _radian_power(q) -> int:
     return int(round(q.to_root_units()._units.get("radian", 0)))
 
@@ -103,8 +112,11 @@ def to_unit(text: str, unit: str) -> float:
     """
     import pint
 
-    ureg = registry()
     expected = _expected(unit)
+    if len(text) > 200 or not _QUANTITY.fullmatch(text):
+        raise UnitError(f"= {text[:60]!r} is not a number followed by a unit (such as '260 mm' "
+                        f"or '81 GPa'); {expected}")
+    ureg = registry()
     try:
         q = ureg.Quantity(text.strip())
     except (pint.errors.UndefinedUnitError, pint.errors.DefinitionSyntaxError) as exc:
