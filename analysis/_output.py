@@ -17,8 +17,13 @@ def to_jsonable(obj: Any) -> Any:
 
     Non-finite floats become ``None`` (JSON has no NaN).
     """
+    import dataclasses
+
     import pandas as pd
 
+    if dataclasses.is_dataclass(obj) and not isinstance(obj, type):
+        return to_jsonable({f.name: getattr(obj, f.name) for f in dataclasses.fields(obj)
+                            if f.repr})
     if isinstance(obj, dict):
         return {str(k): to_jsonable(v) for k, v in obj.items()}
     if isinstance(obj, (list, tuple)):

@@ -31,7 +31,7 @@ _DEFAULT_SHOWWARNMSG = getattr(warnings, "_showwarnmsg_impl", None)
 
 #: Sub-commands in the order ``--help`` lists them.
 COMMANDS = ("info", "demo", "synth", "predict", "analyse", "balance", "compare", "report",
-            "batch", "bench")
+            "batch", "campaign", "bench")
 
 
 def _load(name: str):

@@ -92,6 +92,13 @@ class BalanceShaft:
     position: float
 
 
+def _not_rotary(engine):
+    if getattr(engine, "rotary", False):
+        raise ModelError(f"engine {engine.name!r} is a rotary engine (cylinders turning round a "
+                         "fixed crank): its shaking forces are not modelled by predict.balance, "
+                         "which assumes a stationary crankcase")
+
+
 def _omega(omega) -> float:
     return check_range(omega, "omega", 0.0, None, error=ModelError)
 
@@ -135,6 +142,7 @@ def _axial_harmonics(engine, max_order):
 
 def _phasors(engine, omega, orders, counterweights=(), shafts=()):
     """Forward/backward force and moment phasors (N, N·m) per order."""
+    _not_rotary(engine)
     orders = _orders(orders)
     w2 = omega * omega
     H = _axial_harmonics(engine, int(orders.max()))[:, orders] * w2
@@ -303,6 +311,7 @@ def shaking_forces(engine, theta, *, omega, counterweights=(), shafts=(), pressu
     from .forces import engine_torque
 
     omega = _omega(omega)
+    _not_rotary(engine)
     th = check_finite_array(theta, "theta", ndim=1, error=ModelError)
     w2 = omega * omega
     _, _, d2x = engine.piston_motion(th)

@@ -32,6 +32,7 @@ from pathlib import Path
 
 import numpy as np
 
+from . import _linkage
 from ._toml import load_toml
 from ._validate import check_finite_array, check_int, check_nonnegative, check_positive
 from .errors import ModelError
@@ -63,31 +64,6 @@ class ArticulatedRod:
     link_radius: float
     link_angle_deg: float
     rod_length: float
-
-
-# ---------------------------------------------------------------------------------------------
-# second-order jets (value, d/dθ, d²/dθ²): exact derivatives of the linkage geometry
-# ---------------------------------------------------------------------------------------------
-def _jmul(f, g):
-    return (f[0] * g[0], f[1] * g[0] + f[0] * g[1], f[2] * g[0] + 2 * f[1] * g[1] + f[0] * g[2])
-
-
-def _jsqrt(f):
-    h0 = np.sqrt(f[0])
-    h1 = f[1] / (2 * h0)
-    return (h0, h1, (f[2] - 2 * h1 * h1) / (2 * h0))
-
-
-def _jlin(f, a, g=None, b=0.0, c=0.0):
-    """a f + b g + c."""
-    if g is None:
-        return (a * f[0] + c, a * f[1], a * f[2])
-    return (a * f[0] + b * g[0] + c, a * f[1] + b * g[1], a * f[2] + b * g[2])
-
-
-def _jtrig(psi):
-    s, c = np.sin(psi), np.cos(psi)
-    return (c, -s, -c), (s, c, -s)
 
 
 def _optional_per_cylinder(values, name: str, n: int) -> np.ndarray:
@@ -150,7 +126,30 @@ class Engine:
     rod_inertia_correction : float or sequence of float
         J_G − m h k l² of each plain rod (kg·m², usually negative), the inertia through which
         the residual couple of the two-point rod acts (:meth:`predict.masses.Rod.two_point`);
-        adds −ΔJ ω² φ' φ'' to the crank torque. 0 (default) keeps the two-point model.
+        adds −ΔJ ω² φ' φ'' to the crank torque. 0 (default) keeps the classical two-point
+        (2-mass) rod model, a lower fidelity whose torque error is this residual couple.
+    rotary : bool
+        Rotary engine (Gnome, Le Rhône): the crankshaft stands still and the cylinders,
+        crankcase and propeller turn; θ is then the angle of the cylinder block relative to
+        the fixed crank. The reciprocating masses also move round the axis at radius x, so
+        their inertia torque gains −m ω² x x' (kinetic energy ½ m ω² (x'² + x²), Liang 1948
+        ch. 10); the gas torque is unchanged (kinematic inversion).
+    double_acting : bool
+        Double-acting cylinders: combustion on both sides of the piston, the lower chamber
+        firing half a working cycle after the upper one with the same pressure trace. The
+        net gas force towards the crank is ``(p_top − p_cc) A − (p_bottom − p_cc)(A − A_rod)``
+        (p_cc: the pressure outside, acting on the rod's cross-section).
+    piston_rod_diameter : float
+        Piston-rod diameter through the lower chamber, m (double-acting only). 0 is the
+        textbook lower fidelity that neglects the rod area; its error in the gas force is
+        p_bottom·A_rod.
+    series_order, lambda_terms : int, optional
+        Textbook lower fidelity of the piston motion: None (default) is the exact slider
+        crank; ``series_order=N`` truncates its harmonic series after order N and
+        ``lambda_terms=k`` keeps only k powers of λ per coefficient (``series_order=2,
+        lambda_terms=1`` is x = r cos θ + l − (λr/4)(1 − cos 2θ), a = rω²(cos θ + λ cos 2θ)).
+        Its acceleration error relative to r ω² is
+        :func:`predict.kinematics.series_error`. Plain rods with a centred pin only.
 
     References
     ----------
@@ -170,7 +169,8 @@ class Engine:
                  firing_order=None, bore=None, name="engine", pin_offset=0.0,
                  firing_angles_deg=None, articulated=None, compression_ratio=None,
                  rated_speed_rpm=None, combustion=None, rod_inertia_correction=0.0,
-                 source=None):
+                 source=None, series_order=None, lambda_terms=None, rotary=False,
+                 double_acting=False, piston_rod_diameter=0.0):
         alpha = check_finite_array(crank_angles_deg, "crank_angles_deg", ndim=1, min_length=1,
                                    error=ModelError)
         n = alpha.size
@@ -207,7 +207,40 @@ class Engine:
             raise ModelError(f"rod_inertia_correction[{bad[0]}] must be 0: the residual couple "
                              "is modelled for plain rods only")
         self._rod_corr = _readonly(corr)
+        if not isinstance(rotary, (bool, np.bool_)):
+            raise ModelError(f"rotary={rotary!r} must be true or false")
+        self.rotary = bool(rotary)
+        if not isinstance(double_acting, (bool, np.bool_)):
+            raise ModelError(f"double_acting={double_acting!r} must be true or false")
+        self.double_acting = bool(double_acting)
+        self.piston_rod_diameter = check_nonnegative(piston_rod_diameter, "piston_rod_diameter",
+                                                     error=ModelError)
+        if self.piston_rod_diameter > 0 and not self.double_acting:
+            raise ModelError("piston_rod_diameter needs double_acting=True (a trunk piston "
+                             "has no piston rod through the lower chamber)")
+        if self.double_acting and self.bore is not None \
+                and self.piston_rod_diameter >= self.bore:
+            raise ModelError(f"piston_rod_diameter={piston_rod_diameter!r} must be smaller than "
+                             f"bore={self.bore!r}")
         self._firing_order, self._firing = self._resolve_firing(firing_order, firing_angles_deg)
+        self.series_order = None if series_order is None else check_int(
+            series_order, "series_order", error=ModelError)
+        if self.series_order is not None and self.series_order < 1:
+            raise ModelError(f"series_order={series_order!r} must be >= 1")
+        if lambda_terms is not None and self.series_order is None:
+            raise ModelError("lambda_terms needs series_order (the harmonic series it truncates)")
+        if self.series_order is not None and (self.pin_offset != 0 or any(
+                a is not None for a in self._articulated)):
+            raise ModelError("series_order (textbook piston series) needs plain rods and a "
+                             "centred piston pin")
+        self.lambda_terms = lambda_terms
+        self._series = None
+        if self.series_order is not None:
+            from .kinematics import displacement_coefficients
+
+            c = displacement_coefficients(self.crank_radius / self.rod_length,
+                                          self.series_order, lambda_terms=lambda_terms)
+            self._series = c
 
     # ------------------------------------------------------------------ validation helpers
     def _per_cylinder(self, value, name):
@@ -362,6 +395,30 @@ class Engine:
         """Stroke of a plain-rod cylinder, m (2r for a centred pin)."""
         r, l, e = self.crank_radius, self.rod_length, self.pin_offset
         return float(np.sqrt((l + r) ** 2 - e * e) - np.sqrt((l - r) ** 2 - e * e))
+
+    def net_gas_force(self, trace, crank_angle, crankcase_pressure=1.0e5):
+        """Gas force on one piston towards the crank, N, at ``crank_angle`` from that
+        cylinder's firing TDC (rad): ``(p − p_cc) A`` for a trunk piston; for double-acting
+        cylinders minus the lower chamber's ``(p(ψ − cycle/2) − p_cc)(A − A_rod)``.
+
+        Examples
+        --------
+        >>> from crankbench.predict.pressure import PressureTrace
+        >>> e = Engine(crank_angles_deg=[0], crank_radius=0.1, rod_length=0.4,
+        ...            reciprocating_mass=1.0, bore=0.2, cycle=2, double_acting=True,
+        ...            piston_rod_diameter=0.05)
+        >>> tr = PressureTrace.from_measured(np.linspace(0, 2 * np.pi, 5)[:-1],
+        ...                                  [5e6, 1e5, 1e5, 1e5], cycle=2)
+        >>> round(float(e.net_gas_force(tr, np.pi)))   # lower chamber firing: −(5e6 − 1e5)(A − a)
+        -144317
+        """
+        ang = np.asarray(crank_angle, float)
+        area = self.piston_area
+        force = (trace.at(ang) - crankcase_pressure) * area
+        if self.double_acting:
+            lower = area - np.pi * self.piston_rod_diameter ** 2 / 4
+            force = force - (trace.at(ang - self.cycle_angle / 2) - crankcase_pressure) * lower
+        return force
 
     @property
     def piston_area(self) -> float:
@@ -522,39 +579,16 @@ class Engine:
         beta = np.deg2rad(self._beta_deg)
         for i in range(self._n):
             art = self._articulated[i]
-            if art is None:
-                jet = self._plain_jet(th + alpha[i] - beta[i], r, l, e)
+            if art is None and self._series is not None:
+                jet = _linkage.series_jet(th + alpha[i] - beta[i], r, l, self._series)
+            elif art is None:
+                jet = _linkage.plain_jet(th + alpha[i] - beta[i], r, l, e)
             else:
                 m = art.master
                 psi_m = th + alpha[m] - beta[m]
-                jet = self._articulated_jet(psi_m, art, beta[i] - beta[m], r, l, e)
+                jet = _linkage.articulated_jet(psi_m, art, beta[i] - beta[m], r, l, e)
             x[i], dx[i], d2x[i] = jet
         return x, dx, d2x
-
-    @staticmethod
-    def _plain_jet(psi, r, l, e):
-        cj, sj = _jtrig(psi)
-        s = _jlin(sj, r / l, c=-e / l)
-        c = _jsqrt(_jlin(_jmul(s, s), -1.0, c=1.0))
-        return _jlin(cj, r, c, l)
-
-    @staticmethod
-    def _articulated_jet(psi_m, art, delta, r, l, e):
-        cj, sj = _jtrig(psi_m)
-        s = _jlin(sj, r / l, c=-e / l)                       # sin φ of the master rod
-        c = _jsqrt(_jlin(_jmul(s, s), -1.0, c=1.0))           # cos φ
-        g = np.deg2rad(art.link_angle_deg)
-        cg, sg = np.cos(g), np.sin(g)
-        # link-pin direction: master-rod line (cos φ, −sin φ) turned by γ
-        ca = _jlin(c, cg, s, sg)                              # cos(γ − φ)
-        sa = _jlin(s, -cg, c, sg)                             # sin(γ − φ)
-        a_m = _jlin(cj, r, ca, art.link_radius)               # link pin, master axial
-        p_m = _jlin(sj, r, sa, art.link_radius)               # link pin, master sideways
-        cd, sd = np.cos(delta), np.sin(delta)
-        a_j = _jlin(a_m, cd, p_m, sd)
-        p_j = _jlin(a_m, -sd, p_m, cd)
-        root = _jsqrt(_jlin(_jmul(p_j, p_j), -1.0, c=art.rod_length**2))
-        return _jlin(a_j, 1.0, root, 1.0)
 
     def cylinder_volume(self, theta, *, compression_ratio=None):
         """Cylinder volume (m³) of every cylinder at shaft angle θ (rad).
@@ -734,6 +768,12 @@ class Engine:
             combustion=combustion,
             rod_inertia_correction=masses("rod_inertia_correction", 0.0, low=None, unit="kg*m^2",
                                           plausible=(1e-9, 1e5)),
+            series_order=t.integer("series_order", None, minimum=1),
+            rotary=t.raw("rotary", False),
+            double_acting=t.raw("double_acting", False),
+            piston_rod_diameter=t.number("piston_rod_diameter", 0.0, low=0.0, unit="m",
+                                         plausible=(1e-3, 1.0)),
+            lambda_terms=t.integer("lambda_terms", None, minimum=1),
             articulated=arts,
             source=str(path),
         )

@@ -13,6 +13,7 @@ __all__ = [
     "ConfigError",
     "AnalysisError",
     "MissingDependencyError",
+    "StoreError",
 ]
 
 
@@ -38,3 +39,7 @@ class AnalysisError(CrankbenchError, ValueError):
 
 class MissingDependencyError(CrankbenchError, ImportError):
     """An optional package needed for this feature is not installed."""
+
+
+class StoreError(CrankbenchError, ValueError):
+    """A campaign results store is missing, damaged, foreign, of another schema or locked."""

@@ -566,6 +566,42 @@ class EnduranceDiagram:
             raise ModelError("a zero load point has no load line")
         return StressPoint(alternating=float(alternating) * n, mean=float(mean) * n)
 
+    def crossover(self) -> StressPoint:
+        """Where the fatigue line meets the yield (Langer) line σ_a + σ_m = S_y.
+
+        Load lines steeper than the one through this point fail by fatigue first, flatter ones
+        by first-cycle yield. Closed forms (Shigley 9th ed. Tables 6-6 to 6-8):
+        Goodman σ_m = (S_y − S_e) S_u/(S_u − S_e); Gerber
+        σ_m = S_u²/(2S_e)·[1 − √(1 + (2S_e/S_u)²(1 − S_y/S_e))]; ASME elliptic
+        σ_a = 2 S_e² S_y/(S_e² + S_y²); Soderberg meets it only at (S_y, 0).
+
+        Raises ModelError without a yield strength, or when S_y ≤ S_e (the yield line then
+        lies below the fatigue line everywhere: yield governs every load line).
+
+        Examples
+        --------
+        >>> d = EnduranceDiagram(ultimate=600e6, endurance=250e6, yield_strength=450e6,
+        ...                      criterion="gerber")
+        >>> p = d.crossover()
+        >>> round(p.mean / 1e6, 2), round(p.alternating / 1e6, 2)
+        (240.0, 210.0)
+        """
+        su, se, sy = self.ultimate, self.endurance, self.yield_strength
+        if sy is None:
+            raise ModelError("crossover needs yield_strength (Pa)")
+        if sy <= se:
+            raise ModelError(f"yield_strength={sy:g} Pa <= endurance={se:g} Pa: the yield line "
+                             "governs every load line, there is no crossover")
+        if self.criterion == "goodman":
+            sm = (sy - se) * su / (su - se)
+        elif self.criterion == "gerber":
+            sm = su * su / (2 * se) * (1 - math.sqrt(1 + (2 * se / su) ** 2 * (1 - sy / se)))
+        elif self.criterion == "asme-elliptic":
+            sm = sy - 2 * se * se * sy / (se * se + sy * sy)
+        else:
+            sm = sy
+        return StressPoint(alternating=max(sy - sm, 0.0), mean=sm)
+
     def to_frame(self, n_points: int = 101):
         """Boundary of the diagram: columns mean, allowable_alternating (Pa)."""
         import pandas as pd

@@ -36,6 +36,8 @@ __all__ = [
     "design_flywheel",
     "rim_stress",
     "disc_stress",
+    "harmonic_load",
+    "load_from_toml",
 ]
 
 
@@ -55,7 +57,10 @@ class TurningMoment:
     period : float
         Angle of one period of the diagram, rad.
     load_torque : float
-        Resisting torque (constant), N·m; the mean torque by default.
+        Mean resisting torque, N·m; the mean engine torque by default.
+    load_variation : ndarray or None
+        The load's own variation about its mean at ``angle`` (N·m), for a load with harmonics
+        (compressor, pump, propeller blade passing); None for a constant load.
     """
 
     angle: np.ndarray
@@ -64,10 +69,21 @@ class TurningMoment:
     period: float
     load_torque: float
     load_is_mean: bool = True
+    load_variation: np.ndarray | None = None
+
+    @property
+    def load(self) -> np.ndarray:
+        """Resisting torque at ``angle``, N·m (mean plus its own variation)."""
+        base = np.full(self.angle.shape, self.load_torque)
+        return base if self.load_variation is None else base + self.load_variation
 
     @classmethod
     def from_torque(cls, angle, torque, *, omega, load_torque=None):
         """Wrap a sampled torque (evenly spaced angles over one period, endpoint excluded).
+
+        ``load_torque``: None (a constant load equal to the mean engine torque), a constant
+        (N·m), an array of the load at ``angle`` or a callable ``load(angle_rad) -> N·m``
+        (see :func:`harmonic_load`).
 
         Examples
         --------
@@ -85,9 +101,20 @@ class TurningMoment:
             raise ModelError("angle must be evenly spaced and increasing")
         w = check_positive(omega, "omega", error=ModelError)
         period = float(step.mean() * a.size)
-        load = float(t.mean()) if load_torque is None else float(load_torque)
+        variation = None
+        if load_torque is None:
+            load = float(t.mean())
+        elif callable(load_torque) or np.ndim(load_torque) > 0:
+            arr = load_torque(a) if callable(load_torque) else load_torque
+            arr = check_finite_array(arr, "load_torque", ndim=1, error=ModelError)
+            if arr.size != a.size:
+                raise ModelError(f"load_torque has {arr.size} values, angle {a.size}")
+            load = float(arr.mean())
+            variation = arr - load
+        else:
+            load = float(load_torque)
         return cls(angle=a, torque=t, omega=w, period=period, load_torque=load,
-                   load_is_mean=load_torque is None)
+                   load_is_mean=load_torque is None, load_variation=variation)
 
     @property
     def mean_torque(self) -> float:
@@ -102,7 +129,7 @@ class TurningMoment:
     def excess_energy(self) -> np.ndarray:
         """E(φ) = ∫ (T − T_load) dφ from the start, J, at ``angle`` (trapezoidal rule, with the
         periodic wrap so a sinusoid's integral is exact to round-off for ≥ 3 points per wave)."""
-        d = self.torque - self.load_torque
+        d = self.torque - self.load
         h = self.period / self.angle.size
         steps = 0.5 * (d + np.roll(d, -1)) * h
         return np.concatenate([[0.0], np.cumsum(steps[:-1])])
@@ -116,7 +143,7 @@ class TurningMoment:
     def _fine_energy(self):
         # E between samples from the spectral (trigonometric) interpolant of the torque:
         # exact for band-limited torque, so ΔE is not underestimated between samples
-        d = self.torque - self.load_torque
+        d = self.torque - self.load
         n = d.size
         spec = np.fft.rfft(d) / n
         m = 8 * n
@@ -139,7 +166,9 @@ class TurningMoment:
         half = TurningMoment(angle=self.angle[::2], torque=t2, omega=self.omega,
                              period=self.period,
                              load_torque=float(t2.mean()) if self.load_is_mean else
-                             self.load_torque, load_is_mean=self.load_is_mean)
+                             self.load_torque, load_is_mean=self.load_is_mean,
+                             load_variation=None if self.load_variation is None else
+                             self.load_variation[::2])
         return abs(self.fluctuation_of_energy - half.fluctuation_of_energy)
 
     def speed_fluctuation(self, inertia) -> float:
@@ -182,6 +211,89 @@ class TurningMoment:
             w0 = w0_new
         return np.sqrt(w0**2 + 2 * e / j)
 
+    def crossings(self):
+        """Crossing angles of the engine torque with the load, and the energy of each loop.
+
+        The classical reading of the turning-moment diagram: between successive crossings the
+        area between the curves is the energy gained (+) or given up (−); the excess energy is
+        largest at a downward crossing (speed maximum) and smallest at an upward one (speed
+        minimum). Crossings by linear interpolation of T − T_load between samples; loop areas
+        by the trapezoidal rule with the crossing points inserted.
+
+        Returns
+        -------
+        pandas.DataFrame
+            ``angle_deg`` (from cylinder 1's firing TDC), ``direction`` ("up": torque rises
+            above the load, "down"), ``energy_j`` (excess energy E there, relative to the
+            start of the period), ``loop_area_j`` (area to the next crossing, J).
+
+        Examples
+        --------
+        >>> a = np.arange(360) * 2 * np.pi / 360
+        >>> tm = TurningMoment.from_torque(a, 100 + 50 * np.sin(2 * a), omega=100.0)
+        >>> print(tm.crossings()[["angle_deg", "direction", "loop_area_j"]].round(3))
+           angle_deg direction  loop_area_j
+        0        0.0        up       49.995
+        1       90.0      down      -49.995
+        2      180.0        up       49.995
+        3      270.0      down      -49.995
+        """
+        import pandas as pd
+
+        d = self.torque - self.load
+        n = d.size
+        h = self.period / n
+        nxt = np.roll(d, -1)
+        idx = np.flatnonzero(((d <= 0) & (nxt > 0)) | ((d >= 0) & (nxt < 0)))
+        idx = idx[~((d[idx] == 0) & (np.roll(d, 1)[idx] == 0))]
+        if idx.size == 0:
+            return pd.DataFrame(columns=["angle_deg", "direction", "energy_j", "loop_area_j"])
+        frac = np.where(d[idx] != nxt[idx], d[idx] / (d[idx] - nxt[idx]), 0.0)
+        ang = self.angle[0] + (idx + frac) * h
+        e = self.excess_energy()
+        # E at the crossing: E(sample) + trapezoid over the fraction
+        e_cross = e[idx] + 0.5 * (d[idx] + 0.0) * frac * h
+        direction = np.where(nxt[idx] > d[idx], "up", "down")
+        total = float(np.sum(0.5 * (d + nxt)) * h)        # net energy over the period
+        areas = np.diff(np.concatenate([e_cross, [e_cross[0] + total]]))
+        return pd.DataFrame({"angle_deg": np.rad2deg(ang), "direction": direction,
+                             "energy_j": e_cross, "loop_area_j": areas})
+
+    def speed_statistics(self, inertia) -> dict:
+        """Speed extremes and the mean speeds the texts define, for total inertia J (kg·m²).
+
+        From :meth:`speed` (the energy equation, time-mean speed = ``omega``):
+
+        * ``omega_max``, ``omega_min`` (rad/s) and their angles (deg);
+        * ``mean_extremes`` = (ω_max + ω_min)/2 — with it ΔE = J ω δ (ω_max − ω_min) holds
+          exactly and δ = ΔE/(J ω²) (Applied Mechanics vol. 2 §7);
+        * ``mean_time`` = 2π/(time of a revolution) — what a tachometer shows, = ``omega``;
+        * ``mean_angle`` = average of ω over the crank angle;
+        * ``mean_rms`` = √(mean of ω² over angle) — the kinetic-energy mean;
+        * ``coefficient_<mean>`` = (ω_max − ω_min)/that mean, for each.
+
+        Examples
+        --------
+        >>> a = np.arange(720) * 2 * np.pi / 720
+        >>> tm = TurningMoment.from_torque(a, 100 + 50 * np.sin(2 * a), omega=20.0)
+        >>> st = tm.speed_statistics(0.5)
+        >>> round(st["coefficient_mean_extremes"], 4), round(st["mean_time"], 12)
+        (0.2481, 20.0)
+        """
+        w = self.speed(inertia)
+        i_max, i_min = int(np.argmax(w)), int(np.argmin(w))
+        wmax, wmin = float(w[i_max]), float(w[i_min])
+        means = {"mean_extremes": 0.5 * (wmax + wmin),
+                 "mean_time": float(1.0 / np.mean(1.0 / w)),
+                 "mean_angle": float(np.mean(w)),
+                 "mean_rms": float(np.sqrt(np.mean(w * w)))}
+        out = dict(omega_max=wmax, omega_min=wmin,
+                   angle_max_deg=float(np.rad2deg(self.angle[i_max])),
+                   angle_min_deg=float(np.rad2deg(self.angle[i_min])), **means)
+        for k, v in means.items():
+            out[f"coefficient_{k}"] = (wmax - wmin) / v
+        return out
+
     def to_frame(self):
         """Columns crank_angle_deg, torque_nm, excess_energy_j."""
         import pandas as pd
@@ -199,8 +311,8 @@ class TurningMoment:
             fig = ax.figure
         deg = np.rad2deg(self.angle)
         ax.plot(deg, self.torque, label="engine torque")
-        ax.axhline(self.load_torque, color="k", lw=0.8, ls="--", label="load")
-        ax.fill_between(deg, self.torque, self.load_torque, alpha=0.2)
+        ax.plot(deg, self.load, color="k", lw=0.8, ls="--", label="load")
+        ax.fill_between(deg, self.torque, self.load, alpha=0.2)
         ax.set_xlabel("crank angle from cylinder 1 firing TDC (deg)")
         ax.set_ylabel("torque (N m)")
         ax.set_title(f"turning moment, ΔE = {self.fluctuation_of_energy:.4g} J")
@@ -220,8 +332,9 @@ def turning_moment(engine, *, omega, pressure=None, points_per_cycle=None, load_
         Cylinder pressure (default: the engine's ``[engine.combustion]`` synthetic trace).
     points_per_cycle : int, optional
         Samples over the cycle (default 2880 for 4-stroke: 0.25°).
-    load_torque : float, optional
-        Constant resisting torque, N·m (default the mean torque).
+    load_torque : float, array_like or callable, optional
+        Resisting torque, N·m: constant (default the mean engine torque), sampled at the
+        diagram's angles, or a callable of the crank angle (:func:`harmonic_load`).
 
     Returns
     -------
@@ -252,6 +365,85 @@ def turning_moment(engine, *, omega, pressure=None, points_per_cycle=None, load_
     angle = np.arange(n) * engine.cycle_angle / n
     torque = engine_torque(engine, angle, omega=w, pressure=pressure)
     return TurningMoment.from_torque(angle, torque, omega=w, load_torque=load_torque)
+
+
+def harmonic_load(*, mean, orders, amplitudes, phases_deg=None):
+    """A load torque with its own harmonics, T(φ) = T_m + Σ A_q cos(q φ − β_q), as a callable
+    of the crank angle φ (rad) for :meth:`TurningMoment.from_torque` / :func:`turning_moment`.
+
+    Parameters
+    ----------
+    mean : float
+        T_m, N·m.
+    orders : array_like
+        q, per crankshaft revolution (a driven machine turning at the crank speed has integer
+        orders; choose orders that repeat within the engine cycle).
+    amplitudes : array_like
+        A_q, N·m.
+    phases_deg : array_like, optional
+        β_q, deg (default 0).
+
+    Examples
+    --------
+    >>> load = harmonic_load(mean=100.0, orders=[2], amplitudes=[30.0])
+    >>> print(load(np.array([0.0, np.pi / 2])))
+    [130.  70.]
+    """
+    m = float(mean)
+    q = check_finite_array(orders, "orders", ndim=1, min_length=1, error=ModelError)
+    amp = check_finite_array(amplitudes, "amplitudes", ndim=1, error=ModelError)
+    if amp.size != q.size:
+        raise ModelError(f"amplitudes has {amp.size} values, orders {q.size}")
+    ph = np.zeros(q.size) if phases_deg is None else np.deg2rad(check_finite_array(
+        phases_deg, "phases_deg", ndim=1, error=ModelError))
+    if ph.size != q.size:
+        raise ModelError(f"phases_deg has {ph.size} values, orders {q.size}")
+
+    def load(angle):
+        a = np.asarray(angle, float)
+        return m + np.cos(np.multiply.outer(a, q) - ph) @ amp
+
+    return load
+
+
+def load_from_toml(path):
+    """The ``[load]`` table of a model file as a load-torque callable, or None if absent.
+
+    Keys: ``orders`` (per crank revolution), ``amplitudes_nm`` (N·m), ``phases_deg``
+    (optional) and ``mean_nm`` (optional: default the engine's mean torque, given at use as
+    the diagram's mean)::
+
+        [load]                  # e.g. a reciprocating compressor driven by the engine
+        orders = [1, 2]
+        amplitudes_nm = [350.0, 120.0]
+        phases_deg = [30.0, 0.0]
+
+    Returns
+    -------
+    callable or None
+        ``load(angle_rad, mean_nm)`` when ``mean_nm`` is not in the file, else
+        ``load(angle_rad)`` wrapped to ignore the mean argument.
+    """
+    from ._toml import load_toml
+
+    doc = load_toml(path)
+    t = doc.table("load", None)
+    if t is None:
+        return None
+    orders = t.numbers("orders", low=0.0, strict_low=True, unit="1", plausible=(1e-2, 100.0))
+    amps = t.numbers("amplitudes_nm", length=orders.size, low=0.0, unit="N*m",
+                     plausible=(1e-3, 1e8))
+    phases = t.numbers("phases_deg", None, length=orders.size, unit="deg",
+                       plausible=(1e-3, 720.0))
+    mean = t.number("mean_nm", None, unit="N*m", plausible=(1e-3, 1e8))
+    t.check_unknown(["description"])
+
+    def load(angle, mean_nm=None):
+        m = mean if mean is not None else (0.0 if mean_nm is None else mean_nm)
+        return harmonic_load(mean=m, orders=orders, amplitudes=amps, phases_deg=phases)(angle)
+
+    load.fixed_mean = mean
+    return load
 
 
 def flywheel_inertia(turning, coefficient, *, other_inertia=0.0):

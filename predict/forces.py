@@ -62,7 +62,8 @@ def _traces(engine, pressure):
 
 
 def gas_force(engine, crank_angle, pressure, *, crankcase_pressure=CRANKCASE_PRESSURE):
-    """Gas force on one piston, (p − p_cc)·A, N, positive towards the crank.
+    """Gas force on one piston, (p − p_cc)·A, N, positive towards the crank (double-acting
+    cylinders: minus the lower chamber's, see :meth:`Engine.net_gas_force`).
 
     Parameters
     ----------
@@ -93,7 +94,7 @@ def gas_force(engine, crank_angle, pressure, *, crankcase_pressure=CRANKCASE_PRE
     trace = as_trace(pressure, cycle=engine.cycle)
     pcc = check_nonnegative(crankcase_pressure, "crankcase_pressure", error=ModelError)
     ang = check_finite_array(crank_angle, "crank_angle", error=ModelError)
-    return (trace.at(ang) - pcc) * engine.piston_area
+    return engine.net_gas_force(trace, ang, pcc)
 
 
 def inertia_force(engine, theta, *, omega):
@@ -301,11 +302,14 @@ def cylinder_torque(engine, theta, *, omega, pressure=None, cylinder=1,
     ang = check_finite_array(theta, "theta", error=ModelError)
     flat = ang.reshape(-1)
     shaft = engine.shaft_angle(flat) + np.deg2rad(engine.firing_angles_deg()[i])
-    _, dx, d2x = (v[i] for v in engine.piston_motion(shaft))
+    x, dx, d2x = (v[i] for v in engine.piston_motion(shaft))
     force = engine.reciprocating_mass[i] * w * w * d2x
     if pressure is not None:
         force = force + gas_force(engine, flat, pressure, crankcase_pressure=crankcase_pressure)
     out = force * -dx
+    if getattr(engine, "rotary", False):
+        # rotary engine: the piston also circles the axis at radius x (½ m ω² x² energy)
+        out = out - engine.reciprocating_mass[i] * w * w * x * dx
     if engine.rod_inertia_correction[i] != 0.0:
         d1, d2 = (v[i] for v in engine.rod_motion(shaft))
         out = out - engine.rod_inertia_correction[i] * w * w * d1 * d2
@@ -352,16 +356,17 @@ def engine_torque(engine, theta, *, omega, pressure=None,
     w = _omega(omega)
     ang = check_finite_array(theta, "theta", error=ModelError)
     flat = ang.reshape(-1)
-    _, dx, d2x = engine.piston_motion(engine.shaft_angle(flat))
+    x, dx, d2x = engine.piston_motion(engine.shaft_angle(flat))
     force = engine.reciprocating_mass[:, None] * w * w * d2x
     traces = _traces(engine, pressure)
     if traces is not None:
         pcc = check_nonnegative(crankcase_pressure, "crankcase_pressure", error=ModelError)
         fire = np.deg2rad(engine.firing_angles_deg())
-        area = engine.piston_area
         for i, tr in enumerate(traces):
-            force[i] += (tr.at(flat - fire[i]) - pcc) * area
+            force[i] += engine.net_gas_force(tr, flat - fire[i], pcc)
     parts = force * -dx
+    if getattr(engine, "rotary", False):
+        parts = parts - engine.reciprocating_mass[:, None] * w * w * x * dx
     corr = engine.rod_inertia_correction
     if np.any(corr != 0.0):
         # residual couple ΔM = ΔJ φ̈ through virtual work: −ΔJ ω² φ' φ''

@@ -50,6 +50,7 @@ __all__ = [
     "order_for_tolerance",
     "acceleration_series",
     "AccelerationSeries",
+    "series_error",
 ]
 
 #: highest series order accepted (coefficients beyond it underflow float64 for λ ≤ 0.45)
@@ -231,7 +232,7 @@ def _exact_acceleration(th, r, l, e, w):
 
 
 def piston_acceleration(theta, *, crank_radius, rod_length, omega, max_order=None,
-                        pin_offset=0.0):
+                        pin_offset=0.0, lambda_terms=None):
     """Piston acceleration (m/s²), positive towards the cylinder head, at constant ω.
 
     Parameters
@@ -246,6 +247,9 @@ def piston_acceleration(theta, *, crank_radius, rod_length, omega, max_order=Non
         None: exact closed form. An integer N ≥ 1: the harmonic series
         −r ω² Σ_{n≤N} aₙ cos nθ truncated after order N (its error is at most
         :func:`truncation_bound` · r ω²).
+    lambda_terms : int, optional
+        With ``max_order``: keep only the lowest ``lambda_terms`` powers of λ in each
+        coefficient (``max_order=2, lambda_terms=1`` is the textbook cos θ + λ cos 2θ).
     pin_offset : float
         Piston-pin offset e, m (0: centred). With an offset the series has odd orders and sine
         terms; its coefficients then come from a 256-point FFT of the exact motion (absolute
@@ -276,9 +280,11 @@ def piston_acceleration(theta, *, crank_radius, rod_length, omega, max_order=Non
         return _out(_exact_acceleration(th, r, l, e, w), theta)
     n = check_int(max_order, "max_order", minimum=1, error=ModelError)
     if e == 0.0:
-        a = series_coefficients(r / l, n)
+        a = series_coefficients(r / l, n, lambda_terms=lambda_terms)
         acc = -r * w * w * (np.cos(th) + _clenshaw_even(a, th))
     else:
+        if lambda_terms is not None:
+            raise ModelError("lambda_terms needs a centred piston pin (pin_offset = 0)")
         cos_c, sin_c = _offset_coefficients(r, l, e, n)
         orders = np.arange(n + 1)
         ang = np.multiply.outer(th, orders)
@@ -307,7 +313,7 @@ def _check_lam(lam) -> float:
 
 
 @lru_cache(maxsize=256)
-def _sqrt_coefficients(lam: float, max_k: int) -> tuple[float, ...]:
+def _sqrt_coefficients(lam: float, max_k: int, terms: int | None = None) -> tuple[float, ...]:
     """Fourier cosine coefficients c_{2k}, k = 0..max_k, of sqrt(1 − λ² sin²θ).
 
     sqrt(1 − u) = Σ_m binom(½, m)(−u)^m and sin^{2m}θ = 4^{−m}[C(2m,m) + 2 Σ_k (−1)^k
@@ -323,6 +329,8 @@ def _sqrt_coefficients(lam: float, max_k: int) -> tuple[float, ...]:
         m = k
         # binom(1/2, m) (-1)^m = -|.| for m >= 1; build the term with floats step by step
         while True:
+            if terms is not None and m - k >= terms + (1 if k == 0 else 0):
+                break  # λ-power truncation: keep the lowest ``terms`` powers of λ
             if m == 0:
                 term = 1.0  # the constant 1 of sqrt(1 - u), k = 0 only
             else:
@@ -348,7 +356,13 @@ def _binom_half_signed(m: int) -> float:
     return -math.comb(2 * m, m) / ((2 * m - 1) * 4**m)
 
 
-def displacement_coefficients(lam, max_order):
+def _terms(lambda_terms):
+    if lambda_terms is None:
+        return None
+    return check_int(lambda_terms, "lambda_terms", minimum=1, error=ModelError)
+
+
+def displacement_coefficients(lam, max_order, *, lambda_terms=None):
     """Coefficients dₙ of x/l = λ cos θ + Σ dₙ cos nθ (n even, d₀ the mean) for e = 0.
 
     Returns an array indexed by order 0..max_order (odd entries besides order 1, which holds
@@ -364,7 +378,7 @@ def displacement_coefficients(lam, max_order):
     n = check_int(max_order, "max_order", minimum=0, error=ModelError)
     if n > MAX_SERIES_ORDER:
         raise ModelError(f"max_order={n} must be <= {MAX_SERIES_ORDER}")
-    c = _sqrt_coefficients(lam, n // 2)
+    c = _sqrt_coefficients(lam, n // 2, _terms(lambda_terms))
     out = np.zeros(n + 1)
     out[0::2] = c[: len(out[0::2])]
     if n >= 1:
@@ -372,8 +386,9 @@ def displacement_coefficients(lam, max_order):
     return out
 
 
-def series_coefficients(lam, max_order):
-    """Exact acceleration-series coefficients aₙ, n = 0..max_order, for a centred pin.
+def series_coefficients(lam, max_order, *, lambda_terms=None):
+    """Acceleration-series coefficients aₙ, n = 0..max_order, for a centred pin: exact, or each
+    truncated after ``lambda_terms`` powers of λ (the textbook fidelity).
 
     a(θ) = −r ω² Σₙ aₙ cos nθ with a₀ = 0, a₁ = 1, odd aₙ = 0 (n ≥ 3) and
     a_{2k} = (2k)² c_{2k} / λ, c_{2k} the Fourier coefficients of sqrt(1 − λ² sin²θ).
@@ -386,6 +401,10 @@ def series_coefficients(lam, max_order):
         λ = r / l, 0 < λ < 1.
     max_order : int
         Highest order returned (≤ 400).
+    lambda_terms : int, optional
+        None (default): each coefficient summed to full accuracy. k: only the k lowest powers
+        of λ of each coefficient (k = 1 with ``max_order=2`` is the textbook
+        a = r ω² (cos θ + λ cos 2θ)); the error is :func:`series_error`.
 
     Returns
     -------
@@ -407,7 +426,7 @@ def series_coefficients(lam, max_order):
     n = check_int(max_order, "max_order", minimum=0, error=ModelError)
     if n > MAX_SERIES_ORDER:
         raise ModelError(f"max_order={n} must be <= {MAX_SERIES_ORDER}")
-    c = _sqrt_coefficients(lam, n // 2)
+    c = _sqrt_coefficients(lam, n // 2, _terms(lambda_terms))
     a = np.zeros(n + 1)
     if n >= 1:
         a[1] = 1.0
@@ -564,3 +583,23 @@ def acceleration_series(lam, *, max_order=None, tol=None):
     return AccelerationSeries(lam=lam, max_order=n, coefficients=series_coefficients(lam, n),
                               error_bound=truncation_bound(lam, n))
 
+
+
+def series_error(lam, *, max_order, lambda_terms=None, points=3600) -> float:
+    """Largest error of a truncated piston-acceleration series relative to r ω².
+
+    max over θ of |a_series − a_exact| / (r ω²), on ``points`` crank angles (TDC included,
+    where the truncation error peaks), against the exact closed form.
+
+    Examples
+    --------
+    >>> print(f"{series_error(0.25, max_order=2, lambda_terms=1):.3e}")   # cos θ + λ cos 2θ
+    8.199e-03
+    """
+    lam = _check_lam(lam)
+    n = check_int(max_order, "max_order", minimum=1, error=ModelError)
+    th = np.arange(check_int(points, "points", minimum=8, error=ModelError)) * 2 * np.pi / points
+    a = series_coefficients(lam, n, lambda_terms=lambda_terms)
+    approx = -(np.cos(th) + _clenshaw_even(a, th))
+    exact = _exact_acceleration(th, lam, 1.0, 0.0, 1.0) / lam
+    return float(np.max(np.abs(approx - exact)))

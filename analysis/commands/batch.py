@@ -10,12 +10,19 @@ made of the record's SHA-256, the model file's SHA-256 and the options, written 
 a re-run skips records whose row is cached (``--no-cache`` recomputes everything). Failed
 records are not cached, so a re-run retries them.
 
+Campaign store: ``--store campaign.duckdb`` also writes every record's full results (identity,
+settings, matched criticals, resonances, order amplitudes at reference speeds, steady-state
+tables, checks and verdict, timing, version) into the DuckDB store of
+:mod:`analysis.campaign.store`, one transaction per record as it completes, written by this
+process alone (workers send their results back); a run already in the store with the same
+settings is skipped, so an interrupted batch resumes from the store.
+
 Nothing lost. Every path is resolved before the work is submitted (a worker may run in
-another directory); no output (summary, cache, report) may be a record, a record's sidecar
-or the model, whatever ``--overwrite`` says; reports are named after each record's path
-relative to the records' common folder (``a/run.h5`` → ``DIR/a/run.html``, ``b/run.h5`` →
-``DIR/b/run.html``; ``run.h5`` beside ``run.csv`` → ``run.h5.html``), so no two records share
-a report, and an existing report is refused before any work unless ``--overwrite``.
+another directory); no output (summary, cache, report, store) may be a record, a record's
+sidecar or the model, whatever ``--overwrite`` says; reports are named after each record's
+path relative to the records' common folder (``a/run.h5`` → ``DIR/a/run.html``, ``b/run.h5``
+→ ``DIR/b/run.html``; ``run.h5`` beside ``run.csv`` → ``run.h5.html``), so no two records
+share a report, and an existing report is refused before any work unless ``--overwrite``.
 
 Cluster. ``--scheduler ADDRESS`` is checked before anything is submitted: a scheduler that
 does not answer within a few seconds is a one-line error.
@@ -47,6 +54,9 @@ def configure(parser) -> None:
     parser.add_argument("--workers", type=integer(low=1, high=1024), default=None,
                         help="threads for the local scheduler (default: dask's choice)")
     parser.add_argument("--no-cache", action="store_true", help="ignore and do not write cache")
+    parser.add_argument("--store", metavar="FILE.duckdb", default=None,
+                        help="also append every record's results to this campaign store "
+                             "(created if missing; re-runs replace, never duplicate)")
     parser.add_argument("--reports", metavar="DIR", default=None,
                         help="also write one HTML report per record into DIR (existing "
                              "reports are replaced only with --overwrite)")
@@ -121,12 +131,14 @@ def cache_key(record_path, model_sha, options, report=None) -> str:
 
 
 def process_one(record_path, model_path, options, cache_file=None, report_path=None,
-                overwrite=False, display=None) -> dict:
+                overwrite=False, store_run=None, display=None) -> dict:
     """Analyse one record; return its summary row (``status`` 'ok' or 'error').
 
     Never raises for a bad record: the error is returned in the row (``error``) so the batch
     goes on. Paths are absolute (resolved before submission); ``display`` is the record as
-    the user named it (the row's ``record``).
+    the user named it (the row's ``record``). With ``store_run`` (dict with ``run_id``,
+    ``settings``, ``settings_key``, ``model_sha256``) the row carries the record's store
+    document under ``"_document"``.
     """
     import json
     import logging
@@ -155,11 +167,29 @@ def process_one(record_path, model_path, options, cache_file=None, report_path=N
             build_report(result, record_path=record_path, model_path=model_path).save(
                 report_path, overwrite=overwrite, option="--overwrite")
             row["report"] = str(report_path)
+        if store_run is not None:
+            from crankbench.analysis.campaign.documents import document_from_result
+
+            document = document_from_result(
+                result, record_path=record_path, run_id=store_run["run_id"],
+                settings=store_run["settings"], model_path=model_path,
+                model_sha256=store_run["model_sha256"],
+                settings_key_=store_run["settings_key"], report_path=row.get("report"),
+                elapsed_s=time.perf_counter() - t0)
     except Exception as exc:  # noqa: BLE001 - a failing record is reported, never fatal
         log.warning("%s: failed: %s", display, exc)
-        return {"record": display, "status": "error",
-                "error": f"{type(exc).__name__}: {exc}".replace(str(record_path), display),
-                "elapsed_s": time.perf_counter() - t0}
+        error = {"record": display, "status": "error",
+                 "error": f"{type(exc).__name__}: {exc}".replace(str(record_path), display),
+                 "elapsed_s": time.perf_counter() - t0}
+        if store_run is not None:
+            from crankbench.analysis.campaign.documents import document_from_error
+
+            error["_document"] = document_from_error(
+                record_path=record_path, run_id=store_run["run_id"], error=error["error"],
+                settings=store_run["settings"], record_sha256=store_run["record_sha256"],
+                model_path=model_path, model_sha256=store_run["model_sha256"],
+                settings_key_=store_run["settings_key"], elapsed_s=error["elapsed_s"])
+        return error
     row["elapsed_s"] = time.perf_counter() - t0
     if cache_file is not None:
         cache_file = Path(cache_file)
@@ -168,6 +198,9 @@ def process_one(record_path, model_path, options, cache_file=None, report_path=N
 
         with atomic_path(cache_file, overwrite=True) as tmp:
             tmp.write_text(json.dumps(to_jsonable(row), indent=1), encoding="utf-8")
+    if store_run is not None:
+        document["runs"][0]["elapsed_s"] = row["elapsed_s"]
+        row["_document"] = document
     return row
 
 
@@ -228,7 +261,8 @@ def _client(distributed, address):
 
 
 def _compute(tasks, *, scheduler, workers, progress):
-    """Run dask.delayed tasks locally (threads) or on a distributed cluster."""
+    """Run dask.delayed tasks locally (threads) or on a distributed cluster; ``progress(row)``
+    is called in this process as each record's row arrives."""
     import dask
 
     if scheduler:
@@ -242,7 +276,7 @@ def _compute(tasks, *, scheduler, workers, progress):
             rows = []
             for fut in distributed.as_completed(futures):
                 rows.append(fut.result())
-                progress()
+                progress(rows[-1])
             return rows
         finally:
             client.close()
@@ -252,7 +286,7 @@ def _compute(tasks, *, scheduler, workers, progress):
         def _posttask(self, key, result, dsk, state, worker_id):
             name = key[0] if isinstance(key, tuple) else key
             if str(name).startswith("record-"):
-                progress()
+                progress(result)
 
     with _Bar():
         return list(dask.compute(*tasks, scheduler="threads", num_workers=workers))
@@ -278,20 +312,15 @@ def _cached_row(cache_file, report_path):
 
 
 def run(args) -> int:
-    import json
     import logging
-    import os
     from pathlib import Path
 
-    import dask
-    import pandas as pd
     from tqdm import tqdm
 
-    from crankbench.analysis._output import print_json, print_table, to_jsonable
-    from crankbench.analysis.commands._files import check_outputs, model_inputs, record_inputs
+    from crankbench.analysis._output import to_jsonable
     from crankbench.analysis.commands._pipeline_cli import check_common, options_from_args
     from crankbench.analysis.report import file_sha256
-    from crankbench.measure._atomic import atomic_path, check_overwrite
+    from crankbench.measure._atomic import check_overwrite
     from crankbench.predict.errors import ConfigError
 
     log = logging.getLogger("crankbench")
@@ -305,66 +334,148 @@ def run(args) -> int:
             not Path(args.reports).is_dir():
         raise ConfigError(f"--reports {args.reports}: exists and is not a folder")
     files = expand(args.pattern)
-    # every path absolute before anything is submitted: a worker may run elsewhere
-    absolute = [Path(os.path.abspath(f)) for f in files]
-    model_abs = Path(os.path.abspath(model))
-    cache_dir = Path(os.path.abspath(out.with_name(out.name + ".cache")))
-    reports = None
-    if args.reports is not None:
-        base = Path(os.path.abspath(args.reports))
-        reports = [base / name for name in report_names(absolute)]
-    inputs = [pair for f in absolute for pair in record_inputs(f)] + model_inputs(model_abs)
-    outputs = [(out, f"-o {out}")]
-    if reports is not None:
-        outputs += [(r, f"the report of {f} ({r})") for f, r in zip(files, reports)]
-    check_outputs(outputs, inputs)
-    for f in absolute:
-        if same_tree(cache_dir, f):
-            raise ConfigError(f"record {f} lies in the batch cache {cache_dir}; move it or "
-                              "choose another -o")
+    plan = _plan(files, model, out, args)          # every output checked against every input
     check_overwrite(out, args.overwrite, option="--overwrite")
-    check_common(args, records=absolute[:1], model=model_abs)
+    check_common(args, records=plan["records"][:1], model=plan["model"])
     if args.scheduler:
         from crankbench.predict._validate import require
 
         require("distributed", extra="distributed", feature="crankbench batch --scheduler")
         check_scheduler(args.scheduler)
+    model = plan["model"]                          # absolute from here on
     options = options_from_args(args)  # load per record from its truth when not given
     if options["load"] is not None:
         options["load"] = dict(imep=options["load"].imep, law=options["load"].law,
                                reference_rpm=options["load"].reference_rpm)
-    model_sha = file_sha256(model_abs)
-    rows, tasks, existing = [], [], []
-    for i, (f, path) in enumerate(zip(files, absolute)):
-        report = None if reports is None else reports[i]
+    model_sha = file_sha256(model)
+    cache_dir = plan["cache_dir"]
+    store, store_settings, skey, done = None, None, None, set()
+    if args.store:
+        from crankbench.analysis.campaign.documents import settings_key
+        from crankbench.analysis.campaign.store import Store
+
+        store_path = Path(args.store)
+        store_settings = {**to_jsonable(options), "model": model.name}
+        skey = settings_key(store_settings, model_sha)
+        if store_path.exists():   # what is done, without creating anything yet
+            with Store(store_path, read_only=True) as peek:
+                done = peek.done_run_ids()
+    rows, tasks = [], []
+    # every task planned (and existing reports refused) before the store is created
+    _queue(files, args, options, model, model_sha, cache_dir, rows, tasks, bool(args.store),
+           store_settings, skey, done, plan)
+    if args.store:
+        store = Store(store_path, create=True)
+    try:
+        log.info("%d records: %d cached or stored, %d to run", len(files), len(rows),
+                 len(tasks))
+        quiet = args.json or log.getEffectiveLevel() > logging.INFO
+        bar = tqdm(total=len(tasks), desc="batch", unit="record", leave=False, disable=quiet)
+
+        def arrived(row):
+            bar.update(1)
+            document = row.pop("_document", None) if isinstance(row, dict) else None
+            if store is not None and document is not None:
+                run_id = store.put(document)
+                log.info("%s: stored as run %s in %s", row.get("record"), run_id, args.store)
+
+        try:
+            if tasks:
+                rows.extend(_compute(tasks, scheduler=args.scheduler, workers=args.workers,
+                                     progress=arrived))
+        finally:
+            bar.close()
+    finally:
+        if store is not None:
+            store.close()
+    _write_summary(rows, files, out, args)
+    return _print_summary(rows, files, out, args)
+
+
+def _plan(files, model, out, args) -> dict:
+    """Absolute paths of every input and output, checked: no output is an input (records,
+    sidecars, the model and the files it names) or another output."""
+    import os
+    from pathlib import Path
+
+    from crankbench.analysis.commands._files import check_outputs, model_inputs, record_inputs
+    from crankbench.predict.errors import ConfigError
+
+    # every path absolute before anything is submitted: a worker may run elsewhere
+    records = [Path(os.path.abspath(f)) for f in files]
+    model = Path(os.path.abspath(model))
+    cache_dir = Path(os.path.abspath(out.with_name(out.name + ".cache")))
+    reports = [None] * len(records)
+    if args.reports is not None:
+        base = Path(os.path.abspath(args.reports))
+        reports = [base / name for name in report_names(records)]
+    inputs = [pair for f in records for pair in record_inputs(f)] + model_inputs(model)
+    outputs = [(out, f"-o {out}")]
+    if args.store:
+        outputs.append((Path(args.store), f"--store {args.store}"))
+    if args.reports is not None:
+        outputs += [(r, f"the report of {f} ({r})") for f, r in zip(files, reports)]
+    check_outputs(outputs, inputs)
+    for f in records:
+        if same_tree(cache_dir, f):
+            raise ConfigError(f"record {f} lies in the batch cache {cache_dir}; move it or "
+                              "choose another -o")
+    return {"records": records, "model": model, "cache_dir": cache_dir, "reports": reports}
+
+
+def _queue(files, args, options, model, model_sha, cache_dir, rows, tasks, store: bool,
+           store_settings, skey, done, plan) -> None:
+    """Rows of cached/stored records into ``rows``; a dask task per other record (absolute
+    paths); existing reports of records to run are refused here, before any work."""
+    import dask
+
+    from crankbench.analysis.report import file_sha256
+
+    existing = []
+    for f, path, report in zip(files, plan["records"], plan["reports"]):
+        store_run = None
+        if store:
+            from crankbench.analysis.campaign.store import run_id_for
+
+            record_sha = file_sha256(path)
+            run_id = run_id_for(record_sha, skey)
+            if run_id in done:
+                rows.append({"record": str(f), "status": "stored", "run_id": run_id})
+                continue
+            store_run = {"run_id": run_id, "settings": store_settings, "settings_key": skey,
+                         "model_sha256": model_sha, "record_sha256": record_sha}
         cache_file = None
         if not args.no_cache:
-            key = cache_key(path, model_sha, options, None if report is None else report)
+            key = cache_key(path, model_sha, options, report)
             cache_file = cache_dir / f"{path.stem}-{key}.json"
-            row = _cached_row(cache_file, report)
+            # with a store, the store is what resumes (a cached row has no full results)
+            row = None if store else _cached_row(cache_file, report)
             if row is not None:
                 row.update(status="cached", record=str(f))
                 rows.append(row)
                 continue
         if report is not None and report.exists() and not args.overwrite:
             existing.append(report)
-        task = dask.delayed(process_one, pure=False, name=f"record-{i}-{path.name}")(
-            str(path), str(model_abs), options, None if cache_file is None else str(cache_file),
-            None if report is None else str(report), args.overwrite, str(f))
+        # the key names the record (the progress callback and the store writer look for it)
+        task = dask.delayed(process_one, pure=False)(
+            str(path), str(model), options, None if cache_file is None else str(cache_file),
+            None if report is None else str(report), args.overwrite, store_run, str(f),
+            dask_key_name=f"record-{len(tasks)}-{path.name}")
         tasks.append(task)
     if existing:  # refused before any work, never a good record marked failed
         shown = ", ".join(str(p) for p in existing[:3]) + (" ..." if len(existing) > 3 else "")
         raise FileExistsError(f"{len(existing)} report(s) exist ({shown}); pass --overwrite "
                               "to replace them")
-    log.info("%d records: %d cached, %d to run", len(files), len(rows), len(tasks))
-    quiet = args.json or log.getEffectiveLevel() > logging.INFO
-    bar = tqdm(total=len(tasks), desc="batch", unit="record", leave=False, disable=quiet)
-    try:
-        if tasks:
-            rows.extend(_compute(tasks, scheduler=args.scheduler, workers=args.workers,
-                                 progress=lambda: bar.update(1)))
-    finally:
-        bar.close()
+
+
+def _write_summary(rows, files, out, args) -> None:
+    import json
+
+    import pandas as pd
+
+    from crankbench.analysis._output import to_jsonable
+    from crankbench.measure._atomic import atomic_path
+
     order = {str(f): i for i, f in enumerate(files)}
     rows.sort(key=lambda r: order.get(r.get("record"), len(order)))
     table = pd.DataFrame(to_jsonable(rows))
@@ -373,6 +484,14 @@ def run(args) -> int:
             tmp.write_text(json.dumps(to_jsonable(rows), indent=1), encoding="utf-8")
         else:
             table.to_csv(tmp, index=False)
+
+
+def _print_summary(rows, files, out, args) -> int:
+    import pandas as pd
+
+    from crankbench.analysis._output import print_json, print_table, to_jsonable
+
+    table = pd.DataFrame(to_jsonable(rows))
     failed = table[table["status"] == "error"] if len(table) else table
     if args.json:
         print_json({"summary": str(out), "records": rows})
@@ -393,3 +512,4 @@ def same_tree(folder, path) -> bool:
 
     folder, path = os.path.realpath(folder), os.path.realpath(path)
     return path == folder or path.startswith(folder.rstrip(os.sep) + os.sep)
+

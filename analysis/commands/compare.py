@@ -21,6 +21,9 @@ def configure(parser) -> None:
     parser.add_argument("--strict", action="store_true",
                         help="exit with status 1 unless the overall verdict is a pass (a "
                              "failed or inconclusive check)")
+    parser.add_argument("--store", metavar="FILE.duckdb", default=None,
+                        help="also write the results into this campaign store (created if "
+                             "missing; the same record and settings replace their rows)")
     parser.add_argument("--json", action="store_true", help="print JSON instead of tables")
 
 
@@ -37,11 +40,25 @@ def run(args) -> int:
     check_common(args, records=[args.record], model=args.model)   # before any work
     bar, progress = progress_bar(desc="compare", disable=args.json or
                                  log.getEffectiveLevel() > logging.INFO)
+    from pathlib import Path
+
+    from crankbench.predict.errors import ConfigError
+
+    if args.store and Path(args.store).resolve() in (Path(args.record).resolve(),
+                                                       Path(args.model).resolve()):
+        raise ConfigError(f"--store {args.store!r} is one of the inputs")
+    options = options_from_args(args, args.record)
     try:
-        result = analyse(args.record, args.model, progress=progress,
-                         **options_from_args(args, args.record))
+        result = analyse(args.record, args.model, progress=progress, **options)
     finally:
         bar.close()
+    if args.store:
+        from crankbench.analysis.campaign.documents import store_result
+
+        run_id = store_result(args.store, result, record_path=args.record,
+                              model_path=args.model, settings=options,
+                              elapsed_s=float(sum(result.timings.values())))
+        log.info("stored as run %s in %s", run_id, args.store)
     comp = result.comparison
     limits = [c.as_dict() for c in result.limits]
     if args.json:

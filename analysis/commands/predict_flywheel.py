@@ -47,7 +47,14 @@ def run(args) -> int:
     pressure = synthetic_pressure(engine, imep=args.imep) if args.imep else synthetic_pressure(
         engine)
     omega = args.speed_rpm * np.pi / 30
+    from crankbench.predict.flywheel import load_from_toml
+
     tm = turning_moment(engine, omega=omega, pressure=pressure)
+    load = load_from_toml(args.model)          # optional [load] table: load with harmonics
+    if load is not None:
+        mean = tm.mean_torque if load.fixed_mean is None else load.fixed_mean
+        tm = turning_moment(engine, omega=omega, pressure=pressure,
+                            load_torque=lambda a: load(a, mean))
     radius = args.radius or 2.5 * engine.stroke
     design = design_flywheel(tm, coefficient=args.coefficient, outer_radius=radius,
                              density=args.density, shape=args.shape)
@@ -62,8 +69,9 @@ def run(args) -> int:
         summary["inertia_kgm2"] = args.inertia
         summary["coefficient_of_speed_fluctuation"] = tm.speed_fluctuation(args.inertia)
     frame = design.to_frame()
+    crossings = tm.crossings()
     if args.json:
-        print_json({**summary, "flywheel": frame})
+        print_json({**summary, "flywheel": frame, "crossings": crossings})
         return 0
     import pandas as pd
 
@@ -71,4 +79,6 @@ def run(args) -> int:
         columns={"index": "quantity", 0: "value"}), title=f"{engine.name}: turning moment")
     print()
     print_table(frame, title=f"flywheel for coefficient {args.coefficient:g}")
+    print()
+    print_table(crossings, title="crossings of the turning moment with the load")
     return 0

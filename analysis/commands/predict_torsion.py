@@ -107,10 +107,11 @@ def run(args) -> int:
     print_table(crit_shown, title=f"\nCritical speeds {lo:g}-{hi:g} rpm "
                                   f"(relative vector sum >= {args.min_vector_sum:g})")
     if forced_ok:
-        cols = ["mode", "order", "speed_rpm", "vector_sum", "node", "energy_balance_deg",
-                "exact_deg", "method_error", "dynamic_magnifier", "max_stress_mpa", "section"]
-        print_table(out["resonances"][cols], title="\nResonance amplitudes (energy balance vs "
-                                                    "exact damped solve)")
+        cols = ["mode", "order", "speed_rpm", "vector_sum", "node", "amplitude_deg",
+                "energy_balance_deg", "method_error", "dynamic_magnifier", "max_stress_mpa",
+                "section"]
+        print_table(out["resonances"][cols], title="\nResonance amplitudes (exact damped "
+                                                    "solve; classical energy balance beside)")
         print_table(out["worst_stresses"], title="\nWorst superposed stresses")
         if "limits" in out:
             lim = out["limits"]

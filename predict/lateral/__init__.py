@@ -18,6 +18,9 @@ Submodules, imported on use so ``import predict.lateral`` does no work:
     Result objects (modes, critical speeds, Campbell diagram, unbalance response).
 ``toml``
     The ``[rotor]`` model-file loader.
+``journal``
+    Plain journal bearings: short-bearing closed form and finite-length Reynolds solution,
+    eccentricity/Sommerfeld relation, stiffness and damping coefficients as a ``Bearing``.
 """
 
 from .._lazy import lazy_names
@@ -46,6 +49,8 @@ _LAZY = {
     "lumped_exact": "approx",
     "load_rotor": "toml",
     "RotorModel": "toml",
+    "JournalBearing": "journal",
+    "BearingCoefficients": "journal",
 }
 
 __getattr__, __dir__, __all__ = lazy_names(__name__, _LAZY)

@@ -174,6 +174,17 @@ class ApproxResult:
     fidelity: str = ""
     x: np.ndarray = field(default_factory=lambda: np.empty(0))
     shape: np.ndarray = field(default_factory=lambda: np.empty(0))
+    history: tuple = ()
+
+    def iterates(self):
+        """Stodola's iterates one by one: iteration, omega (Rayleigh quotient), lower and
+        upper (Collatz bracket), rad/s, and speed_rpm (empty for the other methods)."""
+        import pandas as pd
+
+        frame = pd.DataFrame(list(self.history),
+                             columns=["iteration", "omega", "lower", "upper"])
+        frame["speed_rpm"] = frame["omega"] * 30.0 / np.pi
+        return frame
 
     @property
     def frequency_hz(self) -> float:
@@ -385,7 +396,7 @@ def lumped_exact(shaft: MassShaft, *, n_segments: int = 20) -> ApproxResult:
 
 
 def stodola(shaft: MassShaft, *, rtol: float = 1e-6, max_iter: int = 200,
-            n_segments: int = 20) -> ApproxResult:
+            n_segments: int = 20, iterations: int | None = None) -> ApproxResult:
     """Stodola's iteration of the deflection curve with a guaranteed two-sided bracket.
 
     Start from the static deflection under the weights; repeat yₖ₊₁ = α M yₖ (deflection
@@ -403,11 +414,15 @@ def stodola(shaft: MassShaft, *, rtol: float = 1e-6, max_iter: int = 200,
         Iteration limit; :class:`~predict.errors.AnalysisError` if not converged.
     n_segments : int
         Lumping of the shaft mass (ignored for a massless shaft).
+    iterations : int, optional
+        The textbook fidelity: stop after exactly this many iterates (1-3 by hand), whatever
+        the bracket; the bracket then states the error. ``rtol``/``max_iter`` are ignored.
 
     Returns
     -------
     ApproxResult
-        ``bound="bracket"`` with ``lower``/``upper`` the Collatz bracket of the lumped model.
+        ``bound="bracket"`` with ``lower``/``upper`` the Collatz bracket of the lumped model;
+        :meth:`ApproxResult.iterates` lists every iterate.
 
     References
     ----------
@@ -425,21 +440,30 @@ def stodola(shaft: MassShaft, *, rtol: float = 1e-6, max_iter: int = 200,
     s = _check(shaft)
     rtol = check_range(rtol, "rtol", 0.0, 0.5, inclusive=(False, True), error=ModelError)
     max_iter = check_int(max_iter, "max_iter", minimum=1, error=ModelError)
+    fixed = None if iterations is None else check_int(iterations, "iterations", minimum=1,
+                                                       error=ModelError)
     m, x, alpha = _lumped_system(s, n_segments)
     d = alpha * m[None, :]
     y = d @ np.ones_like(m)  # static deflection under the weights (per unit g)
     lo = hi = est = float("nan")
-    for k in range(1, max_iter + 1):
+    history = []
+    for k in range(1, (fixed or max_iter) + 1):
         y_next = d @ y
         est = float(np.sqrt(np.dot(y_next * m, y) / np.dot(y_next * m, y_next)))
         ratio = y_next / y
         lo, hi = float(np.sqrt(1 / ratio.max())), float(np.sqrt(1 / ratio.min()))
+        history.append((k, est, lo, min(hi, est)))
         y = y_next / np.max(np.abs(y_next))
-        if (hi - lo) / (2 * est) <= rtol:
+        if fixed is None and (hi - lo) / (2 * est) <= rtol:
             break
     else:
+        if fixed is not None:
+            fid = f"n_segments={n_segments}" if s.mass_per_length > 0 else "point masses"
+            return ApproxResult("stodola", est, "bracket", lo, min(hi, est), iterations=fixed,
+                                fidelity=f"{fid}, {fixed} iterate(s)", x=x, shape=y,
+                                history=tuple(history))
         raise AnalysisError(f"stodola did not reach rtol={rtol:g} in max_iter={max_iter} "
                             f"iterations (bracket {lo:.6g}..{hi:.6g} rad/s); raise max_iter")
     fid = f"n_segments={n_segments}" if s.mass_per_length > 0 else "point masses"
     return ApproxResult("stodola", est, "bracket", lo, min(hi, est), iterations=k,
-                        fidelity=f"{fid}, rtol={rtol:g}", x=x, shape=y)
+                        fidelity=f"{fid}, rtol={rtol:g}", x=x, shape=y, history=tuple(history))

@@ -29,6 +29,9 @@ File layout (SI units; rpm only in keys that say so)::
     kxx = 1.0e6                    # N/m; rigid = true for an ideal pin, clamp = true to fix slopes
     kyy = 1.0e6
     cxx = 0.0                      # N·s/m; also kxy, kyx, cxy, cyx, cyy
+    # or a plain journal bearing, coefficients at a design speed and static load:
+    # [rotor.bearings.journal]  diameter, length, radial_clearance (m), viscosity (Pa·s),
+    #                           load (N, acting along −y), speed_rpm, model = "finite"|"short"
 
     [analysis]                     # optional
     speed_range_rpm = [0.0, 12000.0]
@@ -195,6 +198,10 @@ def load_rotor(path: str | Path) -> RotorModel:
             d.fail(None, str(exc))
     bearings = []
     for b in r.tables("bearings", []):
+        jt = b.table("journal", None)
+        if jt is not None:
+            bearings.append(_journal_bearing(b, jt))
+            continue
         rigid = _bool(b, "rigid", False)
         inf = math.inf
         kxx = inf if rigid else b.number("kxx", low=0.0, **_BEARING_K)
@@ -242,3 +249,25 @@ def load_rotor(path: str | Path) -> RotorModel:
     return RotorModel(rotor=rotor, speed_range_rpm=(float(rng[0]), float(rng[1])),
                       n_speeds=n_speeds, orders=tuple(float(o) for o in orders),
                       n_modes=n_modes, unbalances=tuple(unbalances), source=str(path))
+
+
+def _journal_bearing(b: Table, jt: Table):
+    """A ``[rotor.bearings.journal]`` entry: coefficients of the film at its design point."""
+    from .journal import BEARING_MODELS, JournalBearing
+
+    position = b.number("position", low=0.0, **_POSITION)
+    b.check_unknown(["journal"])
+    kw = dict(diameter=jt.positive("diameter", **_DIAMETER),
+              length=jt.positive("length", unit="m", plausible=(1e-3, 5.0)),
+              radial_clearance=jt.positive("radial_clearance", unit="m",
+                                           plausible=(1e-7, 1e-2)),
+              viscosity=jt.positive("viscosity", unit="Pa*s", plausible=(1e-5, 10.0)),
+              model=jt.string("model", "finite", options=BEARING_MODELS))
+    load = jt.positive("load", unit="N", plausible=(1e-2, 1e8))
+    speed = jt.positive("speed_rpm", unit="rpm", plausible=(1.0, 1e6))
+    jt.check_unknown()
+    try:
+        co = JournalBearing(**kw).coefficients(load=(0.0, -load), omega=speed * math.pi / 30)
+    except (ModelError, ValueError) as exc:
+        jt.fail(None, str(exc))
+    return co.bearing(position)

@@ -15,7 +15,9 @@ from .._lazy import lazy_names
 
 __all__ = ["chain", "TorsionalSystem", "Modes", "from_toml", "forced_response",
            "ForcedResponse", "ShaftLine", "resonance_amplitudes", "engine_excitation",
-           "Excitation", "StressLimits", "check_stress"]
+           "Excitation", "StressLimits", "check_stress", "CrankThrow", "throw_stiffness",
+           "uniform_shaft_frequencies", "friction_damper_response", "friction_dissipation",
+           "optimum_slip_torque"]
 
 _LAZY = {
     "chain": "system",
@@ -30,6 +32,12 @@ _LAZY = {
     "Excitation": "excitation",
     "StressLimits": "stress",
     "check_stress": "stress",
+    "CrankThrow": "throws",
+    "throw_stiffness": "throws",
+    "uniform_shaft_frequencies": "throws",
+    "friction_damper_response": "friction",
+    "friction_dissipation": "friction",
+    "optimum_slip_torque": "friction",
 }
 
 __getattr__, __dir__, _names = lazy_names(__name__, _LAZY)

@@ -32,7 +32,8 @@ from ..errors import ModelError
 __all__ = ["add_viscous_damper", "add_tuned_damper", "add_pendulum_absorber",
            "add_friction_damper", "friction_equivalent_damping", "den_hartog_optimum",
            "lanchester_optimum", "DamperTuning", "optimum_tuned_damper",
-           "optimum_viscous_damper"]
+           "optimum_viscous_damper", "fixed_points", "tuned_absorber_response",
+           "pendulum_length", "pendulum_order"]
 
 
 def add_viscous_damper(line, node: str, *, ring_inertia: float, damping: float,
@@ -227,3 +228,97 @@ def optimum_viscous_damper(system, node, *, ring_inertia: float, mode: int = 1) 
     zeta, mag = lanchester_optimum(mu)
     return DamperTuning("viscous (Lanchester/Houdaille)", mu, w / (2 * np.pi), 0.0,
                         2 * zeta * jd * w, np.nan, zeta, mag)
+
+
+def tuned_absorber_response(frequency, *, mass_ratio, frequency_ratio, damping_ratio):
+    """Main-mass amplitude over its static deflection with a damped tuned absorber.
+
+    Den Hartog (1956) §3.3: with g = ω/ω_n (forcing over main-system frequency), f = ω_a/ω_n,
+    μ = J_a/J and ζ = c/(2 J_a ω_n),
+
+    ``|x/x_st| = √[(2ζg)² + (g² − f²)²]
+    / √[(2ζg)² (g² − 1 + μg²)² + (μf²g² − (g² − 1)(g² − f²))²]``.
+
+    Parameters
+    ----------
+    frequency : float or array_like
+        g, dimensionless forcing frequency.
+    mass_ratio, frequency_ratio, damping_ratio : float
+        μ, f, ζ.
+
+    Examples
+    --------
+    >>> round(float(tuned_absorber_response(1.0, mass_ratio=0.25, frequency_ratio=1.0,
+    ...                                     damping_ratio=0.0)), 12)
+    0.0
+    """
+    g = np.asarray(frequency, float)
+    mu = check_positive(mass_ratio, "mass_ratio", error=ModelError)
+    f = check_positive(frequency_ratio, "frequency_ratio", error=ModelError)
+    z = check_nonnegative(damping_ratio, "damping_ratio", error=ModelError)
+    g2 = g * g
+    num = (2 * z * g) ** 2 + (g2 - f * f) ** 2
+    den = ((2 * z * g) ** 2 * (g2 - 1 + mu * g2) ** 2
+           + (mu * f * f * g2 - (g2 - 1) * (g2 - f * f)) ** 2)
+    out = np.sqrt(num / den)
+    return float(out) if out.ndim == 0 else out
+
+
+def fixed_points(*, mass_ratio, frequency_ratio):
+    """Den Hartog's fixed points P and Q of the damped tuned absorber.
+
+    Every damping curve of :func:`tuned_absorber_response` passes through two frequencies
+    ``g²_{P,Q} = [1 + f²(1+μ) ∓ √((1 + f²(1+μ))² − 2f²(2+μ))]/(2+μ)`` with heights
+    ``1/|1 − (1+μ) g²|``; optimum tuning f = 1/(1+μ) makes them equal, √(1 + 2/μ).
+
+    Returns
+    -------
+    dict
+        ``frequency_p``, ``frequency_q`` (g, dimensionless) and ``height_p``, ``height_q``.
+
+    References
+    ----------
+    Den Hartog, *Mechanical Vibrations*, 4th ed. (1956) §3.3, eq. (3.29)-(3.31).
+
+    Examples
+    --------
+    >>> p = fixed_points(mass_ratio=0.25, frequency_ratio=0.8)
+    >>> round(p["height_p"], 6), round(p["height_q"], 6)
+    (3.0, 3.0)
+    """
+    mu = check_positive(mass_ratio, "mass_ratio", error=ModelError)
+    f = check_positive(frequency_ratio, "frequency_ratio", error=ModelError)
+    b = 1 + f * f * (1 + mu)
+    root = np.sqrt(b * b - 2 * f * f * (2 + mu))
+    g2 = np.array([(b - root) / (2 + mu), (b + root) / (2 + mu)])
+    h = 1.0 / np.abs(1 - (1 + mu) * g2)
+    return dict(frequency_p=float(np.sqrt(g2[0])), frequency_q=float(np.sqrt(g2[1])),
+                height_p=float(h[0]), height_q=float(h[1]))
+
+
+def pendulum_length(order, *, pivot_radius) -> float:
+    """Pendulum length r (m) tuning a centrifugal pendulum to ``order``: r = R/n².
+
+    The linearised pendulum (pivot at radius R, length r) swings at n = √(R/r) times the
+    shaft speed at every speed (Den Hartog §5.7). For bifilar and roller pendulums r is the
+    effective length (hole minus pin diameter for a bifilar suspension).
+
+    Examples
+    --------
+    >>> pendulum_length(4.5, pivot_radius=0.12)   # 0.12 / 20.25 m
+    0.005925925925925926
+    """
+    n = check_positive(order, "order", error=ModelError)
+    return check_positive(pivot_radius, "pivot_radius", error=ModelError) / (n * n)
+
+
+def pendulum_order(*, pivot_radius, length) -> float:
+    """Tuned order n = √(R/r) of a centrifugal pendulum (R, r in m).
+
+    Examples
+    --------
+    >>> pendulum_order(pivot_radius=0.1, length=0.025)
+    2.0
+    """
+    return float(np.sqrt(check_positive(pivot_radius, "pivot_radius", error=ModelError)
+                         / check_positive(length, "length", error=ModelError)))

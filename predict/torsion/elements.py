@@ -134,6 +134,14 @@ def crank_throw_inertia(engine, cylinder: int, throw_inertia: float = 0.0) -> fl
     r = engine.crank_radius
     lam = r / engine.rod_length
     j0 = check_nonnegative(throw_inertia, "throw_inertia", error=ModelError)
+    if engine.articulated[c] is not None or getattr(engine, "rotary", False):
+        # articulated rod / rotary engine: the exact mean of the kinetic-energy factor over a
+        # revolution (x'² for a link rod, x'² + x² for a piston circling the axis)
+        th = np.arange(720) * 2 * np.pi / 720
+        x, dx, _ = engine.piston_motion(th)
+        factor = np.mean(dx[c] ** 2 + (x[c] ** 2 if getattr(engine, "rotary", False) else 0.0))
+        return j0 + float(engine.rotating_mass[c]) * r * r + float(
+            engine.reciprocating_mass[c]) * float(factor)
     return (j0 + float(engine.rotating_mass[c]) * r * r
             + float(engine.reciprocating_mass[c]) * r * r * (0.5 + lam * lam / 8.0))
 
@@ -195,8 +203,9 @@ class ShaftLine:
             Speed of the part relative to the crankshaft.
         damping : float
             Absolute viscous damping to ground, N·m·s/rad (propeller, engine).
-        cylinder : int, optional
-            1-based cylinder whose tangential torque acts on this node.
+        cylinder : int or sequence of int, optional
+            1-based cylinder(s) whose tangential torque acts on this node (several for a V
+            throw or a radial row on one crank pin).
         throw_inertia : float, optional
             With ``cylinder``: the throw's own inertia; the node inertia is
             :func:`crank_throw_inertia`.
@@ -208,17 +217,21 @@ class ShaftLine:
         ratio = float(ratio)
         if ratio == 0 or not np.isfinite(ratio):
             raise ModelError(f"{name}: ratio={ratio!r} must be a finite non-zero speed ratio")
+        cylinders = [] if cylinder is None else (
+            [int(c) for c in cylinder] if np.ndim(cylinder) else [int(cylinder)])
         if throw_inertia is not None:
-            if cylinder is None or self.engine is None:
+            if not cylinders or self.engine is None:
                 raise ModelError(f"{name}: throw_inertia needs cylinder= and an engine")
-            inertia = crank_throw_inertia(self.engine, cylinder, throw_inertia)
+            # one throw carrying several cylinders (V, radial row): its own inertia once, the
+            # crank-train masses of every cylinder on it
+            inertia = throw_inertia + sum(
+                crank_throw_inertia(self.engine, c, 0.0) for c in cylinders)
         inertia = check_positive(inertia, f"{name}: inertia", error=ModelError)
         damping = check_nonnegative(damping, f"{name}: damping", error=ModelError)
         self._alias[name] = (len(self._nodes), ratio)
         self._nodes.append(dict(name=name, inertia=inertia * ratio ** 2, ratio=ratio,
                                 damping=damping * ratio ** 2, eigen=bool(eigen)))
-        if cylinder is not None:
-            c = int(cylinder)
+        for c in cylinders:
             if c in self._cylinders:
                 raise ModelError(f"{name}: cylinder {c} already sits on another node")
             self._cylinders[c] = len(self._nodes) - 1
@@ -249,15 +262,48 @@ class ShaftLine:
 
     def add_shaft(self, a: str, b: str, *, stiffness=None, length=None, diameter=None,
                   bore=0.0, segments=None, shear_modulus=None, damping=0.0, loss_factor=0.0,
-                  name=None) -> None:
+                  name=None, throw=None, throw_method="wilson", density=None, inertia=None,
+                  elements=None) -> None:
         """Add a shaft section between nodes ``a`` and ``b`` (same speed).
 
         Give ``stiffness`` (N·m/rad) — optionally with ``diameter``/``bore`` for stress — or
         ``length``/``diameter``/``bore`` (m), or ``segments`` [(L, D, d), ...] for a stepped
-        shaft (stress at its smallest section). ``damping`` is relative viscous (N·m·s/rad),
-        ``loss_factor`` hysteretic η.
+        shaft (stress at its smallest section), or ``throw`` (a
+        :class:`~predict.torsion.throws.CrankThrow`, stiffness by ``throw_method`` "carter" or
+        "wilson", stress at the smaller of journal and pin). ``damping`` is relative viscous
+        (N·m·s/rad), ``loss_factor`` hysteretic η.
+
+        Distributed inertia: with ``density`` (kg/m³, needs ``length``/``diameter`` or
+        ``segments``) or ``inertia`` (the shaft's own polar inertia, kg·m²) the shaft is split
+        into ``elements`` equal-stiffness pieces (default: enough for its first own free-free
+        mode to be within 0.1 %, see :func:`predict.torsion.throws.lumping_error`), half an
+        element's inertia at each end, internal nodes named ``"<name> [i]"``.
         """
         g = self.shear_modulus if shear_modulus is None else shear_modulus
+        own_inertia = None
+        if throw is not None:
+            from .throws import throw_stiffness
+
+            if stiffness is not None or length is not None or segments is not None:
+                raise ModelError(f"shaft {a}-{b}: give throw or stiffness/length/segments, "
+                                 "not both")
+            stiffness = throw_stiffness(throw, method=throw_method, shear_modulus=g).stiffness
+            small = min((throw.journal_diameter, throw.journal_bore),
+                        (throw.pin_diameter, throw.pin_bore))
+            diameter, bore = small
+        if density is not None:
+            rho = check_positive(density, f"shaft {a}-{b}: density", error=ModelError)
+            if segments is not None:
+                own_inertia = sum(rho * np.pi * (s[1] ** 4 - (s[2] if len(s) > 2 else 0.0) ** 4)
+                                  / 32.0 * s[0] for s in segments)
+            elif length is not None and diameter is not None:
+                own_inertia = rho * np.pi * (diameter ** 4 - bore ** 4) / 32.0 * length
+            else:
+                raise ModelError(f"shaft {a}-{b}: density needs length+diameter or segments")
+        if inertia is not None:
+            if own_inertia is not None:
+                raise ModelError(f"shaft {a}-{b}: give density or inertia, not both")
+            own_inertia = check_positive(inertia, f"shaft {a}-{b}: inertia", error=ModelError)
         if segments is not None:
             r = stepped_shaft(segments, shear_modulus=g)
             k_geo, d_out, d_in = r["stiffness"], r["min_diameter"], r["bore"]
@@ -274,8 +320,41 @@ class ShaftLine:
             raise ModelError(f"shaft {a}-{b}: give stiffness, length+diameter or segments")
         k = k_geo if stiffness is None else check_positive(stiffness, f"shaft {a}-{b}: "
                                                            "stiffness", error=ModelError)
-        self._spring(a, b, stiffness=k, damping=damping, loss_factor=loss_factor,
-                     diameter=d_out, bore=d_in, name=name)
+        if own_inertia is None:
+            if elements is not None:
+                raise ModelError(f"shaft {a}-{b}: elements needs density or inertia")
+            self._spring(a, b, stiffness=k, damping=damping, loss_factor=loss_factor,
+                         diameter=d_out, bore=d_in, name=name)
+            return
+        self._distributed(a, b, k, own_inertia, elements, damping=damping,
+                          loss_factor=loss_factor, d_out=d_out, d_in=d_in, name=name)
+
+    def _distributed(self, a, b, k, inertia, elements, *, damping, loss_factor, d_out, d_in,
+                     name):
+        """Split a shaft of stiffness k and own inertia into equal lumped elements."""
+        from .._validate import check_int
+
+        label = name or f"{a}-{b}"
+        if elements is None:
+            # first own free-free mode ω = π√(k_total/J_total)·... of the uniform shaft:
+            # x = π/(2N) for it; 1 − sin x/x <= 1e-3 needs N >= 21
+            elements = 21
+        n = check_int(elements, f"shaft {label}: elements", minimum=1, error=ModelError)
+        ia, ra = self._port(a)
+        ib, rb = self._port(b)
+        if not np.isclose(ra, rb, rtol=1e-12):
+            raise ModelError(f"{self.name}: {a!r} turns at ratio {ra:g} and {b!r} at {rb:g}; "
+                             "join different speeds with add_gear")
+        piece = inertia / n
+        self._nodes[ia]["inertia"] += 0.5 * piece * ra ** 2
+        self._nodes[ib]["inertia"] += 0.5 * piece * rb ** 2
+        names = [a] + [f"{label} [{i}]" for i in range(1, n)] + [b]
+        for nm in names[1:-1]:
+            self.add_mass(nm, piece, ratio=ra)
+        for i, (u, v) in enumerate(zip(names[:-1], names[1:])):
+            self._spring(u, v, stiffness=k * n, damping=damping * n, loss_factor=loss_factor,
+                         diameter=d_out, bore=d_in,
+                         name=label if n == 1 else f"{label} ({i + 1}/{n})")
 
     def add_coupling(self, a: str, b: str, *, stiffness: float, damping: float = 0.0,
                      loss_factor: float = 0.0, name=None) -> None:

@@ -116,7 +116,12 @@ def torque_harmonics(engine, *, pressure, orders, omega=0.0, points=None):
     period = np.pi * engine.cycle
     n = points or max(720, len(pressure.angle))
     psi = np.arange(n) * period / n
-    t = tangential_torque(engine, psi, omega=omega, pressure=pressure.at(psi))
+    if getattr(engine, "double_acting", False):
+        from ..forces import cylinder_torque
+
+        t = cylinder_torque(engine, psi, omega=omega, pressure=pressure)
+    else:
+        t = tangential_torque(engine, psi, omega=omega, pressure=pressure.at(psi))
     return _series(t, period, orders)
 
 
@@ -127,9 +132,11 @@ class Excitation:
     Attributes
     ----------
     orders : ndarray (n_o,)
-    gas : ndarray (n_o,), complex
-        Gas-torque harmonics G_q, N·m.
-    inertia : ndarray (n_o,), complex
+    gas : ndarray (n_o,) or (n_o, z), complex
+        Gas-torque harmonics G_q, N·m; one column per cylinder when the cylinders' kinematics
+        differ (articulated rods of a radial row, rotary engines), each cylinder's own
+        harmonics about its own firing TDC.
+    inertia : ndarray (n_o,) or (n_o, z), complex
         Inertia-torque harmonics per unit ω², N·m·s² (``T_q = G_q + Ω² I_q``).
     n_cylinders : int
     source : str
@@ -171,23 +178,29 @@ class Excitation:
                                  f"{self.orders.min():g}..{self.orders.max():g})")
             idx.append(hit[0])
         g, i = self.gas[idx], self.inertia[idx]
-        out = g[None, :, None] + (omega ** 2)[:, None, None] * i[None, :, None]
-        out = np.repeat(out, self.n_cylinders, axis=2)
+        if g.ndim == 2:      # per-cylinder harmonics (articulated rods, rotary engines)
+            out = g[None] + (omega ** 2)[:, None, None] * i[None]
+        else:
+            out = g[None, :, None] + (omega ** 2)[:, None, None] * i[None, :, None]
+            out = np.repeat(out, self.n_cylinders, axis=2)
+            g = np.repeat(g[:, None], self.n_cylinders, axis=1)
         if misfire is not None:
             c = check_int(misfire, "misfire", minimum=1, error=ModelError)
             if c > self.n_cylinders:
                 raise ModelError(f"misfire={c} but the engine has {self.n_cylinders} cylinders")
-            out[:, :, c - 1] -= g[None, :]
+            out[:, :, c - 1] -= g[None, :, c - 1]
         return out
 
     def to_frame(self):
-        """Orders with |G_q|, |I_q| and phases (deg)."""
+        """Orders with |G_q|, |I_q| and phases (deg) (cylinder 1's when per cylinder)."""
         import pandas as pd
 
-        return pd.DataFrame({"order": self.orders, "gas_nm": np.abs(self.gas),
-                             "gas_phase_deg": np.rad2deg(np.angle(self.gas)),
-                             "inertia_nm_s2": np.abs(self.inertia),
-                             "inertia_phase_deg": np.rad2deg(np.angle(self.inertia))})
+        g = self.gas if self.gas.ndim == 1 else self.gas[:, 0]
+        i = self.inertia if self.inertia.ndim == 1 else self.inertia[:, 0]
+        return pd.DataFrame({"order": self.orders, "gas_nm": np.abs(g),
+                             "gas_phase_deg": np.rad2deg(np.angle(g)),
+                             "inertia_nm_s2": np.abs(i),
+                             "inertia_phase_deg": np.rad2deg(np.angle(i))})
 
     def plot(self, ax=None, *, speed_rpm=None):
         """Bar chart of |T_q| (gas, and total at ``speed_rpm``); returns the figure."""
@@ -197,10 +210,12 @@ class Excitation:
             fig, ax = plt.subplots(figsize=(7, 3.5))
         else:
             fig = ax.figure
-        ax.bar(self.orders - 0.1, np.abs(self.gas), width=0.2, label="gas")
+        g = self.gas if self.gas.ndim == 1 else self.gas[:, 0]
+        i = self.inertia if self.inertia.ndim == 1 else self.inertia[:, 0]
+        ax.bar(self.orders - 0.1, np.abs(g), width=0.2, label="gas")
         if speed_rpm is not None:
             w = speed_rpm * np.pi / 30
-            ax.bar(self.orders + 0.1, np.abs(self.gas + w * w * self.inertia), width=0.2,
+            ax.bar(self.orders + 0.1, np.abs(g + w * w * i), width=0.2,
                    label=f"gas + inertia at {speed_rpm:g} rpm")
         ax.set_xlabel("order")
         ax.set_ylabel("|T_q| [N m]")
@@ -260,6 +275,9 @@ def engine_excitation(system_or_engine, *, imep=None, pressure=None, orders=None
                   f"{pressure.imep(engine) / 1e5:.3g} bar")
     else:
         source = "given pressure trace"
+    if any(a is not None for a in engine.articulated) or getattr(engine, "rotary", False):
+        return _per_cylinder_excitation(engine, pressure, np.asarray(orders, float), points,
+                                        source)
     gas = torque_harmonics(engine, pressure=pressure, orders=orders, omega=0.0, points=points)
     coarse = torque_harmonics(engine, pressure=pressure, orders=orders, omega=0.0,
                               points=points // 2)
@@ -271,6 +289,34 @@ def engine_excitation(system_or_engine, *, imep=None, pressure=None, orders=None
     err = float(np.abs(gas - coarse).max() / scale)
     return Excitation(orders=np.asarray(orders, float), gas=gas, inertia=inertia,
                       n_cylinders=engine.n_cylinders, source=source, error_estimate=err)
+
+
+def _per_cylinder_excitation(engine, pressure, orders, points, source):
+    """Exact per-cylinder harmonics from :func:`predict.forces.cylinder_torque` (virtual work
+    with each cylinder's own piston motion: articulated rods of radial engines, the rotary
+    engine's extra inertia torque)."""
+    from ..forces import cylinder_torque
+
+    period = engine.cycle_angle
+    z = engine.n_cylinders
+    gas = np.empty((orders.size, z), complex)
+    inertia = np.empty((orders.size, z), complex)
+    coarse = np.empty((orders.size, z), complex)
+    integer = np.isclose(orders, np.round(orders))
+    for c in range(z):
+        for n, target in ((points, gas), (points // 2, coarse)):
+            psi = np.arange(n) * period / n
+            t = cylinder_torque(engine, psi, omega=0.0, pressure=pressure, cylinder=c + 1)
+            target[:, c] = _series(t, period, orders)
+        psi = np.arange(points) * period / points
+        unit = cylinder_torque(engine, psi, omega=1.0, cylinder=c + 1)
+        inertia[:, c] = np.where(integer, _series(unit, period, orders), 0.0)
+    scale = np.abs(gas).max() or 1.0
+    err = float(np.abs(gas - coarse).max() / scale)
+    kind = "rotary engine" if getattr(engine, "rotary", False) else "articulated rods"
+    return Excitation(orders=orders, gas=gas, inertia=inertia, n_cylinders=z,
+                      source=f"{source}; per-cylinder exact kinematics ({kind})",
+                      error_estimate=err)
 
 
 def harmonic_coefficient_table(engine, imep_values, *, orders=None):

@@ -143,20 +143,41 @@ def harmonic_solve(system, omega, orders, forcing) -> np.ndarray:
         x = np.linalg.solve(a, rhs.T[..., None])[..., 0]
         return x.reshape(ns, no, n)
     parent, pp, order = plan["parent"], plan["parent_pair"], plan["order"]
-    for v in order:  # leaf to root
-        p = parent[v]
-        if p >= 0:
-            z = off[pp[v]]
-            factor = z / d[v]
-            d[p] -= factor * z
-            rhs[p] -= factor * rhs[v]
-    x = np.empty_like(rhs)
-    for v in order[::-1]:  # root to leaf
-        p = parent[v]
-        if p >= 0:
-            x[v] = (rhs[v] - off[pp[v]] * x[p]) / d[v]
-        else:
-            x[v] = rhs[v] / d[v]
+    d0, off0, rhs0 = d.copy(), off.copy(), rhs.copy()
+    # a pivot that vanishes (an undamped absorber exactly at its tuned order: its ring has zero
+    # dynamic stiffness) or nearly so: those (speed, order) pairs are solved again by a dense
+    # LU with partial pivoting, the matrix itself being regular
+    scale = np.abs(d0).max(axis=0) + np.abs(off0).max(axis=0, initial=0.0)
+    weak = np.zeros(ns * no, bool)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        for v in order:  # leaf to root
+            p = parent[v]
+            if p >= 0:
+                weak |= np.abs(d[v]) <= 1e-12 * scale
+                z = off[pp[v]]
+                factor = z / d[v]
+                d[p] -= factor * z
+                rhs[p] -= factor * rhs[v]
+        x = np.empty_like(rhs)
+        for v in order[::-1]:  # root to leaf
+            p = parent[v]
+            if p >= 0:
+                x[v] = (rhs[v] - off[pp[v]] * x[p]) / d[v]
+            else:
+                x[v] = rhs[v] / d[v]
+    weak |= ~np.all(np.isfinite(x), axis=0)
+    if weak.any():
+        cols = np.flatnonzero(weak)
+        a = np.zeros((cols.size, n, n), complex)
+        a[:, np.arange(n), np.arange(n)] = d0[:, cols].T
+        a[:, plan["pa"], plan["pb"]] = off0[:, cols].T
+        a[:, plan["pb"], plan["pa"]] = off0[:, cols].T
+        try:
+            x[:, cols] = np.linalg.solve(a, rhs0[:, cols].T[..., None])[..., 0].T
+        except np.linalg.LinAlgError:
+            raise ModelError("the dynamic stiffness matrix is singular at some (speed, order): "
+                             "an undamped resonance is hit exactly; add damping or move the "
+                             "speed grid") from None
     return x.T.reshape(ns, no, n)
 
 

@@ -470,13 +470,18 @@ class TorsionalSystem:
             shapes[nodes] = vec
         return omega, shapes, numbers, method, bound
 
-    def natural_frequencies(self, units: str = "hz") -> np.ndarray:
+    def natural_frequencies(self, units: str = "hz", *, speed_rpm=None) -> np.ndarray:
         """Undamped natural frequencies, ascending; rigid-body modes exactly 0.
 
         Parameters
         ----------
         units : {'hz', 'rad/s', 'cpm'}
             Hz (default), rad/s or cycles per minute.
+        speed_rpm : float, optional
+            Crankshaft speed, rpm, for systems with speed-dependent springs (centrifugal
+            pendulums): their modes are included at that speed
+            (:func:`predict.torsion.campbell.system_at_speed`). Without it such springs and
+            their pendulum nodes are left out (a pendulum has no stiffness at standstill).
 
         Returns
         -------
@@ -496,12 +501,17 @@ class TorsionalSystem:
         from .._validate import check_option
 
         check_option(units, "units", ("hz", "rad/s", "cpm"), error=ModelError)
+        if speed_rpm is not None:
+            from .campbell import system_at_speed
+
+            return system_at_speed(self, speed_rpm).natural_frequencies(units)
         omega = self._values[0]
         scale = {"hz": 1 / TWO_PI, "rad/s": 1.0, "cpm": 60 / TWO_PI}[units]
         return omega * scale if scale != 1.0 else omega.copy()
 
-    def mode_shapes(self) -> Modes:
-        """Natural frequencies and mass-normalised mode shapes (:class:`Modes`).
+    def mode_shapes(self, *, speed_rpm=None) -> Modes:
+        """Natural frequencies and mass-normalised mode shapes (:class:`Modes`); ``speed_rpm``
+        as in :meth:`natural_frequencies`.
 
         Examples
         --------
@@ -510,6 +520,10 @@ class TorsionalSystem:
         >>> print(m.relative()[:, 1].round(3))
         [ 1. -1.]
         """
+        if speed_rpm is not None:
+            from .campbell import system_at_speed
+
+            return system_at_speed(self, speed_rpm).mode_shapes()
         omega, shapes, numbers, method, bound = self._eigen
         return Modes(frequencies_hz=omega / TWO_PI, shapes=shapes.copy(),
                      mode_numbers=numbers.copy(), node_names=self.node_names, method=method,
@@ -566,7 +580,10 @@ class TorsionalSystem:
         pandas.DataFrame
             Columns ``mode`` (1 = first elastic mode), ``order``, ``speed_rpm``,
             ``frequency_hz``, ``vector_sum`` (relative, NaN without firing angles),
-            ``major`` (bool), sorted by speed.
+            ``major`` (bool), sorted by speed. With centrifugal pendulums the modes move with
+            speed and a critical speed is a root of ω_m(Ω) = qΩ
+            (:mod:`predict.torsion.campbell`); ``frequency_hz`` is then the mode's frequency
+            at that speed.
 
         References
         ----------
@@ -590,6 +607,13 @@ class TorsionalSystem:
         lo, hi = (0.0, np.inf) if speed_range_rpm is None else map(float, speed_range_rpm)
         if not lo <= hi:
             raise ModelError(f"speed_range_rpm={speed_range_rpm!r} must be (low, high), low<=high")
+        from .campbell import has_speed_dependence, speed_dependent_criticals
+
+        if has_speed_dependence(self):
+            rows = speed_dependent_criticals(self, orders, lo, hi)
+            frame = pd.DataFrame(rows, columns=["mode", "order", "speed_rpm", "frequency_hz",
+                                                "vector_sum", "major"])
+            return frame.sort_values(["speed_rpm", "mode"], ignore_index=True)
         omega, numbers = self._values[:2]
         f = omega / TWO_PI
         vs = self.vector_sums(orders)
@@ -620,8 +644,13 @@ class TorsionalSystem:
         omega, numbers = self._values[:2]
         f = omega / TWO_PI
         shown = [i for i in np.flatnonzero(numbers > 0) if modes is None or numbers[i] in modes]
-        for i in shown:
-            ax.axhline(f[i], color="0.5", lw=0.8)
+        from .campbell import has_speed_dependence, _draw_branches
+
+        if has_speed_dependence(self):      # pendulum modes move with speed: draw the curves
+            _draw_branches(self, ax, max(lo, 1e-3), hi)
+        else:
+            for i in shown:
+                ax.axhline(f[i], color="0.5", lw=0.8)
         rpm = np.array([lo, hi])
         for q in orders:
             ax.plot(rpm, rpm * q / 60.0, color="C0" if self.major_orders([q])[0] else "C1",

@@ -11,7 +11,8 @@ Layout (SI unless the key names another unit; values at each part's own speed)::
 
     [[shaftline.mass]]                     # disks, flywheel, propeller, crank throws
     name = "cyl 1"
-    cylinder = 1                           # the cylinder acting on this node
+    cylinder = 1                           # the cylinder acting on this node (an array for
+                                           # a V throw or a radial row on one crank pin)
     throw_inertia = 30.0                   # throw only: crank-train masses are added
     # inertia = 41.0                       # ... or the total inertia
     ratio = 1.0                            # speed relative to the crankshaft
@@ -20,7 +21,11 @@ Layout (SI unless the key names another unit; values at each part's own speed)::
     [[shaftline.shaft]]
     from = "cyl 1"
     to = "cyl 2"
-    stiffness = 6.0e7                      # or length + diameter [+ bore], or segments
+    stiffness = 6.0e7                      # or length + diameter [+ bore], or segments,
+                                           # or a [shaftline.shaft.throw] table (journal_*,
+                                           # pin_*, web_*, crank_radius, method)
+    # density = 7850 (kg/m³) or inertia = 1.2 (kg·m²): distributed inertia, split into
+    # elements = N pieces (default 21)
     diameter = 0.30                        # for stress (with stiffness given)
     loss_factor = 0.02                     # hysteretic η (and/or damping, N·m·s/rad)
 
@@ -294,9 +299,15 @@ def from_toml(path):
             raise ModelError(f"{table.where()}: {exc}") from None
 
     for t in sl.tables("mass", []):
+        cyl = t.raw("cylinder", None)
+        if isinstance(cyl, list):
+            if not cyl or not all(isinstance(c, int) and not isinstance(c, bool) and c >= 1
+                                  for c in cyl):
+                t.fail("cylinder", f"= {cyl!r} must be a cylinder number or an array of them")
+        else:
+            cyl = t.integer("cylinder", None, minimum=1)
         kw = dict(ratio=t.number("ratio", 1.0, **_RATIO),
-                  damping=t.number("damping", 0.0, low=0.0, **_DAMPING),
-                  cylinder=t.integer("cylinder", None, minimum=1))
+                  damping=t.number("damping", 0.0, low=0.0, **_DAMPING), cylinder=cyl)
         if "throw_inertia" in t:
             kw["throw_inertia"] = t.number("throw_inertia", low=0.0, **_INERTIA)
             inertia = None
@@ -327,7 +338,22 @@ def from_toml(path):
                   segments=segs, shear_modulus=t.positive("shear_modulus", None, **_SHEAR),
                   damping=t.number("damping", 0.0, low=0.0, **_DAMPING),
                   loss_factor=t.number("loss_factor", 0.0, low=0.0, **_LOSS),
-                  name=t.string("name", None))
+                  name=t.string("name", None),
+                  density=t.positive("density", None, unit="kg/m^3", plausible=(300.0, 25000.0)),
+                  inertia=t.positive("inertia", None, **_INERTIA),
+                  elements=t.integer("elements", None, minimum=1))
+        tt = t.table("throw", None)
+        if tt is not None:
+            from .throws import THROW_METHODS, CrankThrow
+
+            kw["throw_method"] = tt.string("method", "wilson", options=THROW_METHODS)
+            dims = {key: tt.positive(key, **_DIAMETER) for key in (
+                "journal_diameter", "journal_length", "pin_diameter", "pin_length",
+                "web_thickness", "web_width", "crank_radius")}
+            dims.update(journal_bore=tt.number("journal_bore", 0.0, low=0.0, **_DIAMETER),
+                        pin_bore=tt.number("pin_bore", 0.0, low=0.0, **_DIAMETER))
+            tt.check_unknown()
+            kw["throw"] = wrap(tt, CrankThrow, **dims)
         a, b = t.string("from"), t.string("to")
         t.check_unknown()
         wrap(t, line.add_shaft, a, b, **kw)

@@ -173,7 +173,16 @@ def test_bad_arguments():
 
 
 ENGINES_DIR = Path(__file__).resolve().parents[2] / "sample_data" / "engines"
-SAMPLES = sorted(p.stem for p in ENGINES_DIR.glob("*.toml"))
+SAMPLES = sorted(p.stem for p in ENGINES_DIR.glob("*.toml")
+                 if not Engine.from_toml(p).rotary)    # rotary engines: refused, see below
+
+
+def test_rotary_engine_balance_is_refused_not_guessed():
+    e = Engine.from_toml(ENGINES_DIR / "rotary9.toml")
+    with pytest.raises(ModelError, match="rotary engine"):
+        bal.unbalance(e, omega=100.0)
+    with pytest.raises(ModelError, match="rotary engine"):
+        bal.shaking_forces(e, [0.0], omega=100.0)
 
 
 @pytest.mark.parametrize("name", SAMPLES)
