@@ -81,7 +81,7 @@ def build_parser() -> argparse.ArgumentParser:
             continue
         p = sub.add_parser(name, help=module.HELP, description=module.HELP, parents=[common])
         module.configure(p)
-        p.set_defaults(_run=module.run, _flags=flag_names(p))
+        p.set_defaults(_run=module.run, _flags=flag_names(p), _lists=list_flags(p))
     return parser
 
 
@@ -93,6 +93,13 @@ def flag_names(parser) -> dict:
         if longs and action.dest not in ("help", "verbose", "quiet"):
             out[action.dest] = longs[0]
     return out
+
+
+def list_flags(parser) -> list:
+    """The list options of a parser (one comma-separated value each, repeatable)."""
+    from crankbench.analysis.commands._args import ListAction
+
+    return [a.option_strings[-1] for a in parser._actions if isinstance(a, ListAction)]
 
 
 #: library keyword names that mean exactly what the flag of the same name means (same unit):
@@ -118,8 +125,6 @@ def _name_flags(message: str, flags: dict) -> str:
     return message
 
 
-#: list options (one comma-separated value each); a stray number after one gets a hint
-_LIST_FLAGS = ("--orders", "--shafts", "--channels")
 
 
 class _BarSafeHandler(logging.StreamHandler):
@@ -177,8 +182,9 @@ def _unrecognized(parser, args, argv, extra):
                                    getattr(args, "prediction", None)) if x)
     stray = " ".join(extra)
     hint = ""
+    lists = getattr(args, "_lists", None) or []
     for i, token in enumerate(argv[:-2]):   # a list flag whose value is followed by a stray
-        if token in _LIST_FLAGS and argv[i + 2] == extra[0]:
+        if token in lists and argv[i + 2] == extra[0]:
             a, b = argv[i + 1], argv[i + 2]
             hint = (f"; {token} takes one comma-separated list: write {token} {a},{b} (or "
                     f"repeat {token} {a} {token} {b})")
