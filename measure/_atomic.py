@@ -40,14 +40,14 @@ def same_file(a: str | Path, b: str | Path) -> bool:
 def check_overwrite(path: str | Path, overwrite: bool, *, option: str = "overwrite=True") -> Path:
     """Raise ``FileExistsError`` naming ``option`` if ``path`` exists and ``overwrite`` is False."""
     path = Path(path)
-    if path.is_dir():
-        raise IsADirectoryError(f"{path} is a directory, expected a file path")
-    if path.exists() and not path.is_file():
+    if path.exists() and not path.is_file() and not path.is_dir():
         # a device, pipe or socket (/dev/null): renaming over it would replace the node itself
         raise FileExistsError(f"{path} is not a regular file (a device, pipe or socket); "
                               "choose a file path")
     if path.exists() and not overwrite:
         raise FileExistsError(f"{path} exists; pass {option} to replace it")
+    if path.is_dir():
+        raise IsADirectoryError(f"{path} is a directory, expected a file path")
     return path
 
 

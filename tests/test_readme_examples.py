@@ -46,6 +46,12 @@ NOT_RUN = {
 #: the demo command of the first line, run on its own
 DEMO = "crankbench demo"
 
+#: commands whose README line documents another exit status, with what stderr must then say:
+#: the bench exits 1 when a row exceeds its bound ("exit 1 past a bound"); its timing rows
+#: depend on the machine's load, and the bounds are the bench suites' own tests
+DOCUMENTED_EXIT = {"crankbench bench --quick -o bench-out/":
+                   (1, "exceed their documented error bound")}
+
 
 def _commands(text: str, language: str) -> list[str]:
     """Commands of the README's ``language`` fenced blocks: continuation lines joined,
@@ -111,7 +117,7 @@ def _environment(copy: Path, bin_dir: Path) -> dict:
 def test_not_run_lines_are_still_in_the_readme():
     text = README.read_text(encoding="utf-8")
     lines = set(_commands(text, "bash"))
-    missing = [cmd for cmd in NOT_RUN if cmd not in lines]
+    missing = [cmd for cmd in list(NOT_RUN) + list(DOCUMENTED_EXIT) if cmd not in lines]
     assert not missing, f"README lines listed in NOT_RUN are gone or changed: {missing}"
 
 
@@ -138,7 +144,8 @@ def test_every_readme_command_runs_in_a_fresh_copy(tmp_path):
     for cmd in commands:
         done = subprocess.run(["bash", "-c", cmd], cwd=copy, env=env, capture_output=True,
                               text=True, timeout=900)
-        if done.returncode != 0:
+        status, says = DOCUMENTED_EXIT.get(cmd, (0, ""))
+        if done.returncode != 0 and not (done.returncode == status and says in done.stderr):
             failures.append(f"$ {cmd}\nexit {done.returncode}\n{done.stderr[-2000:]}")
     for block in re.findall(r"^```python\n(.*?)^```", text, flags=re.S | re.M):
         script = tmp_path / "readme_example.py"

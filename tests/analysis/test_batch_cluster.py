@@ -159,7 +159,8 @@ def test_paths_are_absolute_before_submission(bench, monkeypatch):
 
     seen = []
 
-    def fake_process_one(record, model, options, cache_file, report, overwrite, display):
+    def fake_process_one(record, model, options, cache_file, report, overwrite, store_run,
+                         display):
         seen.append((record, model, report, display))
         return {"record": display, "status": "ok", "error": ""}
 
