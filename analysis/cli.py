@@ -30,15 +30,18 @@ log = logging.getLogger("crankbench")
 _DEFAULT_SHOWWARNMSG = getattr(warnings, "_showwarnmsg_impl", None)
 
 #: Sub-commands in the order ``--help`` lists them.
-COMMANDS = ("info", "demo", "synth", "predict", "analyse", "balance", "compare", "report",
-            "batch", "campaign", "bench")
+COMMANDS = ("info", "import", "demo", "synth", "predict", "analyse", "balance", "compare",
+            "report", "batch", "campaign", "bench")
+#: commands whose module name differs (``import`` is a Python keyword)
+_MODULES = {"import": "import_"}
 
 
 def _load(name: str):
+    module = _MODULES.get(name, name)
     try:
-        return importlib.import_module(f"crankbench.analysis.commands.{name}")
+        return importlib.import_module(f"crankbench.analysis.commands.{module}")
     except ModuleNotFoundError as exc:
-        if exc.name == f"crankbench.analysis.commands.{name}":
+        if exc.name == f"crankbench.analysis.commands.{module}":
             return None  # command not part of this build
         raise
 

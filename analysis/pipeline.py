@@ -281,12 +281,12 @@ def _node_of(record, channel, system):
     return system.node_names[0]
 
 
-def _load_record(record):
+def _load_record(record, channel_map=None):
     if isinstance(record, (str, Path)):
         from crankbench import measure
 
         path = Path(record)
-        return measure.read(path), str(path)
+        return measure.read(path, map=channel_map), str(path)
     if hasattr(record, "data_vars"):
         return record, str(record.attrs.get("source", "record"))
     raise RecordError(f"record must be a path or an xarray.Dataset Record, got "
@@ -314,14 +314,20 @@ def predicted_response(system, speed_rpm, orders, node, *, load, quantity="angle
 
     from crankbench.predict.torsion.excitation import engine_excitation
 
-    imep = load.imep if load.imep is not None else system.operating.get("imep")
-    exc = engine_excitation(system, imep=imep, orders=orders)
+    from .given_excitation import given_excitation, given_forcing
+
     omega = np.asarray(speed_rpm, float) * np.pi / 30.0
-    scale = load.scale(speed_rpm)
-    torque = (exc.gas[None, :] * scale[:, None]
-              + (omega**2)[:, None] * exc.inertia[None, :])[:, :, None]
-    torque = np.repeat(torque, exc.n_cylinders, axis=2)
-    res = system.forced_response(speed_rpm, torque=torque, orders=orders, superpose=False)
+    if given_excitation(system) is not None:  # a bench without an engine
+        forced, torque = given_forcing(system, speed_rpm, orders)
+        res = forced.forced_response(speed_rpm, torque=torque, orders=orders, superpose=False)
+    else:
+        imep = load.imep if load.imep is not None else system.operating.get("imep")
+        exc = engine_excitation(system, imep=imep, orders=orders)
+        scale = load.scale(speed_rpm)
+        torque = (exc.gas[None, :] * scale[:, None]
+                  + (omega**2)[:, None] * exc.inertia[None, :])[:, :, None]
+        torque = np.repeat(torque, exc.n_cylinders, axis=2)
+        res = system.forced_response(speed_rpm, torque=torque, orders=orders, superpose=False)
     i = system.node_names.index(node)
     amp = np.abs(res.angle[:, :, i])
     if quantity == "angular_velocity":
@@ -427,7 +433,7 @@ def analyse(record, model, *, channel=None, speed_channel=None, orders=None, max
             method="vkf", bandwidth_orders=None, revolutions=4, load=None, gate=0.15,
             tolerance=0.03, amplitude_tolerance=0.5, machine_class=None,
             vibration_standard=None, operating_range_rpm=None, base_points=1500, order_fraction=0.05, max_tracked=8,
-            resonance_options=None, progress=None) -> PipelineResult:
+            resonance_options=None, progress=None, channel_map=None) -> PipelineResult:
     """Run the chain on one record against one shaft-line model.
 
     Parameters
@@ -479,6 +485,8 @@ def analyse(record, model, *, channel=None, speed_channel=None, orders=None, max
         Passed to :func:`analysis.find_resonances`.
     progress : callable, optional
         ``progress(step_name)`` called before each step (CLI progress bars).
+    channel_map : path-like, dict or ChannelMap, optional
+        Channel map for a record file (:mod:`measure.channelmap`).
 
     Returns
     -------
@@ -517,7 +525,7 @@ def analyse(record, model, *, channel=None, speed_channel=None, orders=None, max
         log.debug("step %-15s %.2f s", name, timings[name])
 
     step("read")
-    rec, source = _load_record(record)
+    rec, source = _load_record(record, channel_map)
     system, model_path = _load_model(model)
     load = LoadCase.from_any(load, getattr(system, "engine", None))
     channel = torsional_channel(rec, channel)
@@ -547,7 +555,10 @@ def analyse(record, model, *, channel=None, speed_channel=None, orders=None, max
     rate = np.abs(np.gradient(rpm_ok, t))
     moving = rate > 0.2
     sweep_rate = float(np.median(rate[moving])) if moving.any() else 0.0
-    all_orders = [float(o) for o in (system.default_orders() if orders is None else orders)
+    from .given_excitation import default_orders, given_excitation
+
+    all_orders = [float(o) for o in (default_orders(system, max_order) if orders is None
+                                     else orders)
                   if o <= max_order + 1e-9 and o * hi / 60.0 < 0.4 * fs]
     if orders is not None and len(all_orders) < len(orders):  # never drop a requested order
         lost = [float(o) for o in orders if float(o) not in all_orders]
@@ -577,6 +588,14 @@ def analyse(record, model, *, channel=None, speed_channel=None, orders=None, max
         predicted.loc[~predicted["order"].isin(orders), "significant"] = False
     else:
         orders = all_orders
+    given = given_excitation(system)
+    if given is not None and given.get("torque") is None:
+        # torques not given: criticals are compared by speed only; which are expected in the
+        # measurement was judged on the response to 1 N·m per order
+        predicted["amplitude"] = np.nan
+        response_da.attrs["note"] = ("response to 1 N·m per order: exciting torques not given "
+                                     "(criticals expected where that response is >= 5 % of "
+                                     "its largest)")
     done("prediction")
 
     if bandwidth_orders is None:

@@ -83,26 +83,12 @@ def find_speed_channel(record, channel: str | None = None) -> str:
 
 
 def _pulse_speed(var, name):
-    edges = np.asarray(var.values, dtype=float)
-    ppr = var.attrs.get("pulses_per_rev")
-    if ppr is None:
+    if var.attrs.get("pulses_per_rev") is None:
         raise RecordError(f"pulse channel {name!r} has no 'pulses_per_rev' attr")
-    missing = int(var.attrs.get("missing_teeth", 0))
-    try:
-        from crankbench.measure.tacho import speed_from_pulses
-    except ImportError:  # pragma: no cover - measure.tacho is part of the distribution
-        speed_from_pulses = None
-    if speed_from_pulses is not None:
-        t, omega = speed_from_pulses(edges, pulses_per_rev=int(ppr), missing_teeth=missing)
-        return np.asarray(t, float), np.asarray(omega, float)
-    if missing:
-        raise AnalysisError(f"pulse channel {name!r} has missing teeth; measure.tacho is needed")
-    # one revolution per window: ω = 2π / (t[k + ppr] − t[k]) at the window's mid time
-    ppr = int(ppr)
-    if edges.shape[0] <= ppr:
-        raise AnalysisError(f"pulse channel {name!r} holds less than one revolution of edges")
-    span = edges[ppr:] - edges[:-ppr]
-    return 0.5 * (edges[ppr:] + edges[:-ppr]), _TWO_PI / span
+    from crankbench.measure.tacho import pulse_channel_speed  # reads the layout attrs
+
+    t, omega = pulse_channel_speed(var)
+    return np.asarray(t, float), np.asarray(omega, float)
 
 
 def speed_reference(record, channel: str, *,

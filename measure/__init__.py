@@ -26,6 +26,11 @@ _LAZY = {
     "speed_from_pulses": "tacho",
     "angle_from_pulses": "tacho",
     "detect_edges": "tacho",
+    "find_edges": "edges",
+    "decode_wheel": "wheel",
+    "decode_marks": "wheel",
+    "ChannelMap": "channelmap",
+    "pulse_channel_speed": "tacho",
     "angular_vibration": "torsiograph",
 }
 

@@ -7,10 +7,18 @@ extension      format                      streams with :func:`open`
 .nc            netCDF4 (h5netcdf)          data yes; time coordinates held in memory
 .tdms          NI TDMS (npTDMS)            yes: channel slices read on demand
 .wav           WAV + ``.wav.json`` sidecar yes: frames read on demand (main clock only)
-.csv           CSV, units in header        no: loaded whole, then chunked
+.csv .txt      delimited text, any dialect no: parsed whole (8 bytes a value), then chunked
+.tsv .tab
+.asc .dat
+.xlsx .xlsm    Excel workbook (openpyxl)   no: loaded whole, then chunked
 .mf4 .mdf      ASAM MDF4 (asammdf)         no: loaded whole, then chunked
 .uff .unv      UFF dataset 58 (pyuff)      no: loaded whole, then chunked
 =============  ==========================  ====================================================
+
+Text and spreadsheet exports whose headers do not say what a column is are read through a
+channel map (``read(path, map=...)``, :mod:`measure.channelmap`), which also decodes raw wheel
+and TDC signals into pulse trains. HDF5/netCDF files holding external links or virtual
+datasets are refused (a record holds its own data).
 
 Input files are opened read-only and never modified. :func:`write` is atomic (temporary file
 in the target folder, then rename) and refuses to replace an existing file unless
@@ -30,7 +38,7 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
-from crankbench.predict.errors import CrankbenchError, RecordError
+from crankbench.predict.errors import ConfigError, CrankbenchError, RecordError
 
 from ._atomic import atomic_path, check_overwrite
 from .readers import EXTENSIONS, format_of_magic, module_for
@@ -43,7 +51,7 @@ log = logging.getLogger("crankbench")
 
 _HASH_CACHE: dict[tuple, str] = {}
 _FORMAT_EXT = {"hdf5": ".h5", "mdf": ".mf4", "tdms": ".tdms", "wav": ".wav", "uff": ".uff",
-               "csv": ".csv"}
+               "csv": ".csv", "xlsx": ".xlsx"}
 
 
 def sha256_of(path) -> str:
@@ -111,7 +119,8 @@ def _named(path: Path, exc: CrankbenchError) -> CrankbenchError:
 
 
 def _mask_nonfinite(ds: xr.Dataset, path: Path) -> xr.Dataset:
-    for name, var in ds.data_vars.items():
+    for name in list(ds.data_vars):
+        var = ds.variables[name]  # a Variable: ds[name] would cost O(channels) each
         if var.dtype.kind != "f" or var.chunks is not None:
             continue
         values = var.values
@@ -123,7 +132,7 @@ def _mask_nonfinite(ds: xr.Dataset, path: Path) -> xr.Dataset:
         if var.attrs.get("quantity") == "pulse_times":
             raise RecordError(f"{path}: pulse-time channel {name!r} has NaN/inf edge times; "
                               "expected finite times in s (cannot be masked)")
-        t = ds[var.dims[0]].values if var.dims[0] in ds.coords else None
+        t = ds.variables[var.dims[0]].values if var.dims[0] in ds.coords else None
         flat = []
         text = []
         for a, b in spans:
@@ -143,7 +152,8 @@ def _mask_nonfinite(ds: xr.Dataset, path: Path) -> xr.Dataset:
 
 
 def _flag_clipping(ds: xr.Dataset, path: Path) -> None:
-    for name, var in ds.data_vars.items():
+    for name in ds.data_vars:
+        var = ds.variables[name]
         if (var.dtype.kind != "f" or var.chunks is not None
                 or var.attrs.get("quantity") not in CLIP_QUANTITIES):
             continue
@@ -151,7 +161,7 @@ def _flag_clipping(ds: xr.Dataset, path: Path) -> None:
         if not spans:
             continue
         values = var.values
-        t = ds[var.dims[0]].values
+        t = ds.variables[var.dims[0]].values
         flat = []
         for a, b in spans:
             flat += [float(t[a]), float(t[b - 1])]
@@ -167,15 +177,22 @@ def _flag_clipping(ds: xr.Dataset, path: Path) -> None:
         var.attrs["clipped_spans_s"] = np.asarray(flat)
 
 
-def read(path, *, channels=None, allow_nonfinite: bool = False) -> xr.Dataset:
+def read(path, *, channels=None, allow_nonfinite: bool = False, map=None) -> xr.Dataset:  # noqa: A002
     """Read a record file into a validated Record, by extension.
 
     Parameters
     ----------
     path : path-like
-        ``.csv .h5 .hdf5 .nc .mf4 .mdf .tdms .uff .unv .wav`` (WAV with its ``.wav.json``).
+        ``.h5 .hdf5 .nc .mf4 .mdf .tdms .uff .unv .wav`` (WAV with its ``.wav.json``), delimited
+        text ``.csv .txt .tsv .tab .asc .dat`` of any common dialect, ``.xlsx`` workbooks.
     channels : list of str, optional
         Load only these channels (an unknown name is an error suggesting the close one).
+    map : path-like, dict or ChannelMap, optional
+        A channel map (:mod:`measure.channelmap`): which column is which channel, its units,
+        calibration and sensor metadata, raw pulse signals to decode (``role`` "wheel" or
+        "tdc"), the file's dialect and time axis. The Record then keeps its provenance in attrs
+        ``raw_source``, ``raw_sha256``, ``channel_map`` (the map's text) and
+        ``channel_map_sha256``.
     allow_nonfinite : bool
         Accept NaN/inf dropouts: they are masked as NaN, listed in the channel attr
         ``masked_spans_s`` (start, end pairs in s) and reported by a :class:`RecordWarning`
@@ -214,11 +231,23 @@ def read(path, *, channels=None, allow_nonfinite: bool = False) -> xr.Dataset:
     m/s^2 9.80665 r.h5
     """
     path, module = _check_input(path)
+    cmap = None
+    if map is not None:
+        from .channelmap import load_map
+
+        cmap = load_map(map)
     # hash on a second thread while the reader parses (hashlib releases the GIL)
     with ThreadPoolExecutor(max_workers=1) as pool:
         digest = pool.submit(sha256_of, path)
         try:
-            ds = module.read(path, channels=channels)
+            if cmap is None:
+                ds = module.read(path, channels=channels)
+            else:
+                ds = _read_mapped(path, module, cmap, channels, allow_nonfinite)
+        except ConfigError as exc:  # the map's fault: name the map and the data file
+            if cmap is None:
+                raise
+            raise ConfigError(f"{cmap.origin} (for {path.name}): {exc}") from None
         except CrankbenchError as exc:
             raise _named(path, exc) from None
         except (MemoryError, KeyboardInterrupt):
@@ -235,6 +264,21 @@ def read(path, *, channels=None, allow_nonfinite: bool = False) -> xr.Dataset:
         _flag_clipping(ds, path)
         ds.attrs["source"] = path.name
         ds.attrs["sha256"] = digest.result()
+        if cmap is not None:
+            ds.attrs.update(raw_source=path.name, raw_sha256=ds.attrs["sha256"],
+                            channel_map=cmap.text, channel_map_source=Path(cmap.origin).name,
+                            channel_map_sha256=cmap.sha256)
+    return ds
+
+
+def _read_mapped(path, module, cmap, channels, allow_nonfinite):
+    from .channelmap import read_mapped
+
+    ds = read_mapped(path, module, cmap, allow_nonfinite=allow_nonfinite)
+    if channels is not None:
+        from .readers._common import select
+
+        ds = ds[select([str(n) for n in ds.data_vars], channels, file=path.name)]
     return ds
 
 
@@ -315,7 +359,7 @@ def read_truth(path) -> xr.Dataset:
 
 
 def open(path, *, chunk_seconds: float = 10.0, channels=None,  # noqa: A001
-         allow_nonfinite: bool = False) -> xr.Dataset:
+         allow_nonfinite: bool = False, map=None) -> xr.Dataset:  # noqa: A002
     """Open a record lazily: a Record whose channels are dask arrays of ``chunk_seconds``.
 
     Parameters
@@ -328,6 +372,8 @@ def open(path, *, chunk_seconds: float = 10.0, channels=None,  # noqa: A001
         Target chunk length per clock, s (> 0).
     channels : list of str, optional
         Only these channels.
+    map : path-like, dict or ChannelMap, optional
+        A channel map (see :func:`read`): the file is read through it (whole), then chunked.
     allow_nonfinite : bool
         Keep NaN/inf samples. By default every block is checked as it is computed, and one
         holding NaN/inf raises :class:`RecordError` naming the file, the channel and the time
@@ -361,6 +407,9 @@ def open(path, *, chunk_seconds: float = 10.0, channels=None,  # noqa: A001
     from crankbench.predict._validate import check_positive
 
     chunk_seconds = check_positive(chunk_seconds, "chunk_seconds", error=RecordError)
+    if map is not None:
+        ds = read(path, channels=channels, allow_nonfinite=allow_nonfinite, map=map)
+        return ds.chunk(_chunks_of(ds, chunk_seconds))
     path, module = _check_input(path)
     try:
         if hasattr(module, "open"):
@@ -369,11 +418,7 @@ def open(path, *, chunk_seconds: float = 10.0, channels=None,  # noqa: A001
             log.debug("%s: %s cannot be read in parts; loading it whole", path.name,
                      module.FORMAT)
             ds = module.read(path, channels=channels)
-            chunks = {}
-            for var in ds.data_vars.values():
-                fs = var.attrs.get("sample_rate")
-                chunks[var.dims[0]] = max(1, int(round(chunk_seconds * float(fs)))) if fs else -1
-            ds = ds.chunk(chunks)
+            ds = ds.chunk(_chunks_of(ds, chunk_seconds))
     except CrankbenchError as exc:
         raise _named(path, exc) from None
     except (MemoryError, KeyboardInterrupt):
@@ -389,16 +434,29 @@ def open(path, *, chunk_seconds: float = 10.0, channels=None,  # noqa: A001
     return ds if allow_nonfinite else _guard_finite(ds, path)
 
 
+def _chunks_of(ds: xr.Dataset, chunk_seconds: float) -> dict:
+    """Chunk length per dim: ``chunk_seconds`` of samples, a pulse train whole."""
+    chunks = {}
+    for name in ds.data_vars:
+        var = ds.variables[name]
+        fs = var.attrs.get("sample_rate")
+        chunks[var.dims[0]] = max(1, int(round(chunk_seconds * float(fs)))) if fs else -1
+    return chunks
+
+
 def _guard_finite(ds: xr.Dataset, path: Path) -> xr.Dataset:
     """Wrap each lazy float channel so a block with NaN/inf raises RecordError when computed."""
     import dask.array as da
 
-    for name, var in ds.data_vars.items():
+    guarded = {}
+    for name in ds.data_vars:
+        var = ds.variables[name]
         data = var.data
         if not isinstance(data, da.Array) or data.dtype.kind != "f" or data.ndim != 1:
             continue
         fs = var.attrs.get("sample_rate")
-        t0 = float(ds[var.dims[0]][0]) if fs and var.dims[0] in ds.coords and var.size else 0.0
+        t0 = float(ds.variables[var.dims[0]][0].values) if fs and var.dims[0] in ds.coords \
+            and var.size else 0.0
 
         def check(block, block_info=None, _name=name, _fs=fs, _t0=t0):
             bad = ~np.isfinite(block)
@@ -412,8 +470,11 @@ def _guard_finite(ds: xr.Dataset, path: Path) -> xr.Dataset:
                     "samples (open(..., allow_nonfinite=True) keeps them)")
             return block
 
-        ds[name] = var.copy(data=data.map_blocks(check, dtype=data.dtype))
-    return ds
+        # a name from the input's (unique) name: dask would otherwise pickle ``check`` to hash it
+        guarded[name] = var.copy(data=data.map_blocks(check, dtype=data.dtype,
+                                                      name=f"crankbench-finite-{data.name}"))
+    # one assignment for all channels: one merge per channel made this quadratic in their number
+    return ds.assign(guarded) if guarded else ds
 
 
 def iter_blocks(record: xr.Dataset, name: str):

@@ -12,9 +12,14 @@ Each channel is a 1-D data variable with attrs
 Channels on one clock share the dim ``time`` (coordinate in s from record start, float64);
 channels on another clock get ``time_<group>`` with its own coordinate. Pulse trains are stored as
 edge times on dim ``pulse`` (``pulse_<name>`` when several) with units ``s``, quantity
-``pulse_times`` and attrs ``pulses_per_rev`` (int) and ``missing_teeth`` (int, default 0).
+``pulse_times`` and attrs ``pulses_per_rev`` (int) and ``missing_teeth`` (int, default 0);
+optional ``speed_ratio`` (turns of the pulse source per crankshaft turn, > 0, default 1: 0.5 for
+a mark once per four-stroke cycle) and ``role`` ("wheel" or "tdc", set when decoded from a raw
+signal by a channel map, with ``runt_teeth``/``lost_teeth`` and how it was decoded).
 Dataset attrs: ``start_time`` (ISO 8601), ``source`` (file name), ``sha256`` (of the source
-file), optional ``engine_id`` and ``test_id``. Mixed sample rates are never resampled.
+file), optional ``engine_id`` and ``test_id``; a record read through a channel map also keeps
+``raw_source``, ``raw_sha256`` (the raw export it came from), ``channel_map`` (the map's text)
+and ``channel_map_sha256``. Mixed sample rates are never resampled.
 """
 
 from __future__ import annotations
@@ -271,7 +276,11 @@ def validate(record: xr.Dataset, *, allow_nonfinite: bool = False,
             raise RecordError(f"record attr start_time={start!r} is not ISO 8601 "
                               "(expected e.g. '2026-01-31T12:00:00+00:00')") from None
     checked_dims: set[str] = set()
-    for name, var in record.data_vars.items():
+    variables = record.variables  # Variables, not DataArrays: record[name] costs O(channels)
+    coords = set(record.coords)
+    ends: dict[str, tuple] = {}
+    for name in record.data_vars:
+        var = variables[name]
         name = str(name)
         if var.ndim != 1:
             raise RecordError(f"channel {name!r} has dims {var.dims}; expected one dim "
@@ -314,30 +323,31 @@ def validate(record: xr.Dataset, *, allow_nonfinite: bool = False,
         if fs is None:
             raise RecordError(f"channel {name!r} has no 'sample_rate' attr; expected Hz > 0")
         fs = _rate(name, fs)
-        if dim not in record.coords:
+        if dim not in coords:
             raise RecordError(f"channel {name!r}: dim {dim!r} has no time coordinate; expected "
                               "s from record start")
         if dim not in checked_dims:
-            coord = record[dim]
+            coord = variables[dim]
             units_t = coord.attrs.get("units", "s")
             if units_t != "s":
                 raise RecordError(f"time coordinate {dim!r} has units {units_t!r}; expected 's'")
+            ends[dim] = _ends(coord)
             if dim in _regular_dims or _lazy_index(record, dim):
                 # built as start + i / sample_rate by a reader: strictly increasing and
                 # evenly spaced by construction; only the rate needs checking
-                _check_time_axis_rate_only(name, coord, fs, dim)
+                _check_time_axis_rate_only(name, ends[dim], fs, dim)
             else:
                 _check_time_axis(name, coord.values, fs, dim)
             checked_dims.add(dim)
         else:
-            _check_time_axis_rate_only(name, record[dim], fs, dim)
+            _check_time_axis_rate_only(name, ends[dim], fs, dim)
         if not _is_lazy(var) and not allow_nonfinite and var.dtype.kind == "f":
             spans = nonfinite_spans(var.values)
             if spans:
                 n_bad = sum(b - a for a, b in spans)
                 raise RecordError(
                     f"channel {name!r} has {n_bad} NaN/inf sample(s) in {len(spans)} run(s): "
-                    f"{_describe_spans(spans, record[dim].values)}; expected finite values "
+                    f"{_describe_spans(spans, variables[dim].values)}; expected finite values "
                     "(read with allow_nonfinite=True to mask them)")
     return record
 
@@ -347,11 +357,17 @@ def _lazy_index(record: xr.Dataset, dim: str) -> bool:
     return index is not None and type(index).__name__ == "RangeIndex"
 
 
-def _check_time_axis_rate_only(name, coord, fs, dim) -> None:
+def _ends(coord) -> tuple[int, float, float]:
     n = coord.size
     if n < 2:
+        return n, 0.0, 0.0
+    return n, float(coord[0]), float(coord[-1])
+
+
+def _check_time_axis_rate_only(name, ends, fs, dim) -> None:
+    n, t0, t1 = ends
+    if n < 2:
         return
-    t0, t1 = float(coord[0]), float(coord[-1])
     mean_step = (t1 - t0) / (n - 1)
     if abs(mean_step * fs - 1.0) > RATE_RTOL:
         raise RecordError(
@@ -377,6 +393,14 @@ def _validate_pulses(name: str, var: xr.DataArray, dim: str) -> None:
     if not _is_int(missing) or not 0 <= int(missing) < int(ppr):
         raise RecordError(f"pulse-time channel {name!r}: missing_teeth={missing!r}; expected an "
                           f"integer in [0, {int(ppr) - 1}]")
+    ratio = var.attrs.get("speed_ratio", 1.0)
+    try:
+        ratio_ok = float(ratio) > 0 and math.isfinite(float(ratio))
+    except (TypeError, ValueError):
+        ratio_ok = False
+    if not ratio_ok:
+        raise RecordError(f"pulse-time channel {name!r}: speed_ratio={ratio!r}; expected a "
+                          "number > 0 (turns of the pulse source per crankshaft turn)")
     if _is_lazy(var):
         return
     t = np.asarray(var.values, dtype=np.float64)

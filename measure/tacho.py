@@ -4,10 +4,12 @@ A speed reference on a test bench is a train of pulses: a once-per-revolution ma
 ``N``-per-revolution gear or encoder, or a missing-tooth wheel (``60-2``: sixty pitch positions,
 two teeth left out so the gap marks a fixed angle). This module turns them into
 
-* edge times from an analogue pick-up signal (:func:`detect_edges`: hysteresis thresholds chosen
-  from the signal, sub-sample interpolation of the mid-level crossing),
+* edge times from an analogue pick-up signal (:func:`detect_edges`, from :mod:`measure.edges`:
+  levels following the signal's envelope, hysteresis from its noise, sub-sample interpolation
+  of the mid-level crossing),
 * a cleaned, counted pulse train (:func:`count_pitches`: dropouts and spurious pulses repaired,
-  missing-tooth gap located, every edge given its pitch number),
+  missing-tooth gap located — or its width inferred — from the wheel positions that never hold
+  an edge (:mod:`measure.wheel_layout`), every edge given its pitch number),
 * speed against time (:func:`speed_from_pulses`) and crank angle against time
   (:func:`angle_from_pulses`), referenced to the gap or to a once-per-revolution mark and to top
   dead centre of cylinder 1.
@@ -36,6 +38,7 @@ instruments, time marks and crank-angle marks on torsiograms).
 from __future__ import annotations
 
 import logging
+import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -43,11 +46,14 @@ import numpy as np
 from crankbench.predict._validate import (
     check_finite_array,
     check_int,
-    check_option,
     check_positive,
     check_range,
 )
 from crankbench.predict.errors import AnalysisError
+
+from .edges import detect_edges  # noqa: F401 - public here since issue 6
+from .record import RecordWarning
+from .wheel_layout import locate_gap
 
 __all__ = [
     "detect_edges",
@@ -57,127 +63,12 @@ __all__ = [
     "SpeedTrace",
     "angle_from_pulses",
     "AngleTrace",
+    "pulse_channel_speed",
 ]
 
 log = logging.getLogger("crankbench")
 
 TWO_PI = 2.0 * np.pi
-
-
-# --------------------------------------------------------------------------------------------
-# edges from an analogue signal
-# --------------------------------------------------------------------------------------------
-def detect_edges(signal, *, fs, hysteresis=0.2, level=None, slope="rising",
-                 interpolation="cubic"):
-    """Edge times of an analogue tacho signal, with hysteresis and sub-sample interpolation.
-
-    The signal's low and high levels are taken as its 2nd and 98th percentiles; the switching
-    level is their mean (or ``level``). An edge is counted only when the signal passes from
-    below ``level - hysteresis * span / 2`` to above ``level + hysteresis * span / 2`` (for
-    ``slope="rising"``), so noise around the level cannot produce double edges. The edge time is
-    where the signal crosses ``level``, found between samples by linear or cubic interpolation.
-
-    Parameters
-    ----------
-    signal : array_like, shape (n,)
-        Pick-up voltage (any units), uniformly sampled.
-    fs : float
-        Sample rate, Hz.
-    hysteresis : float
-        Hysteresis band as a fraction of the signal span (high minus low level), in [0, 1).
-    level : float, optional
-        Switching level in signal units; default the mid level.
-    slope : {"rising", "falling"}
-        Which edges to return.
-    interpolation : {"cubic", "linear"}
-        Sub-sample interpolation of the crossing. Cubic (Lagrange through the four samples around
-        the crossing) has an error of order ``(f_pulse / fs)**4`` of a sample for a smooth
-        (sine-like magnetic pick-up) signal, linear of order ``(f_pulse / fs)**2``; for square
-        pulses with a rise time shorter than a sample both are limited to about a sample / 10.
-
-    Returns
-    -------
-    numpy.ndarray
-        Edge times, s from the first sample, ascending.
-
-    References
-    ----------
-    Liang Shoupan, *Engine dynamics*, 1948, ch. 9 (timing of records).
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> fs = 20_000.0
-    >>> t = np.arange(2000) / fs
-    >>> edges = detect_edges(np.sin(2 * np.pi * 250.0 * t - 0.3), fs=fs)
-    >>> print(np.round(edges[:3] * 1e3, 5))  # ms; up-crossings at (0.3 + 2 pi k)/(2 pi 250)
-    [0.19099 4.19099 8.19099]
-    """
-    x = check_finite_array(signal, "signal", ndim=1, min_length=4, error=AnalysisError)
-    fs = check_positive(fs, "fs", error=AnalysisError)
-    hysteresis = check_range(hysteresis, "hysteresis", 0.0, 1.0, inclusive=(True, False),
-                             error=AnalysisError)
-    check_option(slope, "slope", ("rising", "falling"), error=AnalysisError)
-    check_option(interpolation, "interpolation", ("cubic", "linear"), error=AnalysisError)
-    if slope == "falling":
-        x = -x
-    lo, hi = np.percentile(x, [2.0, 98.0])
-    span = hi - lo
-    if span <= 0:
-        raise AnalysisError("signal is constant (no pulses): its 2nd and 98th percentiles are "
-                            f"equal ({lo:g}); expected a pulse train")
-    if level is None:
-        mid = 0.5 * (lo + hi)
-    else:
-        mid = float(level) * (-1.0 if slope == "falling" else 1.0)
-    upper = mid + 0.5 * hysteresis * span
-    lower = mid - 0.5 * hysteresis * span
-    # Schmitt trigger: state +1 above upper, -1 below lower, hold in between (forward fill).
-    state = np.zeros(x.size, dtype=np.int8)
-    state[x > upper] = 1
-    state[x < lower] = -1
-    idx = np.where(state != 0, np.arange(x.size), 0)
-    np.maximum.accumulate(idx, out=idx)
-    held = state[idx]
-    switch_on = np.flatnonzero((held[1:] == 1) & (held[:-1] == -1)) + 1  # first sample above upper
-    if switch_on.size == 0:
-        return np.empty(0)
-    # the level crossing that caused the switch: last upward crossing of `mid` before switch_on
-    up = np.flatnonzero((x[:-1] < mid) & (x[1:] >= mid))  # crossing between j and j+1
-    pos = np.searchsorted(up, switch_on, side="left") - 1
-    ok = pos >= 0
-    j = up[pos[ok]]
-    frac = (mid - x[j]) / (x[j + 1] - x[j])
-    if interpolation == "cubic":
-        frac = _cubic_crossing(x, j, frac, mid)
-    return (j + frac) / fs
-
-
-def _cubic_crossing(x, j, frac, level):
-    """Refine linear crossing fractions with Newton steps on the cubic through j-1..j+2."""
-    inner = (j >= 1) & (j + 2 < x.size)
-    if not inner.any():
-        return frac
-    jj = j[inner]
-    y0, y1, y2, y3 = (x[jj - 1] - level, x[jj] - level, x[jj + 1] - level, x[jj + 2] - level)
-    # Lagrange cubic through nodes -1, 0, 1, 2 evaluated at u in [0, 1]
-    def poly(u):
-        return (-y0 * u * (u - 1) * (u - 2) / 6 + y1 * (u + 1) * (u - 1) * (u - 2) / 2
-                - y2 * (u + 1) * u * (u - 2) / 2 + y3 * (u + 1) * u * (u - 1) / 6)
-
-    def dpoly(u):
-        return (-y0 * (3 * u * u - 6 * u + 2) / 6 + y1 * (3 * u * u - 4 * u - 1) / 2
-                - y2 * (3 * u * u - 2 * u - 2) / 2 + y3 * (3 * u * u - 1) / 6)
-
-    u = frac[inner].copy()
-    for _ in range(4):
-        d = dpoly(u)
-        safe = np.abs(d) > 1e-12 * (np.abs(y2 - y1) + 1e-300)
-        step = np.where(safe, poly(u) / np.where(safe, d, 1.0), 0.0)
-        u = np.clip(u - step, 0.0, 1.0)
-    out = frac.copy()
-    out[inner] = u
-    return out
 
 
 # --------------------------------------------------------------------------------------------
@@ -206,6 +97,10 @@ class PitchCount:
         Spurious pulses removed.
     gaps : numpy.ndarray of int
         Indices of the edges that end a missing-tooth gap.
+    lost_teeth : tuple of int
+        Teeth (numbered from the reference) that gave no edge in any revolution (bridged).
+    notes : tuple of str
+        What the decoding warned about (lost or weak teeth, an inferred layout).
     """
 
     edge_times: np.ndarray
@@ -216,6 +111,8 @@ class PitchCount:
     filled: int
     removed: int
     gaps: np.ndarray = field(default_factory=lambda: np.empty(0, dtype=int))
+    lost_teeth: tuple = ()
+    notes: tuple = ()
 
     @property
     def angle(self) -> np.ndarray:
@@ -269,10 +166,11 @@ def count_pitches(edge_times, *, pulses_per_rev, missing_teeth=0, repair=True,
     ``spurious_ratio`` marks an extra pulse: of the two edges bounding that interval, the one whose
     removal leaves a merged interval closest to a whole number of pitches is dropped. A rounded
     ratio of 2 or more counts the missing pitches, so a dropout does not shift the angle of the
-    following edges. For a missing-tooth wheel the intervals of ``missing_teeth + 1`` pitches
-    are the gap candidates; their pitch position modulo ``pulses_per_rev`` (the most common one)
-    fixes the reference, so synchronisation works from a start anywhere in the revolution as
-    soon as the record contains one gap.
+    following edges. For a missing-tooth wheel the gap is the stretch of wheel positions the
+    record passes without ever finding an edge there (:mod:`measure.wheel_layout`): it is found
+    from a start anywhere in the revolution, never confused with dropouts it could tie with (an
+    error says when the record is too short to tell), and a tooth beside it that never fires (a
+    runt pulse) is recognised, bridged and named in a :class:`~measure.record.RecordWarning`.
 
     Parameters
     ----------
@@ -280,8 +178,9 @@ def count_pitches(edge_times, *, pulses_per_rev, missing_teeth=0, repair=True,
         Edge times, s, ascending.
     pulses_per_rev : int
         Pitch positions per revolution, counting the missing teeth (60 for a 60-2 wheel).
-    missing_teeth : int
-        Teeth left out to form the reference gap (0 for a plain gear or encoder).
+    missing_teeth : int or None
+        Teeth left out to form the reference gap (0 for a plain gear or encoder); None infers
+        it from the pitch pattern (the record must pass every position at least twice).
     repair : bool
         Remove spurious pulses (with ``False`` every interval must be at least half a pitch).
     spurious_ratio : float
@@ -297,9 +196,10 @@ def count_pitches(edge_times, *, pulses_per_rev, missing_teeth=0, repair=True,
     Raises
     ------
     AnalysisError
-        Too few edges, non-increasing times, no gap found on a missing-tooth wheel, a silence
-        longer than ``max_bridge_pitches``, or more than 10 % of the intervals further than a
-        quarter pitch from a whole number of pitches (too many faults to count reliably).
+        Too few edges, non-increasing times, a silence longer than ``max_bridge_pitches``,
+        more than 10 % of the intervals further than a quarter pitch from a whole number of
+        pitches (too many faults to count reliably), or a gap that is not there, is wider than
+        a lost tooth explains, or cannot be told from dropouts — with the numbers seen.
 
     Examples
     --------
@@ -310,13 +210,18 @@ def count_pitches(edge_times, *, pulses_per_rev, missing_teeth=0, repair=True,
     >>> pc = count_pitches(t[5:], pulses_per_rev=60, missing_teeth=2)
     >>> int(pc.filled), float(pc.edge_times[pc.reference_index]), int(pc.pitch[0])
     (1, 0.059, -54)
+    >>> count_pitches(t[5:], pulses_per_rev=60, missing_teeth=None).missing_teeth
+    2
     """
     t = check_finite_array(edge_times, "edge_times", ndim=1, error=AnalysisError)
     n_rev = check_int(pulses_per_rev, "pulses_per_rev", minimum=1, error=AnalysisError)
-    missing = check_int(missing_teeth, "missing_teeth", minimum=0, error=AnalysisError)
-    if missing >= n_rev - 1 and n_rev > 1:
+    missing = None if missing_teeth is None else check_int(
+        missing_teeth, "missing_teeth", minimum=0, error=AnalysisError)
+    if missing is not None and missing >= n_rev - 1 and n_rev > 1:
         raise AnalysisError(f"missing_teeth={missing} must be less than pulses_per_rev - 1 "
                             f"= {n_rev - 1}")
+    if n_rev == 1:
+        missing = 0
     spurious_ratio = check_range(spurious_ratio, "spurious_ratio", 0.05, 0.95,
                                  error=AnalysisError)
     if t.size < 3:
@@ -332,14 +237,15 @@ def count_pitches(edge_times, *, pulses_per_rev, missing_teeth=0, repair=True,
         t, removed = _remove_spurious(t, spurious_ratio)
         dt = np.diff(t)
     ref = _local_pitch_time(dt)
-    if missing and n_rev > 1:
+    if missing != 0:
         # the gap is longer than its neighbours: take the median of ordinary intervals only
         ref = _local_pitch_time(np.where(dt > 1.5 * ref, np.nan_to_num(ref), dt))
     ratio = dt / ref
     counts = np.maximum(np.rint(ratio).astype(np.int64), 1)
     limit = max(n_rev, 8) if max_bridge_pitches is None else check_int(
         max_bridge_pitches, "max_bridge_pitches", minimum=1, error=AnalysisError)
-    long = np.flatnonzero(counts - 1 > limit + (missing if missing else 0))
+    widest_gap = missing if missing is not None else max(n_rev // 2, 1)
+    long = np.flatnonzero(counts - 1 > limit + widest_gap)
     if long.size:
         i = int(long[0])
         raise AnalysisError(
@@ -361,42 +267,58 @@ def count_pitches(edge_times, *, pulses_per_rev, missing_teeth=0, repair=True,
     pitch = np.concatenate([[0], np.cumsum(counts)])
     gaps = np.empty(0, dtype=int)
     reference_index = 0
-    if missing and n_rev > 1:
-        cand = np.flatnonzero(counts == missing + 1) + 1  # edge ending the gap
-        if cand.size == 0:
-            raise AnalysisError(
-                f"no gap of {missing} missing teeth found in {t.size} edges "
-                f"(about {t.size / (n_rev - missing):.1f} revolutions); the record must span "
-                "at least one full revolution of the wheel")
-        phases = np.mod(pitch[cand], n_rev)
-        values, freq = np.unique(phases, return_counts=True)
-        phase = int(values[np.argmax(freq)])
-        share = freq.max() / cand.size
-        if share < 0.8:
-            log.warning("missing-tooth gap: only %.0f%% of %d gap candidates agree on its "
-                        "position; check pulses_per_rev/missing_teeth", 100 * share, cand.size)
-        gaps = cand[phases == phase]
-        first_ref = pitch[gaps[0]]
-        filled = int(np.sum(counts - 1) - missing * _gaps_spanned(pitch, phase, n_rev, missing))
-        pitch = pitch - first_ref
-        reference_index = int(gaps[0])
-    else:
-        filled = int(np.sum(counts - 1))
+    notes, lost = (), ()
+    gap_positions = np.zeros(n_rev, bool)
+    if n_rev > 1:
+        layout = locate_gap(pitch, counts, pulses_per_rev=n_rev, missing_teeth=missing,
+                            n_edges=t.size)
+        missing, notes, lost = layout.missing_teeth, layout.notes, layout.lost
+        if layout.phase is not None:
+            phase = layout.phase
+            pos = np.mod(pitch, n_rev)
+            gaps = np.flatnonzero((pos[1:] == phase) & (counts >= layout.width + 1)) + 1
+            if gaps.size:
+                first_ref = int(pitch[gaps[0]])
+                reference_index = int(gaps[0])
+            else:  # no gap seen whole: the first edge at the reference position
+                first_ref = int(pitch[0]) + int(np.mod(phase - pitch[0], n_rev))
+                hit = np.flatnonzero(pitch == first_ref)
+                reference_index = int(hit[0]) if hit.size else None
+            pitch = pitch - first_ref
+            gap_positions[np.mod(np.arange(n_rev - layout.width, n_rev), n_rev)] = True
+    filled, notes = _bridged(pitch, counts, n_rev, gap_positions, lost, notes)
+    for note in notes:
+        warnings.warn(f"tacho: {note}", RecordWarning, stacklevel=3)
     if filled:
         log.info("tacho: %d missing pulse(s) bridged, %d spurious removed", filled, removed)
     return PitchCount(edge_times=t, pitch=pitch.astype(np.int64), pulses_per_rev=n_rev,
                       missing_teeth=missing, reference_index=reference_index, filled=filled,
-                      removed=removed, gaps=gaps)
+                      removed=removed, gaps=gaps, lost_teeth=tuple(lost), notes=tuple(notes))
 
 
-def _gaps_spanned(pitch, phase, n_rev, missing):
-    """Number of gap positions (pitch == phase mod n_rev) strictly inside the counted span."""
-    first, last = int(pitch[0]), int(pitch[-1])
-    # gap-ending pitches p with p ≡ phase (mod n_rev) and first + missing < p <= last
-    lo = first + missing + 1
-    k_lo = -(-(lo - phase) // n_rev)
-    k_hi = (last - phase) // n_rev
-    return max(0, k_hi - k_lo + 1)
+def _bridged(pitch, counts, n_rev, gap_positions, lost, notes):
+    """Pitches bridged as dropouts (gap positions excluded) and a note where they pile up."""
+    multi = np.flatnonzero(counts > 1)
+    if multi.size == 0:
+        return 0, notes
+    c = counts[multi]
+    starts = np.repeat(pitch[multi], c - 1) + (np.arange(int((c - 1).sum()))
+                                               - np.repeat(np.cumsum(c - 1) - (c - 1), c - 1))
+    skipped = np.mod(starts + 1, n_rev)
+    skipped = skipped[~gap_positions[skipped]]
+    filled = int(skipped.size)
+    if n_rev > 1 and filled:
+        per = np.bincount(skipped, minlength=n_rev)
+        revs = (int(pitch[-1]) - int(pitch[0])) / n_rev
+        weak = np.flatnonzero((per >= max(3.0, 0.5 * revs)) & (per > 5.0 * per.mean() + 2.0))
+        weak = [int(k) for k in weak if int(k) not in lost]
+        if weak:
+            text = ", ".join(f"{k} ({per[k]} times)" for k in weak[:5])
+            notes = tuple(notes) + (
+                f"dropouts pile up at tooth {text} of {revs:.0f} revolutions (a weak or runt "
+                "tooth, counting the first after the gap as 0): bridged, but check the "
+                "pick-up and the trigger level",)
+    return filled, notes
 
 
 def _remove_spurious(t, spurious_ratio):
@@ -736,3 +658,48 @@ def angle_from_pulses(edge_times, *, pulses_per_rev, missing_teeth=0, reference_
     return AngleTrace(time=pc.edge_times, angle=angle - tdc_offset,
                       pulses_per_rev=pc.pulses_per_rev, reference=reference,
                       tdc_offset=float(tdc_offset))
+
+
+def pulse_channel_speed(var, *, window_revs=1.0, smoothing_revs=1.0):
+    """Crankshaft speed from a Record's pulse-train channel, its attrs read for the layout.
+
+    ``pulses_per_rev`` and ``missing_teeth`` (None/absent: 0) describe the wheel; ``speed_ratio``
+    (default 1) is the turns of the pulse source per crankshaft turn — 0.5 for a mark once per
+    four-stroke cycle, which turns with the camshaft — and divides the wheel's speed.
+
+    Parameters
+    ----------
+    var : xarray.DataArray
+        Edge times (s) with the attrs above.
+    window_revs, smoothing_revs : float
+        As in :func:`speed_from_pulses`.
+
+    Returns
+    -------
+    SpeedTrace
+        Crankshaft speed (rad/s) at the window mid times.
+
+    Examples
+    --------
+    >>> import numpy as np, xarray as xr
+    >>> marks = xr.DataArray(np.arange(40) * 0.1, dims="pulse",
+    ...                      attrs={"pulses_per_rev": 1, "speed_ratio": 0.5})
+    >>> round(float(pulse_channel_speed(marks, smoothing_revs=0).speed_rpm[0]), 6)
+    1200.0
+    """
+    ppr = var.attrs.get("pulses_per_rev")
+    if ppr is None:
+        raise AnalysisError(f"pulse channel {var.name!r} has no 'pulses_per_rev' attr")
+    missing = var.attrs.get("missing_teeth", 0)
+    ratio = float(var.attrs.get("speed_ratio", 1.0))
+    if not np.isfinite(ratio) or ratio <= 0:
+        raise AnalysisError(f"pulse channel {var.name!r}: speed_ratio={ratio!r}; expected > 0")
+    trace = speed_from_pulses(np.asarray(var.values, dtype=float), pulses_per_rev=int(ppr),
+                              missing_teeth=None if missing is None else int(missing),
+                              window_revs=window_revs, smoothing_revs=smoothing_revs)
+    if ratio == 1.0:
+        return trace
+    return SpeedTrace(time=trace.time, omega=trace.omega / ratio,
+                      window_pitches=trace.window_pitches,
+                      timing_error_s=trace.timing_error_s, error_rpm=trace.error_rpm / ratio,
+                      method=trace.method + f", divided by speed_ratio {ratio:g}")

@@ -28,8 +28,9 @@ References
    11P/16, −3P/32).
 .. [2] 交通大学内燃机教研组, 内燃机动力学、构造与计算 (上册), 1958, 第一篇 (crank-train forces);
    Liang 1948 ch. 5 (forces on the crank pin).
-.. [3] IACS UR M53, *Calculation of crankshafts for I.C. engines* (2015), §2 (bending moments
-   from the statically determinate model over one throw).
+.. [3] IACS UR M53, *Calculation of crankshafts for I.C. engines*, §2 (bending moments
+   from the statically determinate model over one throw); its fillet factors:
+   :mod:`predict.crankshaft_scf`.
 """
 
 from __future__ import annotations
@@ -263,12 +264,15 @@ def bearing_loads(engine, *, omega, bearing_positions, pressure=None, model="con
                         model=model, omega=w)
 
 
-def web_stresses(*, bending_moment, radial_force, web_width, web_thickness, bending_scf=1.0):
+def web_stresses(*, bending_moment, radial_force, web_width, web_thickness, bending_scf=1.0,
+                 compression_scf=1.0):
     """Nominal and fillet stresses of a crank web from its bending moment and radial force.
 
     The web is a rectangular section of width b (across the shaft) and thickness h (along it):
     ``σ_b = M / (b h²/6)``, ``σ_q = F / (b h)`` (IACS UR M53 §2.2: W_eqw = B W²/6,
-    F = B W), the fillet stress ``α_B σ_b + σ_q`` with α_B the journal/pin fillet factor.
+    F = B W), the fillet stress ``α σ_b + β σ_q``. With the rule's empirical factors
+    (:func:`predict.crankshaft_scf.stress_concentration_factors`, defined on this web basis):
+    crank-pin fillet α = α_B, β = 0; journal fillet α = β_B, β = β_Q (UR M53 §2 (1)(C)).
 
     Parameters
     ----------
@@ -280,7 +284,9 @@ def web_stresses(*, bending_moment, radial_force, web_width, web_thickness, bend
     web_width, web_thickness : float
         b and h, m.
     bending_scf : float
-        α_B ≥ 1.
+        α ≥ 1, on the web bending stress.
+    compression_scf : float
+        β ≥ 0, on the web compressive stress (default 1: the nominal stress added).
 
     Returns
     -------
@@ -302,9 +308,12 @@ def web_stresses(*, bending_moment, radial_force, web_width, web_thickness, bend
     a = float(bending_scf)
     if not a >= 1:
         raise ModelError(f"bending_scf={bending_scf!r} must be >= 1")
+    beta = float(compression_scf)
+    if not beta >= 0:
+        raise ModelError(f"compression_scf={compression_scf!r} must be >= 0")
     sb = m / (b * h * h / 6)
     sq = f / (b * h)
-    fil = a * sb + sq
+    fil = a * sb + beta * sq
     return dict(bending=sb, axial=sq, fillet=fil, fillet_alternating=float(np.ptp(fil) / 2),
                 fillet_mean=float((fil.max() + fil.min()) / 2))
 
@@ -343,7 +352,7 @@ def bearing_loads_from_toml(path, *, omega, pressure=None, points=720) -> Bearin
     # EI, N·m²: only the ratios between spans matter, so no plausible range
     ei = (t.numbers("bending_stiffness", low=0.0, strict_low=True, unit="N*m^2")
           if isinstance(raw, list) else t.positive("bending_stiffness", 1.0, unit="N*m^2"))
-    t.check_unknown(["description"])
+    t.check_unknown(["description", "fillets"])     # fillets: predict.crankshaft_scf
     engine = Engine.from_toml(path)
     if pressure is None and engine.bore is not None and engine.compression_ratio is not None:
         pressure = synthetic_pressure(engine)

@@ -8,7 +8,7 @@
   stress folded into an equivalent fully reversed amplitude (Goodman ``σ_a/(1 − σ_m/S_u)`` or
   Gerber ``σ_a/(1 − (σ_m/S_u)²)``; compressive means not credited); failure at D = 1.
 * **Combined stresses** at a fillet: nominal bending σ = 32 M D/(π (D⁴ − d⁴)) and torsion
-  τ = 16 T D/(π (D⁴ − d⁴)) times the fillet stress-concentration factors α_B, α_T; judged by
+  τ = 16 T D/(π (D⁴ − d⁴)) times fillet stress-concentration factors; judged by
   von Mises (σ_eq = √(σ² + 3τ²), alternating and mean parts apart, then the chosen mean-stress
   criterion against the bending endurance limit) or by the Gough–Pollard ellipse quadrant
   ``(σ_a/σ_e)² + (τ_a/τ_e)² = 1/n²`` (endurance limits reduced by the von Mises mean stress
@@ -22,8 +22,9 @@ References
    N(55 kpsi) ≈ 77 500), §6-15 (Miner's rule), §6-14 (von Mises for combined loading).
 .. [2] H. J. Gough, H. V. Pollard, "The strength of metals under combined alternating
    stresses", Proc. IMechE 131 (1935) 3-103 (the ellipse quadrant for ductile steels).
-.. [3] IACS UR M53 (2015), §3-§6: nominal crank-pin and journal fillet stresses times the
-   stress-concentration factors α_B, α_T; equivalent alternating stress √(σ² + 3τ²).
+.. [3] IACS UR M53, §2-§6: nominal web bending and pin/journal torsional stresses times the
+   stress-concentration factors α_B, α_T (web and pin bases: :mod:`predict.crankshaft_scf`);
+   equivalent alternating stress √((σ + σ_add)² + 3τ²).
 .. [4] ASTM E1049-85 (2017) §5.4.4 (rainflow).
 """
 
@@ -230,7 +231,10 @@ def fillet_stresses(*, bending_moment, torque, diameter, bore=0.0, bending_scf=1
                     torsion_scf=1.0):
     """Peak fillet stresses of a round pin or journal from bending moment and torque histories.
 
-    σ = α_B · 32 M D/(π (D⁴ − d⁴)), τ = α_T · 16 T D/(π (D⁴ − d⁴)) (IACS UR M53 §3-§5 form).
+    σ = α · 32 M D/(π (D⁴ − d⁴)), τ = α_T · 16 T D/(π (D⁴ − d⁴)): both on the pin (or journal)
+    section. The torsion factor may be UR M53's α_T or β_T (same nominal basis); the rule's
+    bending factors α_B, β_B are defined on the *web* section instead — for them use
+    :func:`predict.crankshaft.web_stresses` or :func:`predict.crankshaft_scf.m53_fillet_stresses`.
 
     Parameters
     ----------
@@ -239,8 +243,9 @@ def fillet_stresses(*, bending_moment, torque, diameter, bore=0.0, bending_scf=1
     diameter, bore : float
         m.
     bending_scf, torsion_scf : float
-        Fillet stress-concentration factors α_B, α_T (≥ 1), from the engine maker, FE or the
-        rule's empirical formulas.
+        Fillet stress-concentration factors (≥ 1) on the pin-section nominal stresses, from
+        the engine maker or FE (bending) and FE or UR M53 (torsion,
+        :func:`predict.crankshaft_scf.stress_concentration_factors`).
 
     Returns
     -------

@@ -15,7 +15,7 @@ from pathlib import Path
 
 from crankbench.measure._atomic import same_file
 
-__all__ = ["record_inputs", "model_inputs", "check_outputs", "sidecars_of"]
+__all__ = ["record_inputs", "model_inputs", "map_inputs", "check_outputs", "sidecars_of"]
 
 #: suffixes a record may carry beside it (``<record><suffix>``): the WAV sidecar and any
 #: metadata JSON a reader may look for
@@ -46,6 +46,12 @@ def model_inputs(path, what: str = "the model") -> list[tuple[Path, str]]:
     """A TOML model and every existing file its string values name (relative to the model's
     folder, recursively through referenced TOML files), as (path, description) pairs."""
     return _model_inputs(Path(path), what, set())
+
+
+def map_inputs(args) -> list[tuple[Path, str]]:
+    """The channel map of a command (``--map``), if any, as (path, description) pairs."""
+    path = getattr(args, "map", None)
+    return model_inputs(path, "the channel map") if path else []
 
 
 def _model_inputs(path, what, seen):

@@ -19,6 +19,9 @@ MAX_ORDER = 12.0
 
 def add_common_arguments(parser) -> None:
     """Arguments shared by ``compare``, ``report`` and ``batch``."""
+    parser.add_argument("--map", metavar="MAP.toml", default=None,
+                        help="channel map for the record(s): columns, units, calibration, raw "
+                             "pulse roles")
     parser.add_argument("--channel", metavar="NAME", default=None,
                         help="torsional channel (default: the first angle/angular-velocity one)")
     parser.add_argument("--speed-channel", metavar="NAME", default=None,
@@ -106,7 +109,7 @@ def check_common(args, *, records=(), model=None) -> None:
             raise ConfigError(f"--orders {','.join(f'{q:g}' for q in odd)}: not an order of this "
                               f"{system.cycle}-stroke engine (multiples of {step:g})")
     for path in records:
-        names = _channels(path)
+        names = _channels(path, getattr(args, "map", None))
         if names is None:
             continue
         from crankbench.predict._validate import suggest
@@ -118,14 +121,16 @@ def check_common(args, *, records=(), model=None) -> None:
                                   f"({path})")
 
 
-def _channels(path):
-    """Channel names of a record from its header (lazy open), None if it cannot be opened
-    here (the analysis then reports the file's own error)."""
+def _channels(path, channel_map=None):
+    """Channel names of a record from its header (lazy open, through the channel map when
+    given), None if it cannot be opened here (the analysis then reports the file's own
+    error)."""
     from crankbench.measure import io as mio
     from crankbench.predict.errors import CrankbenchError
 
     try:
-        return [str(n) for n in mio.open(path).data_vars]
+        kwargs = {"map": channel_map} if channel_map else {}
+        return [str(n) for n in mio.open(path, **kwargs).data_vars]
     except (CrankbenchError, OSError):
         return None
 
@@ -140,7 +145,8 @@ def options_from_args(args, record_path=None) -> dict:
         load = load_from_record_file(record_path)
         if load is not None:
             log.debug("load from the record's scene: %s, imep %s Pa", load.law, load.imep)
-    return dict(channel=args.channel, speed_channel=args.speed_channel, orders=args.orders,
+    return dict(channel_map=args.map, channel=args.channel, speed_channel=args.speed_channel,
+                orders=args.orders,
                 method=args.method, bandwidth_orders=args.bandwidth_orders, load=load,
                 gate=args.gate, tolerance=args.tolerance,
                 machine_class=args.machine_class,

@@ -32,6 +32,8 @@ def configure(parser) -> None:
 
     parser.add_argument("record", metavar="RECORD",
                         help="record file (any format measure.read knows)")
+    parser.add_argument("--map", metavar="MAP.toml", default=None,
+                        help="channel map: columns, units, calibration, raw pulse roles")
     parser.add_argument("--channel", required=True, help="channel to analyse")
     add_list(parser, "--orders", item=positive_order, metavar="Q", required=True,
              help="orders to track, e.g. 0.5,1,1.5")
@@ -149,7 +151,7 @@ def run(args) -> int:
     check_args(args)
     targets = []
     if args.plot:
-        from crankbench.analysis.commands._files import check_outputs, record_inputs
+        from crankbench.analysis.commands._files import check_outputs, map_inputs, record_inputs
         from crankbench.measure._atomic import check_overwrite
 
         out_dir = Path(args.plot)
@@ -157,7 +159,7 @@ def run(args) -> int:
             raise ConfigError(f"--plot {out_dir}: exists and is not a directory")
         targets = [out_dir / name for name in PLOTS]
         check_outputs([(p, f"--plot {out_dir} ({p.name})") for p in targets],
-                      record_inputs(args.record))
+                      record_inputs(args.record) + map_inputs(args))
         for path in targets:           # refuse before any work, never half a set of plots
             check_overwrite(path, args.overwrite, option="--overwrite")
     import os
@@ -167,9 +169,9 @@ def run(args) -> int:
         log.info("%s: %.3g MB > %.3g MB, streaming it segment by segment (measure.open + "
                  "analysis.stream)", args.record, os.path.getsize(args.record) / 1e6,
                  STREAM_BYTES / 1e6)
-        record = measure.open(args.record)
+        record = measure.open(args.record, map=args.map)
     else:
-        record = measure.read(args.record)
+        record = measure.read(args.record, map=args.map)
     names = [str(n) for n in record.data_vars]
     if args.channel not in names:
         raise RecordError(f"{args.record}: --channel {args.channel!r}: no such channel"

@@ -348,6 +348,11 @@ def run(args) -> int:
         options["load"] = dict(imep=options["load"].imep, law=options["load"].law,
                                reference_rpm=options["load"].reference_rpm)
     model_sha = file_sha256(model)
+    if options.get("channel_map"):  # the map's text is part of what a cached row depends on
+        from crankbench.measure.channelmap import load_map
+
+        model_sha += load_map(options["channel_map"]).sha256   # validated before any record
+        options["channel_map"] = str(Path(options["channel_map"]).resolve())
     cache_dir = plan["cache_dir"]
     store, store_settings, skey, done = None, None, None, set()
     if args.store:
@@ -398,7 +403,8 @@ def _plan(files, model, out, args) -> dict:
     import os
     from pathlib import Path
 
-    from crankbench.analysis.commands._files import check_outputs, model_inputs, record_inputs
+    from crankbench.analysis.commands._files import (check_outputs, map_inputs, model_inputs,
+                                                     record_inputs)
     from crankbench.predict.errors import ConfigError
 
     # every path absolute before anything is submitted: a worker may run elsewhere
@@ -409,7 +415,8 @@ def _plan(files, model, out, args) -> dict:
     if args.reports is not None:
         base = Path(os.path.abspath(args.reports))
         reports = [base / name for name in report_names(records)]
-    inputs = [pair for f in records for pair in record_inputs(f)] + model_inputs(model)
+    inputs = ([pair for f in records for pair in record_inputs(f)] + model_inputs(model)
+              + map_inputs(args))
     outputs = [(out, f"-o {out}")]
     if args.store:
         outputs.append((Path(args.store), f"--store {args.store}"))

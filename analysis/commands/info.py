@@ -18,6 +18,8 @@ def configure(parser) -> None:
     from crankbench.analysis.commands._args import add_list
 
     add_list(parser, "--channels", metavar="NAME", help="only these channels, e.g. acc,speed")
+    parser.add_argument("--map", metavar="MAP.toml", default=None,
+                        help="channel map for text/spreadsheet files or raw pulse channels")
     parser.add_argument("--json", action="store_true", help="print JSON instead of a table")
 
 
@@ -61,7 +63,7 @@ def run(args) -> int:
     from crankbench.analysis._output import print_json, print_table
     from crankbench.measure import io
 
-    record = io.open(args.file, channels=args.channels)
+    record = io.open(args.file, channels=args.channels, map=args.map)
     info = summary(record)
     if args.json:
         print_json({"file": str(args.file), **info})
@@ -77,7 +79,11 @@ def run(args) -> int:
     others = {k: v for k, v in attrs.items()
               if k not in ("start_time", "engine_id", "test_id", "sha256", "source")}
     for key, value in others.items():
-        print(f"{key:<11} {value}")
+        text = str(value)
+        if "\n" in text.strip():  # the channel map's text: its size, not its lines
+            text = f"({len(text.strip().splitlines())} lines of TOML; sha256 in " \
+                   "channel_map_sha256)"
+        print(f"{key:<11} {text}")
     print()
     frame = pd.DataFrame(info["channels"])
     columns = ["name", "quantity", "units", "sample_rate", "n", "duration_s", "dim"]

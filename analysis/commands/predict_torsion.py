@@ -1,5 +1,7 @@
 """``crankbench predict torsion MODEL.toml``: natural frequencies, mode table, critical speeds,
-resonance amplitudes (energy balance vs exact) and worst vibratory stresses of a shaft line."""
+resonance amplitudes (energy balance vs exact) and worst vibratory stresses of a shaft line;
+with a non-linear friction damper in the model, its harmonic-balance response per order
+instead of the linear resonance table."""
 
 from __future__ import annotations
 
@@ -83,13 +85,25 @@ def run(args) -> int:
                speed_range_rpm=[lo, hi], modes=mode_table, critical_speeds=crit_shown)
     forced_ok = (not args.no_forced and system.engine is not None and system.cylinder_nodes)
     if forced_ok:
-        res = resonance_amplitudes(system, orders=orders, speed_range_rpm=(lo, hi),
-                                   imep=args.imep or system.operating.get("imep"),
-                                   min_vector_sum=args.min_vector_sum)
-        out["resonances"] = res
         speeds = np.linspace(max(lo, 1.0), hi, args.speeds)
-        resp = system.forced_response(speeds, orders=orders,
-                                      imep=args.imep or system.operating.get("imep"))
+        if system.friction_dampers:
+            # non-linear friction ring: harmonic balance per order replaces the linear
+            # resonance table (which would leave the ring out)
+            from crankbench.predict.torsion.friction_line import friction_forced_response
+
+            fr = friction_forced_response(system, speeds, orders=orders,
+                                          imep=args.imep or system.operating.get("imep"))
+            resp = fr.forced
+            peaks = fr.peaks().sort_values("hub_amplitude_deg", ascending=False)
+            out["friction_damper"] = dict(name=fr.damper, node=fr.node,
+                                          method=resp.method, peaks=peaks.head(8))
+        else:
+            out["resonances"] = resonance_amplitudes(
+                system, orders=orders, speed_range_rpm=(lo, hi),
+                imep=args.imep or system.operating.get("imep"),
+                min_vector_sum=args.min_vector_sum)
+            resp = system.forced_response(speeds, orders=orders,
+                                          imep=args.imep or system.operating.get("imep"))
         frame = resp.to_frame()
         worst = frame.sort_values("max_stress_mpa", ascending=False).head(5)
         out["worst_stresses"] = worst
@@ -107,11 +121,18 @@ def run(args) -> int:
     print_table(crit_shown, title=f"\nCritical speeds {lo:g}-{hi:g} rpm "
                                   f"(relative vector sum >= {args.min_vector_sum:g})")
     if forced_ok:
-        cols = ["mode", "order", "speed_rpm", "vector_sum", "node", "amplitude_deg",
-                "energy_balance_deg", "method_error", "dynamic_magnifier", "max_stress_mpa",
-                "section"]
-        print_table(out["resonances"][cols], title="\nResonance amplitudes (exact damped "
-                                                    "solve; classical energy balance beside)")
+        if "friction_damper" in out:
+            fd = out["friction_damper"]
+            print_table(fd["peaks"], title=f"\nFriction damper {fd['name']!r} on {fd['node']!r}: "
+                                           "largest hub amplitudes (harmonic balance of the "
+                                           "stick-slip ring, each order alone)")
+        else:
+            cols = ["mode", "order", "speed_rpm", "vector_sum", "node", "amplitude_deg",
+                    "energy_balance_deg", "method_error", "dynamic_magnifier",
+                    "max_stress_mpa", "section"]
+            print_table(out["resonances"][cols], title="\nResonance amplitudes (exact damped "
+                                                        "solve; classical energy balance "
+                                                        "beside)")
         print_table(out["worst_stresses"], title="\nWorst superposed stresses")
         if "limits" in out:
             lim = out["limits"]

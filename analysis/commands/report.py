@@ -84,7 +84,8 @@ def run(args) -> int:
     from crankbench.analysis.pipeline import analyse
     from crankbench.measure._atomic import check_overwrite
 
-    from crankbench.analysis.commands._files import check_outputs, model_inputs, record_inputs
+    from crankbench.analysis.commands._files import (check_outputs, map_inputs, model_inputs,
+                                                     record_inputs)
     from crankbench.analysis.commands._pipeline_cli import check_common
 
     log = logging.getLogger("crankbench")
@@ -96,7 +97,8 @@ def run(args) -> int:
     outputs = [(out, f"-o {out}")]
     if args.pdf and out.suffix.lower() != ".pdf":
         outputs.append((out.with_suffix(".pdf"), f"the PDF beside it ({out.with_suffix('.pdf')})"))
-    check_outputs(outputs, record_inputs(args.record) + model_inputs(args.model))
+    check_outputs(outputs, record_inputs(args.record) + model_inputs(args.model)
+                  + map_inputs(args))
     for path, _ in outputs:
         check_overwrite(path, args.overwrite, option="--overwrite")
     check_common(args, records=[args.record], model=args.model)   # before any work
@@ -111,6 +113,9 @@ def run(args) -> int:
               "tolerance": args.tolerance}
     if args.machine_class is not None:
         params["machine class"] = args.machine_class
+    if args.map:
+        params["channel map"] = (f"{args.map} (sha256 "
+                                 f"{result.record.attrs.get('channel_map_sha256', '')})")
     bench_rows = None
     if args.bench:
         from crankbench.analysis.bench import run_suites

@@ -36,15 +36,25 @@ EXTENSIONS = {
     ".uff": "uff",
     ".unv": "uff",
     ".wav": "wav",
+    ".txt": "csv",
+    ".tsv": "csv",
+    ".tab": "csv",
+    ".asc": "csv",
+    ".dat": "csv",
+    ".xlsx": "xlsx",
+    ".xlsm": "xlsx",
 }
 
 #: Format module names, in the order files are probed by magic bytes.
-FORMAT_MODULES = ("hdf5", "mdf", "tdms", "wav", "uff", "csv")
+FORMAT_MODULES = ("hdf5", "mdf", "tdms", "wav", "uff", "xlsx", "csv")
 
 # Common near-misses that difflib does not rank well.
 _ALIASES = {".hdf": ".h5", ".he5": ".h5", ".h4": ".h5", ".mf3": ".mf4", ".mdf4": ".mf4",
-            ".dat": ".mf4", ".txt": ".csv", ".tsv": ".csv", ".wave": ".wav", ".netcdf": ".nc",
-            ".cdf": ".nc", ".tdm": ".tdms", ".tdms_index": ".tdms", ".58": ".uff"}
+            ".wave": ".wav", ".netcdf": ".nc", ".cdf": ".nc", ".tdm": ".tdms",
+            ".tdms_index": ".tdms", ".58": ".uff"}
+# formats read after a conversion
+_CONVERT = {".xls": "a legacy Excel workbook: save it as .xlsx (or CSV) and read that",
+            ".ods": "an OpenDocument sheet: save it as .xlsx (or CSV) and read that"}
 
 
 def module_for(path) -> object:
@@ -63,6 +73,8 @@ def module_for(path) -> object:
     from pathlib import Path
 
     suffix = Path(path).suffix.lower()
+    if suffix in _CONVERT:
+        raise RecordError(f"{path}: {suffix!r} is {_CONVERT[suffix]}")
     if suffix not in EXTENSIONS:
         hint = f" (did you mean {_ALIASES[suffix]!r}?)" if suffix in _ALIASES else suggest(
             suffix, EXTENSIONS)

@@ -15,7 +15,7 @@ from ..units import QUANTITIES, SI_UNITS, sensitivity_to_si, to_si_owned
 
 __all__ = ["clean_attr", "clean_attrs", "regular_start", "channel_meta", "dims_of",
            "si_channel", "build_dataset", "select", "meta_json", "jsonable_attrs",
-           "refuse_truth", "META_KEYS", "REGULAR_KEY"]
+           "refuse_truth", "META_KEYS", "REGULAR_KEY", "refuse_external_links"]
 
 #: Channel attrs carried through every format's metadata slot.
 META_KEYS = ("units", "quantity", "sample_rate", "location", "direction", "sensitivity",
@@ -184,3 +184,38 @@ def select(names: list[str], channels, *, file: str) -> list[str]:
             raise RecordError(f"{file}: no channel {c!r}{suggest(c, names)}; channels: "
                               f"{', '.join(names)}")
     return wanted
+
+
+def refuse_external_links(path, *, file=None) -> None:
+    """Refuse an HDF5 file holding external links or virtual datasets (data in other files).
+
+    A record must hold its own data: following a link would read (and hash-attribute to this
+    record) another file, possibly one that changed or that the user never named.
+
+    Raises
+    ------
+    RecordError
+        Naming the object, the file and path it points to.
+    """
+    import h5py
+
+    file = file or str(path)
+    with h5py.File(path, "r") as f:
+        found = []
+
+        def visit(name):
+            link = f.get(name, getlink=True)
+            if isinstance(link, h5py.ExternalLink):
+                found.append(f"{name!r} is an external link to {link.filename}:{link.path}")
+                return True
+            obj = f.get(name)
+            if isinstance(obj, h5py.Dataset) and obj.is_virtual:
+                sources = sorted({s.file_name for s in obj.virtual_sources()})
+                found.append(f"{name!r} is a virtual dataset reading {', '.join(sources)}")
+                return True
+            return None
+
+        f.visit_links(visit)
+        if found:
+            raise RecordError(f"{file}: HDF5 object {found[0]}; a record must hold its own "
+                              "data (external links and virtual datasets are not followed)")

@@ -1,4 +1,4 @@
-"""CSV records with a header naming units.
+"""CSV and other delimited text records (``.csv .txt .tsv .tab .asc .dat``).
 
 Written layout (read back exactly: floats as shortest round-trip repr)::
 
@@ -9,24 +9,26 @@ Written layout (read back exactly: floats as shortest round-trip repr)::
     0,0.12,0,157.08,0.0012
     ...
 
-Floats are written as their shortest round-trip repr. One column per time dim (``<dim> [s]``) followed by the channels on that clock; channels of a
-slower clock or pulse trains end early and the rest of their column is left empty.
+Floats are written as their shortest round-trip repr. One column per time dim (``<dim> [s]``)
+followed by the channels on that clock; channels of a slower clock or pulse trains end early
+and the rest of their column is left empty.
 
-Foreign CSV files are accepted too: comment lines starting with ``#`` are skipped; the first
-column whose name is ``time``/``t``/``Time`` (optionally with a unit) is the time axis; every
-other column is a channel named ``name [unit]`` or ``name (unit)``, converted to SI with
-:func:`measure.units.to_si`; the sample rate is inferred from the time column; the quantity from
-the unit. A column without a unit is an error naming it.
+Foreign text files of any common dialect are accepted too (delimiter, decimal mark, encoding,
+preamble and header rows sniffed by :mod:`measure.readers.text`): the column whose name is
+``time``/``t``/``Time`` (optionally with a unit) is the time axis (else a sample rate stated in
+the preamble); every other column is a channel named ``name [unit]`` or ``name (unit)`` (or
+with a units row), converted to SI with :func:`measure.units.to_si`; the quantity from the
+unit. What the headers cannot tell (no header row, a column without unit, no time) is an error
+naming it; a channel map (:mod:`measure.channelmap`) supplies it. Numbers are parsed in chunks
+into preallocated arrays, so memory stays near 8 bytes per value kept.
 """
 
 from __future__ import annotations
 
 import io as _io
 import json
-import re
 
 import numpy as np
-import pandas as pd
 import xarray as xr
 
 from crankbench.predict.errors import RecordError
@@ -45,14 +47,12 @@ from ._common import (
 
 __all__ = ["FORMAT", "check_magic", "read", "write"]
 
-FORMAT = "CSV with units in the header"
-_HEADER_RE = re.compile(r"^\s*(?P<name>.*?)\s*(?:\[(?P<u1>[^\]]*)\]|\((?P<u2>.*)\))\s*$")
-_TIME_NAMES = {"time", "t", "zeit", "timestamp", "time_s"}
+FORMAT = "CSV / delimited text"
 
 
 def check_magic(head: bytes) -> bool:
-    """Text without NUL bytes."""
-    return b"\x00" not in head
+    """Text: no NUL bytes (UTF-16 text with its byte-order mark allowed)."""
+    return head.startswith((b"\xff\xfe", b"\xfe\xff")) or b"\x00" not in head
 
 
 def write(record: xr.Dataset, path, *, truth=None) -> dict:
@@ -105,21 +105,15 @@ def _quote(text: str) -> str:
     return f'"{text}"' if "," in text else text
 
 
-def _split_header(line: str) -> tuple[str, str | None]:
-    m = _HEADER_RE.match(line)
-    if m:
-        unit = m.group("u1") if m.group("u1") is not None else m.group("u2")
-        return m.group("name"), unit.strip()
-    return line.strip(), None
-
-
 def read(path, *, channels=None) -> xr.Dataset:
-    """Read a CSV record (crankbench layout or a foreign file with unit headers)."""
+    """Read a CSV record (crankbench layout) or a foreign delimited-text table with headers."""
+    from .table import TextTable, table_record
+
     file = str(path)
     record_attrs: dict = {}
     metas: list[dict] = []
     n_comment = 0
-    with _io.open(path, "r", encoding="utf-8-sig", errors="strict") as f:
+    with _io.open(path, "r", encoding="utf-8-sig", errors="replace") as f:
         for line in f:
             if not line.startswith("#"):
                 break
@@ -137,17 +131,7 @@ def read(path, *, channels=None) -> xr.Dataset:
                 record_attrs = value
             else:
                 metas.append(value)
-    try:
-        frame = pd.read_csv(path, skiprows=n_comment, dtype=np.float64, skip_blank_lines=True,
-                            encoding="utf-8-sig")
-    except pd.errors.EmptyDataError:
-        raise RecordError(f"{file}: CSV has no header row or data; expected a header naming "
-                          "columns with units, e.g. 'time [s],acc [g]'") from None
-    except ValueError as exc:
-        raise RecordError(f"{file}: CSV contains a non-numeric value ({exc}); expected numbers "
-                          "in every data cell") from None
-    if frame.shape[0] == 0:
-        raise RecordError(f"{file}: CSV has a header but no data rows")
+    table = TextTable(path)
     if metas:
         with _io.open(path, "rb") as f:
             f.seek(-1, 2)
@@ -155,41 +139,51 @@ def read(path, *, channels=None) -> xr.Dataset:
                 raise RecordError(f"{file}: last line has no line break; the file was cut "
                                   "mid-row (truncated?) — expected crankbench CSV rows to end "
                                   "with a newline")
-        return _read_native(frame, metas, record_attrs, channels, file)
-    return _read_foreign(frame, channels, file)
+        return _read_native(table, metas, record_attrs, channels, file)
+    return table_record(table, channels=channels)
 
 
-def _column(frame: pd.DataFrame, header: str, file: str) -> np.ndarray:
-    if header not in frame.columns:
-        raise RecordError(f"{file}: header names column {header!r} but the table has no such "
-                          "column (header/body mismatch)")
-    return frame[header].to_numpy()
+def _read_native(table, metas, record_attrs, channels, file) -> xr.Dataset:
+    from .table import duplicate_names
 
-
-def _read_native(frame, metas, record_attrs, channels, file) -> xr.Dataset:
+    duplicate_names(table)
+    index = {str(h): i for i, h in enumerate(table.names) if h}
     names = [m.get("name") for m in metas]
     wanted = select(names, channels, file=file)
-    out, coords = [], {}
+
+    def col(header):
+        if header not in index:
+            raise RecordError(f"{file}: header names column {header!r} but the table has no "
+                              "such column (header/body mismatch)")
+        return index[header]
+
+    plan = []
     for meta in metas:
+        if meta["name"] in wanted:
+            dim = meta.get("dim", "time")
+            plan.append((meta, col(f"{meta['name']} [{meta.get('units', '')}]"),
+                         None if is_pulse_dim(dim) else col(f"{dim} [s]")))
+    needed = sorted({c for _, c, tc in plan for c in (c, tc) if c is not None})
+    data = dict(zip(needed, table.read(needed))) if needed else {}
+    out, coords = [], {}
+    for meta, c, tc in plan:
         name = meta["name"]
-        if name not in wanted:
-            continue
         dim = meta.get("dim", "time")
         n = int(meta.get("n", -1))
-        col = _column(frame, f"{name} [{meta.get('units', '')}]", file)
+        column = data[c]
         if n < 0:
-            n = _trim_length(col)
-        if n > col.size:
+            n = _trim_length(column)
+        if n > column.size:
             raise RecordError(f"{file}: channel {name!r}: header declares {n} samples, the table "
-                              f"has {col.size} rows (header/body mismatch; file truncated?)")
-        if col.size > n and np.any(np.isfinite(col[n:])):
+                              f"has {column.size} rows (header/body mismatch; file truncated?)")
+        if column.size > n and np.any(np.isfinite(column[n:])):
             raise RecordError(f"{file}: channel {name!r}: header declares {n} samples but the "
                               "column has more values (header/body mismatch)")
-        values = col[:n]
+        values = column[:n]
         if meta.get("dtype") == "float32":
             values = values.astype(np.float32)
-        if not is_pulse_dim(dim) and dim not in coords:
-            t = _column(frame, f"{dim} [s]", file)[:n]
+        if tc is not None and dim not in coords:
+            t = data[tc][:n]
             if t.size < n or np.isnan(t).any():
                 raise RecordError(f"{file}: time column {dim!r} has fewer than the {n} values "
                                   f"channel {name!r} declares (header/body mismatch)")
@@ -203,46 +197,3 @@ def _read_native(frame, metas, record_attrs, channels, file) -> xr.Dataset:
 def _trim_length(col: np.ndarray) -> int:
     finite = np.flatnonzero(~np.isnan(col))
     return int(finite[-1]) + 1 if finite.size else 0
-
-
-def _read_foreign(frame, channels, file) -> xr.Dataset:
-    headers = [str(c) for c in frame.columns]
-    parsed = [_split_header(h) for h in headers]
-    time_idx = next((i for i, (name, _) in enumerate(parsed)
-                     if name.strip().lower() in _TIME_NAMES), None)
-    if time_idx is None:
-        raise RecordError(f"{file}: no time column; expected a first column named 'time [s]' "
-                          f"(found columns {headers})")
-    tname, tunit = parsed[time_idx]
-    t = frame[headers[time_idx]].to_numpy()
-    n = _trim_length(t)
-    t = t[:n]
-    if tunit not in (None, "", "s"):
-        from ..units import to_si
-
-        t, si, _ = to_si(t, tunit, channel=tname)
-        if si != "s":
-            raise RecordError(f"{file}: time column {headers[time_idx]!r} has unit {tunit!r}; "
-                              "expected a time unit (s, ms)")
-    if n < 2:
-        raise RecordError(f"{file}: time column has {n} value(s); expected at least 2 to infer "
-                          "the sample rate")
-    if not np.all(np.isfinite(t)):
-        i = int(np.flatnonzero(~np.isfinite(t))[0])
-        raise RecordError(f"{file}: time column {headers[time_idx]!r} is empty or NaN/inf at "
-                          f"data row {i + 1}; expected a time in every row")
-    span = t[-1] - t[0]
-    fs = (n - 1) / span if np.isfinite(span) and span > 0 else float("nan")
-    names = [p[0] for i, p in enumerate(parsed) if i != time_idx]
-    wanted = select(names, channels, file=file)
-    out = []
-    for i, (name, unit) in enumerate(parsed):
-        if i == time_idx or name not in wanted:
-            continue
-        if unit is None:
-            raise RecordError(f"{file}: column {headers[i]!r} names no unit; expected "
-                              f"'{name} [unit]', e.g. '{name} [g]'")
-        values = frame[headers[i]].to_numpy()[:n]
-        values, attrs = si_channel(name, values, {"units": unit, "sample_rate": fs}, file=file)
-        out.append((name, "time", values, attrs))
-    return build_dataset(out, {"time": t}, {})

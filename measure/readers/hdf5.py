@@ -26,7 +26,15 @@ import xarray as xr
 from crankbench.predict.errors import RecordError
 
 from ..record import is_pulse_dim, time_coordinate
-from ._common import build_dataset, clean_attrs, dims_of, regular_start, select, si_channel
+from ._common import (
+    build_dataset,
+    clean_attrs,
+    dims_of,
+    refuse_external_links,
+    regular_start,
+    select,
+    si_channel,
+)
 
 __all__ = ["FORMAT", "check_magic", "read", "write", "open", "read_truth", "write_truth"]
 
@@ -138,6 +146,7 @@ def write_truth(truth: xr.Dataset, path) -> None:
 def read_truth(path) -> xr.Dataset:
     """Read the ``/truth`` group of an HDF5 or netCDF file into memory."""
     h5py = _h5()
+    refuse_external_links(path)
     with h5py.File(path, "r") as f:
         if "truth" not in f:
             raise RecordError(f"{path}: no 'truth' group; ground truth is stored only by "
@@ -228,6 +237,7 @@ def read(path, *, channels=None) -> xr.Dataset:
     """Read a crankbench HDF5 record fully into memory."""
     h5py = _h5()
     file = str(path)
+    refuse_external_links(path, file=file)
     with h5py.File(path, "r") as f:
         order, dims = _layout(f, file)
         names = select(order, channels, file=file)
@@ -280,6 +290,7 @@ def open(path, *, chunk_seconds: float = 10.0, channels=None) -> xr.Dataset:  # 
 
     h5py = _h5()
     file = str(path)
+    refuse_external_links(path, file=file)
     with h5py.File(path, "r") as f:
         order, dims = _layout(f, file)
         names = select(order, channels, file=file)

@@ -16,7 +16,7 @@ import xarray as xr
 from crankbench.predict.errors import RecordError
 
 from ..record import is_pulse_dim
-from ._common import clean_attrs, select, si_channel
+from ._common import clean_attrs, refuse_external_links, select, si_channel
 from .hdf5 import read_truth as _read_truth
 from .hdf5 import write_truth
 
@@ -74,6 +74,7 @@ def _convert(ds: xr.Dataset, file: str, *, lazy: bool) -> xr.Dataset:
 def read(path, *, channels=None) -> xr.Dataset:
     """Read a netCDF4 record into memory."""
     file = str(path)
+    refuse_external_links(path, file=file)
     with xr.open_dataset(path, engine="h5netcdf") as ds:
         names = select([str(n) for n in ds.data_vars], channels, file=file)
         return _convert(ds[names].load(), file, lazy=False)
@@ -86,6 +87,7 @@ def open(path, *, chunk_seconds: float = 10.0, channels=None) -> xr.Dataset:  # 
     sample of each clock. For records larger than memory prefer the ``.h5`` layout.
     """
     file = str(path)
+    refuse_external_links(path, file=file)
     ds = xr.open_dataset(path, engine="h5netcdf")
     names = select([str(n) for n in ds.data_vars], channels, file=file)
     ds = ds[names]

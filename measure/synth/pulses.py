@@ -20,7 +20,8 @@ from crankbench.predict.errors import ConfigError
 
 from .imperfections import degrade_edges, tooth_angles
 
-__all__ = ["wheel_edges", "analogue_pickup"]
+__all__ = ["wheel_edges", "analogue_pickup", "tooth_numbers", "pulse_voltage",
+           "pickup_voltage"]
 
 TWO_PI = 2.0 * np.pi
 
@@ -153,3 +154,127 @@ def analogue_pickup(edges, *, time, pulses_per_rev, missing_teeth, profile, ampl
             wave = np.where(ti > b - 0.5 * ref, np.sin(TWO_PI * (ti - b) / ref), wave)
             out[inside] = amp[inside] * wave
     return out
+
+
+def tooth_numbers(edges, *, pulses_per_rev, missing_teeth):
+    """Tooth number of each edge of a wheel: 0 for the first tooth after the gap.
+
+    Without a gap the first edge is tooth 0. The gap is an interval longer than 1.5 times the
+    median interval.
+
+    Examples
+    --------
+    >>> e = np.delete(np.arange(20.0), [4, 5, 10, 11, 16, 17])     # a 6-2 wheel
+    >>> tooth_numbers(e, pulses_per_rev=6, missing_teeth=2).tolist()
+    [0, 1, 2, 3, 0, 1, 2, 3, 0, 1, 2, 3, 0, 1]
+    """
+    edges = np.asarray(edges, float)
+    n = int(pulses_per_rev)
+    if edges.size < 2:
+        return np.zeros(edges.size, int)
+    if not missing_teeth:
+        return np.mod(np.arange(edges.size), n)
+    dt = np.diff(edges)
+    gap_end = np.flatnonzero(dt > 1.5 * np.median(dt)) + 1
+    present = n - int(missing_teeth)
+    out = np.empty(edges.size, int)
+    first = int(gap_end[0]) if gap_end.size else 0
+    out[first:] = np.mod(np.arange(edges.size - first), present)
+    out[:first] = np.mod(np.arange(-first, 0), present)
+    return out
+
+
+def pulse_voltage(edges, time, *, widths, levels=1.0, high=5.0, low=0.0):
+    """Square pulses (a Hall or optical pick-up, a TDC mark) sampled with exact sub-sample
+    coverage: each sample is the mean of the ideal signal over its sampling interval, so edges
+    between samples keep their timing in the sampled values (a 1-sample mark included).
+
+    Parameters
+    ----------
+    edges : array_like
+        Rising edge times, s.
+    time : array_like
+        Sample times (uniform), s.
+    widths : float or array_like
+        Pulse widths, s.
+    levels : float or array_like
+        Pulse height as a fraction of ``high - low`` (a runt tooth: e.g. 0.11).
+    high, low : float
+        Levels, V.
+
+    Returns
+    -------
+    numpy.ndarray
+        Voltage on ``time``.
+
+    Examples
+    --------
+    >>> t = np.arange(8) * 1e-3          # each sample: the mean over t +- 0.5 ms
+    >>> pulse_voltage([2.25e-3], t, widths=2e-3, high=1.0).round(3).tolist()
+    [0.0, 0.0, 0.25, 1.0, 0.75, 0.0, 0.0, 0.0]
+    """
+    edges = np.asarray(edges, float)
+    time = np.asarray(time, float)
+    widths = np.broadcast_to(np.asarray(widths, float), edges.shape)
+    levels = np.broadcast_to(np.asarray(levels, float), edges.shape)
+    h = float(time[1] - time[0]) if time.size > 1 else 1.0
+    # cumulative "high" integral H(t): piecewise linear through the pulse starts and ends
+    ends = edges + widths
+    knots = np.column_stack([edges, ends]).ravel()
+    steps = np.column_stack([np.zeros_like(widths), widths * levels]).ravel()
+    order = np.argsort(knots, kind="stable")
+    knots, steps = knots[order], steps[order]
+    cum = np.concatenate([[0.0], np.cumsum(steps)])[1:]
+    # between a start and its end H rises linearly: interpolate on (start, end) pairs
+    integral = np.interp(time + 0.5 * h, knots, cum, left=0.0) - \
+        np.interp(time - 0.5 * h, knots, cum, left=0.0)
+    return low + (high - low) * integral / h
+
+
+def pickup_voltage(edges, *, time, params, profile):
+    """The analogue voltage of a scene's tacho sensor (see :mod:`measure.synth.scene`).
+
+    ``params`` holds ``pulses_per_rev``, ``missing_teeth`` and the pick-up keys ``shape``
+    ("sine": :func:`analogue_pickup`; "square": 0–5 V pulses of half a pitch, or of
+    ``mark_width_deg`` for a once-per-revolution mark), ``runt_teeth`` with ``runt_level`` and
+    ``ringing`` with ``ringing_hz``.
+
+    Examples
+    --------
+    >>> from crankbench.measure.synth.profile import steady
+    >>> t = np.arange(5000) / 100_000.0                       # 1500 rpm, a mark per rev
+    >>> v = pickup_voltage(np.array([0.01, 0.05]), time=t, profile=steady(1500.0, duration=1),
+    ...                    params=dict(pulses_per_rev=1, missing_teeth=0, shape="square",
+    ...                                mark_width_deg=0.5))  # 0.5 deg = 1.4 samples
+    >>> int((v > 2.5).sum()), round(float(v.max()), 6)       # 2 or 3 samples a mark
+    (5, 5.0)
+    """
+    from .imperfections import ring
+
+    n, missing = int(params["pulses_per_rev"]), int(params.get("missing_teeth", 0))
+    time = np.asarray(time, float)
+    edges = np.asarray(edges, float)
+    teeth = tooth_numbers(edges, pulses_per_rev=n, missing_teeth=missing)
+    levels = np.where(np.isin(teeth, params.get("runt_teeth") or []),
+                      float(params.get("runt_level", 0.11)), 1.0)
+    if params.get("shape", "sine") == "square":
+        if params.get("mark_width_deg"):
+            rev_time = 2.0 * np.pi / profile.speed(edges)
+            widths = rev_time * float(params["mark_width_deg"]) / 360.0
+        else:
+            pitch = np.diff(edges)
+            local = np.minimum(np.r_[pitch, pitch[-1:]], np.r_[pitch[:1], pitch]) \
+                if edges.size > 1 else np.full(edges.size, 1.0)
+            widths = 0.5 * local
+        volts = pulse_voltage(edges, time, widths=widths, levels=levels, high=5.0, low=0.0)
+    else:
+        volts = analogue_pickup(edges, time=time, pulses_per_rev=n, missing_teeth=missing,
+                                profile=profile)
+        if np.any(levels != 1.0):
+            k = np.clip(np.searchsorted(edges, time, side="right") - 1, 0, edges.size - 1)
+            volts = volts * levels[k]
+    if params.get("ringing"):
+        fs = 1.0 / (time[1] - time[0])
+        volts = ring(volts, fs, damping=float(params["ringing"]),
+                     frequency_hz=float(params.get("ringing_hz", fs / 8.0)))
+    return volts

@@ -34,7 +34,7 @@ from crankbench.predict._validate import check_option
 from crankbench.predict.errors import ConfigError
 
 from .imperfections import add_noise_and_drift as _add_noise_and_drift
-from .pulses import analogue_pickup, wheel_edges
+from .pulses import pickup_voltage, wheel_edges
 from .scene import Scene
 
 __all__ = ["synthesize", "SyntheticRun"]
@@ -252,8 +252,7 @@ def synthesize(scene, *, method="split", integration_rate=None):
             if s.kind == "tacho" and s.params.get("output") == "analogue":
                 fs = float(s.sample_rate)
                 ts = np.arange(int(np.floor(duration * fs)) + 1) / fs
-                volts = analogue_pickup(clean, time=ts, pulses_per_rev=s.params["pulses_per_rev"],
-                                        missing_teeth=s.params["missing_teeth"], profile=prof)
+                volts = pickup_voltage(clean, time=ts, params=s.params, profile=prof)
                 volts = _read_out(volts, ts, s.imperfections, rng)
                 channels[s.name] = dict(data=volts, sample_rate=fs, units="V",
                                         quantity="voltage",

@@ -36,7 +36,11 @@ A scene is read from TOML (paths relative to the scene file)::
 
 Sensor keys by kind: *torsiograph* ``node``, ``quantity``, ``sample_rate``; *encoder* and
 *tacho* ``node``, ``pulses_per_rev``, ``missing_teeth``, ``tdc_offset_deg`` and, for a tacho,
-``output = "pulses" | "analogue"`` (``sample_rate`` for the analogue pick-up voltage);
+``output = "pulses" | "analogue"`` (``sample_rate`` for the analogue pick-up voltage; its
+``shape = "sine"`` (magnetic, default) or ``"square"`` (Hall/optical, 0-5 V), ``runt_teeth``
+(tooth numbers, 0 the first after the gap) reaching only ``runt_level`` of the swing (default
+0.11), ``ringing`` (damping ratio of the pick-up chain, 0 = none) at ``ringing_hz``, and for a
+once-per-revolution mark ``mark_width_deg``, e.g. a TDC mark one or two samples wide);
 *vibrograph* ``point = [x, y, z]`` or ``mount = "name"``, ``direction`` (x/y/z),
 ``quantity`` (acceleration/velocity/displacement), ``sample_rate``; *pressure* ``cylinder``,
 ``sample_rate``; *speed* ``sample_rate``. Torsiograph and vibrograph sensors may give a
@@ -58,6 +62,7 @@ import numpy as np
 from crankbench.predict._toml import Table, load_toml
 from crankbench.predict.errors import ConfigError
 
+from .imperfections import _KEYS as _IMPERFECTION_KEYS
 from .imperfections import Imperfections
 from .profile import SpeedProfile, exponential_coastdown, from_table, ramp, steady
 
@@ -69,15 +74,14 @@ SENSOR_KINDS = {
                     "instrument_damping"),
     "encoder": ("node", "pulses_per_rev", "missing_teeth", "tdc_offset_deg", "location"),
     "tacho": ("node", "pulses_per_rev", "missing_teeth", "tdc_offset_deg", "output",
-              "sample_rate", "location"),
+              "sample_rate", "location", "shape", "runt_teeth", "runt_level", "ringing",
+              "ringing_hz", "mark_width_deg"),
     "vibrograph": ("point", "mount", "direction", "quantity", "sample_rate", "location",
                    "instrument_frequency", "instrument_damping"),
     "pressure": ("cylinder", "sample_rate", "location"),
     "speed": ("sample_rate", "location"),
 }
 
-_IMPERFECTION_KEYS = ("noise_rms", "drift_rate", "tooth_error_deg", "butt_joint_deg",
-                      "jitter_s", "timer_resolution_s", "dropout_rate", "spurious_rate")
 
 
 @dataclass(frozen=True)
@@ -399,6 +403,24 @@ def _sensor(t: Table, defaults: Imperfections) -> SensorSpec:
         p["output"] = t.string("output", "pulses", options=["pulses", "analogue"])
         if p["output"] == "analogue":
             p["sample_rate"] = t.positive("sample_rate", **_FS)
+            p["shape"] = t.string("shape", "sine", options=["sine", "square"])
+            p["runt_teeth"] = [int(k) for k in t.numbers("runt_teeth", [], unit="1")]
+            for k in p["runt_teeth"]:
+                if not 0 <= k < p["pulses_per_rev"] - p["missing_teeth"]:
+                    t.fail("runt_teeth", f"tooth {k} is not on the wheel (teeth 0 .. "
+                                         f"{p['pulses_per_rev'] - p['missing_teeth'] - 1}, 0 "
+                                         "the first after the gap)")
+            p["runt_level"] = t.number("runt_level", 0.11, low=0.0, high=1.0, unit="1",
+                                         plausible=(1e-3, 1.0))
+            p["ringing"] = t.number("ringing", 0.0, low=0.0, high=1.0, unit="1",
+                                      plausible=(1e-4, 1.0))
+            p["ringing_hz"] = t.positive("ringing_hz", p["sample_rate"] / 8.0, unit="Hz",
+                                           plausible=(0.1, 1e7))
+            if p["ringing"] and p["ringing_hz"] >= p["sample_rate"] / 2:
+                t.fail("ringing_hz", f"= {p['ringing_hz']:g} must be below half the sample "
+                                     "rate")
+            p["mark_width_deg"] = t.positive("mark_width_deg", None, unit="deg",
+                                               plausible=(1e-3, 90.0))
     if kind == "vibrograph":
         if ("point" in t) == ("mount" in t):
             t.fail("point", "give exactly one of point = [x, y, z] (m) or mount = 'name'")

@@ -17,7 +17,7 @@ __all__ = ["chain", "TorsionalSystem", "Modes", "from_toml", "forced_response",
            "ForcedResponse", "ShaftLine", "resonance_amplitudes", "engine_excitation",
            "Excitation", "StressLimits", "check_stress", "CrankThrow", "throw_stiffness",
            "uniform_shaft_frequencies", "friction_damper_response", "friction_dissipation",
-           "optimum_slip_torque"]
+           "optimum_slip_torque", "FrictionDamper", "friction_forced_response"]
 
 _LAZY = {
     "chain": "system",
@@ -38,6 +38,8 @@ _LAZY = {
     "friction_damper_response": "friction",
     "friction_dissipation": "friction",
     "optimum_slip_torque": "friction",
+    "FrictionDamper": "friction",
+    "friction_forced_response": "friction_line",
 }
 
 __getattr__, __dir__, _names = lazy_names(__name__, _LAZY)

@@ -26,7 +26,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .._validate import check_int, check_nonnegative, check_positive
+from .._validate import check_int, check_nonnegative, check_option, check_positive
 from ..errors import ModelError
 
 __all__ = ["add_viscous_damper", "add_tuned_damper", "add_pendulum_absorber",
@@ -100,13 +100,55 @@ def friction_equivalent_damping(slip_torque: float, omega: float,
 
 
 def add_friction_damper(line, node: str, *, ring_inertia: float, slip_torque: float,
-                        design_frequency: float, design_amplitude: float,
+                        design_frequency: float | None = None,
+                        design_amplitude: float | None = None, model: str | None = None,
                         name: str | None = None) -> str:
-    """Lanchester friction damper as its equivalent viscous damper at a design point
-    (``design_frequency`` rad/s, ``design_amplitude`` relative rad). Returns the ring name."""
-    c = friction_equivalent_damping(slip_torque, design_frequency, design_amplitude)
-    return add_viscous_damper(line, node, ring_inertia=ring_inertia, damping=c,
-                              name=name or f"{node} friction ring")
+    """Lanchester friction damper (free ring on friction plates) on ``node``.
+
+    Parameters
+    ----------
+    line : ShaftLine
+    node : str
+        Hub node (at crankshaft speed for the non-linear model).
+    ring_inertia : float
+        kg·m².
+    slip_torque : float
+        N·m.
+    design_frequency, design_amplitude : float, optional
+        rad/s and relative rad: the design point of the linearised model.
+    model : {"harmonic-balance", "linearised"}, optional
+        ``"harmonic-balance"`` keeps the ring as a non-linear element of the system
+        (slip/stick response across speed by :mod:`predict.torsion.friction_line`; the ring
+        is not in the eigen-analysis); ``"linearised"`` adds the equivalent viscous damper at
+        the design point. Default: linearised when a design point is given, else
+        harmonic-balance.
+
+    Returns
+    -------
+    str
+        The ring's name.
+    """
+    lin = design_frequency is not None or design_amplitude is not None
+    model = check_option(model if model is not None else
+                         ("linearised" if lin else "harmonic-balance"), "model",
+                         ("harmonic-balance", "linearised"), error=ModelError)
+    ring = name or f"{node} friction ring"
+    if model == "linearised":
+        if design_frequency is None or design_amplitude is None:
+            raise ModelError("the linearised friction damper needs design_frequency (rad/s) "
+                             "and design_amplitude (rad)")
+        c = friction_equivalent_damping(slip_torque, design_frequency, design_amplitude)
+        return add_viscous_damper(line, node, ring_inertia=ring_inertia, damping=c, name=ring)
+    if lin:
+        raise ModelError("design_frequency/design_amplitude belong to the linearised model; "
+                         "the harmonic-balance friction damper has no design point")
+    line._port(node)
+    line._friction.append(dict(node=node, name=ring,
+                               ring_inertia=check_positive(ring_inertia, "ring_inertia",
+                                                           error=ModelError),
+                               slip_torque=check_positive(slip_torque, "slip_torque",
+                                                          error=ModelError)))
+    return ring
 
 
 @dataclass(frozen=True)

@@ -100,12 +100,21 @@ def stepped_shaft(segments, *, reference_diameter=None, shear_modulus=STEEL_SHEA
                 min_diameter=segs[i_min][1], bore=segs[i_min][2])
 
 
-def crank_throw_inertia(engine, cylinder: int, throw_inertia: float = 0.0) -> float:
+def crank_throw_inertia(engine, cylinder: int, throw_inertia: float = 0.0, *,
+                        exact: bool = True) -> float:
     """Equivalent inertia of one crank throw with its crank-train masses, kg·m².
 
-    ``J = J_throw + m_rot r² + m_rec r² (1/2 + λ²/8)``: the rotating mass at the crank radius
-    plus the mean over a revolution of the reciprocating mass's kinetic-energy factor
-    ``(sin ψ + (λ/2) sin 2ψ)²`` (first-order λ expansion of the piston velocity).
+    ``J = J_throw + m_rot r² + m_rec ⟨x'(ψ)²⟩ + ΔJ ⟨φ'(ψ)²⟩``: the rotating mass at the crank
+    radius plus the mean over a revolution of the kinetic-energy factors of the reciprocating
+    mass (x the piston position, ' = d/dψ) and of the rod's residual inertia ΔJ
+    (``Engine.rod_inertia_correction``, 0 for the two-point rod; φ the rod angle) — the
+    inertia that carries the same mean kinetic energy at constant speed.
+
+    The mean is taken exactly (rectangle rule over 720 equal steps of the exact, smooth and
+    periodic motion: exponentially convergent, round-off here). ``exact=False`` gives the
+    classical truncated form ``m_rec r² (1/2 + λ²/8)`` (Ker Wilson): its series continues
+    ``+ λ⁴/16 + 5λ⁶/128 + …``, so it is low by ≈ λ⁴/8 relative (5.0·10⁻⁴ at λ = 1/4,
+    3.4·10⁻³ at λ = 0.4: ``textbook`` bench rows); it ignores ΔJ and the pin offset.
 
     Parameters
     ----------
@@ -114,6 +123,8 @@ def crank_throw_inertia(engine, cylinder: int, throw_inertia: float = 0.0) -> fl
         Cylinder number, 1-based.
     throw_inertia : float
         Inertia of the throw itself (webs, pin, journal share), kg·m².
+    exact : bool
+        Exact mean (default) or the textbook truncated factor (plain rods only).
 
     References
     ----------
@@ -124,7 +135,9 @@ def crank_throw_inertia(engine, cylinder: int, throw_inertia: float = 0.0) -> fl
     >>> from crankbench.predict.engine import Engine
     >>> e = Engine(crank_angles_deg=[0], crank_radius=0.1, rod_length=0.4,
     ...            reciprocating_mass=10.0, rotating_mass=5.0)
-    >>> print(round(crank_throw_inertia(e, 1, 1.0), 6))
+    >>> print(round(crank_throw_inertia(e, 1, 1.0), 6))   # ⟨x'²⟩ = r²(1/2 + λ²/8 + λ⁴/16 …)
+    1.100807
+    >>> print(round(crank_throw_inertia(e, 1, 1.0, exact=False), 6))
     1.100781
     """
     z = engine.n_cylinders
@@ -132,18 +145,26 @@ def crank_throw_inertia(engine, cylinder: int, throw_inertia: float = 0.0) -> fl
         raise ModelError(f"cylinder={cylinder!r} must be in 1..{z}")
     c = int(cylinder) - 1
     r = engine.crank_radius
-    lam = r / engine.rod_length
     j0 = check_nonnegative(throw_inertia, "throw_inertia", error=ModelError)
-    if engine.articulated[c] is not None or getattr(engine, "rotary", False):
-        # articulated rod / rotary engine: the exact mean of the kinetic-energy factor over a
-        # revolution (x'² for a link rod, x'² + x² for a piston circling the axis)
-        th = np.arange(720) * 2 * np.pi / 720
-        x, dx, _ = engine.piston_motion(th)
-        factor = np.mean(dx[c] ** 2 + (x[c] ** 2 if getattr(engine, "rotary", False) else 0.0))
-        return j0 + float(engine.rotating_mass[c]) * r * r + float(
-            engine.reciprocating_mass[c]) * float(factor)
-    return (j0 + float(engine.rotating_mass[c]) * r * r
-            + float(engine.reciprocating_mass[c]) * r * r * (0.5 + lam * lam / 8.0))
+    special = engine.articulated[c] is not None or getattr(engine, "rotary", False)
+    if not exact:
+        if special:
+            raise ModelError("exact=False (the truncated 1/2 + λ²/8 factor) is for plain rods "
+                             "only; articulated rods and rotary engines need exact=True")
+        lam = r / engine.rod_length
+        return (j0 + float(engine.rotating_mass[c]) * r * r
+                + float(engine.reciprocating_mass[c]) * r * r * (0.5 + lam * lam / 8.0))
+    th = np.arange(720) * 2 * np.pi / 720
+    x, dx, _ = engine.piston_motion(th)
+    # articulated link rod: x'²; rotary engine: the piston also circles the axis (x'² + x²)
+    factor = np.mean(dx[c] ** 2 + (x[c] ** 2 if getattr(engine, "rotary", False) else 0.0))
+    out = j0 + float(engine.rotating_mass[c]) * r * r + float(
+        engine.reciprocating_mass[c]) * float(factor)
+    corr = float(engine.rod_inertia_correction[c])
+    if corr != 0.0:
+        d1, _ = engine.rod_motion(th)
+        out += corr * float(np.mean(d1[c] ** 2))
+    return out
 
 
 class ShaftLine:
@@ -178,6 +199,7 @@ class ShaftLine:
         self._alias: dict[str, tuple[int, float]] = {}
         self._edges: list[dict] = []
         self._cylinders: dict[int, int] = {}
+        self._friction: list[dict] = []
 
     # ---------------------------------------------------------------- nodes -------------
     def _port(self, name: str) -> tuple[int, float]:
@@ -466,6 +488,17 @@ class ShaftLine:
                     raise ModelError(f"{self.name}: cylinders {sorted(self._cylinders)} on the "
                                      f"shaft line, engine has 1..{self.engine.n_cylinders}")
                 firing = self.engine.firing_angles_deg()
+        from .friction import FrictionDamper
+
+        friction = []
+        for fr in self._friction:
+            idx, ratio = self._port(fr["node"])
+            if not np.isclose(ratio, 1.0):
+                raise ModelError(f"{self.name}: friction damper {fr['name']!r} on "
+                                 f"{fr['node']!r} (speed ratio {ratio:g}): the non-linear "
+                                 "friction ring must sit on a node at crankshaft speed")
+            friction.append(FrictionDamper(int(new[idx]), fr["ring_inertia"],
+                                           fr["slip_torque"], fr["name"]))
         return TorsionalSystem(
             [n["inertia"] for n in nodes], e, [d["k"] for d in edges],
             node_names=[n["name"] for n in nodes], edge_names=[d["name"] for d in edges],
@@ -477,4 +510,4 @@ class ShaftLine:
             edge_inner_diameter=[d["d_in"] for d in edges],
             eigen_nodes=[n["eigen"] for n in nodes], cylinder_nodes=cylinders,
             firing_angles_deg=firing, cycle=cycle, engine=self.engine, limits=limits,
-            name=self.name)
+            name=self.name, friction_dampers=friction)

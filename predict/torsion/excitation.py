@@ -43,8 +43,10 @@ __all__ = ["Excitation", "tangential_torque", "torque_harmonics", "engine_excita
 def tangential_torque(engine, psi, *, omega, pressure, crankcase_pressure=1.0e5):
     """Tangential torque of one cylinder vs its crank angle from firing TDC.
 
-    Uses ``predict.forces.cylinder_torque`` when that module provides it, else the formula of
-    the module docstring with ``Engine.piston_motion`` (cylinder 1's geometry).
+    ``T = −x'(A (p − p_cc) + m_rec ω² x'') − ΔJ ω² φ' φ''`` with cylinder 1's geometry and
+    masses (the shared-harmonics path of :func:`engine_excitation`, cylinders alike): the same
+    virtual-work torque as :func:`predict.forces.cylinder_torque`, including the residual couple
+    of the two-point rod through ``Engine.rod_inertia_correction`` ΔJ (φ the rod angle).
 
     Parameters
     ----------
@@ -81,7 +83,20 @@ def tangential_torque(engine, psi, *, omega, pressure, crankcase_pressure=1.0e5)
     _, dx, d2x = engine.piston_motion(theta)
     area = np.pi * engine.bore ** 2 / 4
     m = float(engine.reciprocating_mass[0])
-    return -dx[0] * (area * (p - crankcase_pressure) + m * omega ** 2 * d2x[0])
+    out = -dx[0] * (area * (p - crankcase_pressure) + m * omega ** 2 * d2x[0])
+    corr = float(engine.rod_inertia_correction[0])
+    if corr != 0.0:
+        d1, d2 = engine.rod_motion(np.ravel(theta))
+        out = out - corr * omega ** 2 * (d1[0] * d2[0]).reshape(np.shape(out))
+    return out
+
+
+def _cylinders_alike(engine) -> bool:
+    """True when one shared harmonic column describes every cylinder (same masses, rods)."""
+    return (not any(a is not None for a in engine.articulated)
+            and not getattr(engine, "rotary", False)
+            and np.ptp(engine.reciprocating_mass) == 0
+            and np.ptp(engine.rod_inertia_correction) == 0)
 
 
 def _series(values: np.ndarray, psi_period: float, orders: np.ndarray) -> np.ndarray:
@@ -275,7 +290,7 @@ def engine_excitation(system_or_engine, *, imep=None, pressure=None, orders=None
                   f"{pressure.imep(engine) / 1e5:.3g} bar")
     else:
         source = "given pressure trace"
-    if any(a is not None for a in engine.articulated) or getattr(engine, "rotary", False):
+    if not _cylinders_alike(engine):
         return _per_cylinder_excitation(engine, pressure, np.asarray(orders, float), points,
                                         source)
     gas = torque_harmonics(engine, pressure=pressure, orders=orders, omega=0.0, points=points)
@@ -313,7 +328,8 @@ def _per_cylinder_excitation(engine, pressure, orders, points, source):
         inertia[:, c] = np.where(integer, _series(unit, period, orders), 0.0)
     scale = np.abs(gas).max() or 1.0
     err = float(np.abs(gas - coarse).max() / scale)
-    kind = "rotary engine" if getattr(engine, "rotary", False) else "articulated rods"
+    kind = ("rotary engine" if getattr(engine, "rotary", False) else "articulated rods"
+            if any(a is not None for a in engine.articulated) else "cylinders' masses differ")
     return Excitation(orders=orders, gas=gas, inertia=inertia, n_cylinders=z,
                       source=f"{source}; per-cylinder exact kinematics ({kind})",
                       error_estimate=err)

@@ -32,7 +32,7 @@ from .._validate import check_finite_array
 from ..errors import ModelError
 
 __all__ = ["ForcedResponse", "forced_response", "harmonic_solve", "cylinder_forcing",
-           "stress_factor"]
+           "stress_factor", "response_from_angles", "cylinder_harmonics"]
 
 TWO_PI = 2.0 * np.pi
 SAMPLES_PER_PERIOD = 8
@@ -357,6 +357,38 @@ class ForcedResponse:
         return fig
 
 
+def check_speeds_orders(system, speed_rpm, orders):
+    """Validated speeds (rpm, > 0) and orders (> 0; None: the system's default orders)."""
+    speed_rpm = check_finite_array(speed_rpm, "speed_rpm", ndim=1, min_length=1,
+                                   error=ModelError)
+    if np.any(speed_rpm <= 0):
+        raise ModelError("speed_rpm must be > 0 everywhere")
+    orders = system.default_orders() if orders is None else check_finite_array(
+        orders, "orders", ndim=1, min_length=1, error=ModelError)
+    if np.any(orders <= 0):
+        raise ModelError("orders must be > 0")
+    return speed_rpm, orders
+
+
+def cylinder_harmonics(system, omega, orders, *, torque=None, misfire=None, imep=None):
+    """Cylinder torque harmonics for :func:`cylinder_forcing` and the label of their source.
+
+    ``torque`` None (the system's engine, :func:`predict.torsion.excitation.engine_excitation`
+    at ``imep``, default the model's), an Excitation, or plain harmonics (returned as given).
+    """
+    if torque is None or hasattr(torque, "harmonics"):
+        from .excitation import engine_excitation
+
+        if imep is None:
+            imep = system.operating.get("imep")
+        exc = torque if torque is not None else engine_excitation(system, imep=imep)
+        return exc.harmonics(omega, orders, misfire=misfire), exc.describe()
+    if misfire is not None:
+        raise ModelError("misfire needs an Excitation (gas and inertia torque apart), "
+                         "not plain torque harmonics")
+    return torque, "given torque harmonics"
+
+
 def forced_response(system, speed_rpm, *, torque=None, orders=None, misfire=None,
                     imep=None, superpose=True,
                     samples_per_period=SAMPLES_PER_PERIOD) -> ForcedResponse:
@@ -399,31 +431,44 @@ def forced_response(system, speed_rpm, *, torque=None, orders=None, misfire=None
     >>> print(round(float(np.abs(r.torque[0, 0, 0])), 3))
     57.942
     """
-    speed_rpm = check_finite_array(speed_rpm, "speed_rpm", ndim=1, min_length=1,
-                                   error=ModelError)
-    if np.any(speed_rpm <= 0):
-        raise ModelError("speed_rpm must be > 0 everywhere")
-    orders = system.default_orders() if orders is None else check_finite_array(
-        orders, "orders", ndim=1, min_length=1, error=ModelError)
-    if np.any(orders <= 0):
-        raise ModelError("orders must be > 0")
-    speed = speed_rpm * TWO_PI / 60.0
-    if torque is None or hasattr(torque, "harmonics"):
-        from .excitation import engine_excitation
+    speed_rpm, orders = check_speeds_orders(system, speed_rpm, orders)
+    if system.friction_dampers:
+        from .friction_line import friction_forced_response
 
-        if imep is None:
-            imep = system.operating.get("imep")
-        exc = torque if torque is not None else engine_excitation(system, imep=imep)
-        harmonics = exc.harmonics(speed, orders, misfire=misfire)
-        label = exc.describe()
-    else:
-        if misfire is not None:
-            raise ModelError("misfire needs an Excitation (gas and inertia torque apart), "
-                             "not plain torque harmonics")
-        harmonics = torque
-        label = "given torque harmonics"
+        return friction_forced_response(system, speed_rpm, torque=torque, orders=orders,
+                                        misfire=misfire, imep=imep, superpose=superpose,
+                                        samples_per_period=samples_per_period).forced
+    speed = speed_rpm * TWO_PI / 60.0
+    harmonics, label = cylinder_harmonics(system, speed, orders, torque=torque,
+                                          misfire=misfire, imep=imep)
     forcing = cylinder_forcing(system, harmonics, orders, speed.size)
     x = harmonic_solve(system, speed, orders, forcing)
+    return response_from_angles(
+        system, speed_rpm, orders, x, superpose=superpose, samples_per_period=samples_per_period,
+        method=f"exact harmonic solve (tree elimination); excitation: {label}")
+
+
+def response_from_angles(system, speed_rpm, orders, x, *, method, superpose=True,
+                         samples_per_period=SAMPLES_PER_PERIOD) -> ForcedResponse:
+    """Section torques, stresses and cycle peaks from referred node-angle phasors.
+
+    Parameters
+    ----------
+    system : TorsionalSystem
+    speed_rpm : ndarray (n_s,)
+    orders : ndarray (n_o,)
+    x : ndarray (n_s, n_o, n_nodes) complex
+        Referred node angles, rad (e.g. from :func:`harmonic_solve`).
+    method : str
+    superpose, samples_per_period
+        As in :func:`forced_response`.
+
+    Returns
+    -------
+    ForcedResponse
+    """
+    speed = np.asarray(speed_rpm, float) * TWO_PI / 60.0
+    orders = np.asarray(orders, float)
     e = system.edges
     omega = speed[:, None] * orders[None, :]
     xb = x[..., e[:, 1]]
@@ -444,10 +489,10 @@ def forced_response(system, speed_rpm, *, torque=None, orders=None, misfire=None
     angle_total, torque_total = both[:, :system.n_nodes], both[:, system.n_nodes:]
     stress_total = torque_total * sf
     bound = 1 - np.cos(np.pi / samples_per_period) if how.startswith("cycle") else 0.0
-    return ForcedResponse(speed_rpm=speed_rpm.copy(), orders=np.asarray(orders, float),
+    return ForcedResponse(speed_rpm=np.array(speed_rpm, float), orders=orders,
                           angle=angle, torque=torque_e, stress=stress,
                           angle_total=angle_total, torque_total=torque_total,
                           stress_total=stress_total, node_names=system.node_names,
                           edge_names=system.edge_names, superposition=how,
                           superposition_error_bound=float(bound),
-                          method=f"exact harmonic solve (tree elimination); excitation: {label}")
+                          method=method)

@@ -50,13 +50,40 @@ from ..errors import ModelError
 
 __all__ = ["friction_dissipation", "friction_dynamic_stiffness", "optimum_slip_torque",
            "FrictionResponse", "friction_damper_response", "time_domain_sdof",
-           "CONTINUOUS_SLIP_LIMIT"]
+           "CONTINUOUS_SLIP_LIMIT", "FrictionDamper"]
 
 log = logging.getLogger("crankbench")
 
 #: largest x = T_s/(J ω² a) with slip through the whole cycle: at the switching instant the
 #: hub's acceleration must exceed the ring's, √(1 − π²x²/4) ≥ x, i.e. x ≤ 1/√(1 + π²/4)
 CONTINUOUS_SLIP_LIMIT = float(2.0 / np.pi / np.sqrt(1.0 + 4.0 / np.pi ** 2))
+
+
+@dataclass(frozen=True)
+class FrictionDamper:
+    """A Lanchester friction ring kept as a non-linear element of a torsional system.
+
+    Attributes
+    ----------
+    node : int
+        Node carrying the hub (turning at crankshaft speed).
+    ring_inertia : float
+        kg·m².
+    slip_torque : float
+        N·m.
+    name : str
+    """
+
+    node: int
+    ring_inertia: float
+    slip_torque: float
+    name: str = "friction ring"
+
+    def __post_init__(self):
+        object.__setattr__(self, "ring_inertia", check_positive(
+            self.ring_inertia, "ring_inertia", error=ModelError))
+        object.__setattr__(self, "slip_torque", check_positive(
+            self.slip_torque, "slip_torque", error=ModelError))
 
 
 def _ring_cycle(x: float, samples: int = 4096):
@@ -347,38 +374,12 @@ def friction_damper_response(system, node, *, ring_inertia, slip_torque, speed_r
     energy = np.empty(rpm.size)
     for i, w in enumerate(speed * q):
         jw2 = j * w * w
-        xf, gn = x_f[i, n], g[i, n]
-        if abs(xf) == 0:
-            a, zc = 0.0, -1.0
-        else:
-            # φ(a) = a |1 + g Z(a)| − |x_F| on a log grid of a (Z depends on a through x)
-            a_stick = ts / jw2                       # a below this: the ring sticks
-            grid = a_stick * np.geomspace(1e-3, 1e6, 1200)
-            z = friction_dynamic_stiffness(ts / (jw2 * grid)) * jw2
-            phi = grid * np.abs(1 + gn * z) - abs(xf)
-            roots = np.flatnonzero(np.sign(phi[1:]) != np.sign(phi[:-1]))
-            if roots.size == 0:
-                raise ModelError(f"friction damper: no harmonic-balance amplitude found at "
-                                 f"{rpm[i]:g} rpm")
-            multi[i] = roots.size > 1
-            k = int(roots[-1])
-            lo, hi = grid[k], grid[k + 1]
-            for _ in range(60):                      # bisection on the bracket
-                mid = np.sqrt(lo * hi)
-                zm = friction_dynamic_stiffness(ts / (jw2 * mid)) * jw2
-                if np.sign(mid * abs(1 + gn * zm) - abs(xf)) == np.sign(phi[k]):
-                    lo = mid
-                else:
-                    hi = mid
-            a = float(np.sqrt(lo * hi))
-            zc = friction_dynamic_stiffness(ts / (jw2 * a))
+        a, zc, multi[i] = _balance(x_f[i, n], g[i, n], jw2, ts, rpm[i])
         zz = zc * jw2
-        theta_n = xf / (1 + gn * zz) if abs(xf) else 0.0
+        theta_n = x_f[i, n] / (1 + g[i, n] * zz) if a > 0 else 0.0
         angle[i] = x_f[i] - g[i] * zz * theta_n
         amp[i] = a
-        xr = ts / (jw2 * a) if a > 0 else np.inf
-        state[i] = ("stick" if xr >= 1 else "slip" if xr <= CONTINUOUS_SLIP_LIMIT
-                    else "stick-slip")
+        state[i] = _state(ts, jw2, a)
         energy[i] = np.pi * a * a * jw2 * np.imag(zc) if a > 0 else 0.0
     if multi.any():
         log.warning("friction_damper_response: several harmonic-balance amplitudes at %d "
@@ -388,6 +389,45 @@ def friction_damper_response(system, node, *, ring_inertia, slip_torque, speed_r
                             multiple_solutions=multi, node_names=system.node_names,
                             method="harmonic balance (first harmonic of the exact stick-slip "
                                    "friction torque)")
+
+
+def _balance(xf, gn, jw2, ts, rpm):
+    """Hub amplitude of the first-harmonic balance ``a |1 + g Z(a)| = |x_F|`` at one speed.
+
+    While the ring sticks (a ≤ T_s/(J ω²)) Z is the added inertia −J ω² and the balance is
+    linear: its root is taken directly; above, the roots are bracketed on a log grid and
+    bisected. Returns (a, Z/(J ω²) at a, several roots?); the largest root is taken.
+    """
+    if abs(xf) == 0:
+        return 0.0, -1.0 + 0j, False
+    a_stick = ts / jw2                       # a below this: the ring sticks
+    roots = []
+    a0 = abs(xf) / abs(1 - gn * jw2)         # stuck ring: added inertia
+    if a0 <= a_stick:
+        roots.append(a0)
+    top = max(1e6 * a_stick, 10.0 * abs(xf) * (1 + abs(gn) * 4 * ts / np.pi))
+    grid = a_stick * np.geomspace(1.0, top / a_stick, 1200)
+    z = friction_dynamic_stiffness(ts / (jw2 * grid)) * jw2
+    phi = grid * np.abs(1 + gn * z) - abs(xf)
+    for k in np.flatnonzero(np.sign(phi[1:]) != np.sign(phi[:-1])):
+        lo, hi = grid[k], grid[k + 1]
+        for _ in range(48):          # bisection on the bracket: to round-off
+            mid = np.sqrt(lo * hi)
+            zm = friction_dynamic_stiffness(ts / (jw2 * mid)) * jw2
+            if np.sign(mid * abs(1 + gn * zm) - abs(xf)) == np.sign(phi[k]):
+                lo = mid
+            else:
+                hi = mid
+        roots.append(float(np.sqrt(lo * hi)))
+    if not roots:
+        raise ModelError(f"friction damper: no harmonic-balance amplitude found at {rpm:g} rpm")
+    a = max(roots)
+    return a, complex(friction_dynamic_stiffness(ts / (jw2 * a))), len(roots) > 1
+
+
+def _state(ts, jw2, a):
+    xr = ts / (jw2 * a) if a > 0 else np.inf
+    return "stick" if xr >= 1 else "slip" if xr <= CONTINUOUS_SLIP_LIMIT else "stick-slip"
 
 
 def time_domain_sdof(*, inertia, stiffness, damping, ring_inertia, slip_torque, omega,

@@ -88,8 +88,15 @@ def resonance_amplitudes(system, *, torque=None, orders=None, speed_range_rpm=No
     >>> print(float(t.method_error.abs().iloc[0]) < 0.01)
     True
     """
+    import logging
+
     import pandas as pd
 
+    if system.friction_dampers:
+        logging.getLogger("crankbench").warning(
+            "resonance_amplitudes: the non-linear friction ring(s) %s are not in this linear "
+            "table; their response is predict.torsion.friction_forced_response",
+            ", ".join(repr(d.name) for d in system.friction_dampers))
     if torque is None:
         from .excitation import engine_excitation
 

@@ -83,6 +83,12 @@ class TorsionalSystem:
     name : str
     operating : dict, optional
         Operating data from the model file: ``speed_range_rpm`` (low, high), ``imep`` (Pa).
+    friction_dampers : sequence of FrictionDamper, optional
+        Lanchester friction rings kept as non-linear elements
+        (:class:`predict.torsion.friction.FrictionDamper`): not in the linear matrices nor
+        the eigen-analysis (a slipping ring carries no stiffness); the forced response then
+        goes through :func:`predict.torsion.friction_line.friction_forced_response`
+        (harmonic balance of the exact stick-slip torque, each order alone).
 
     Notes
     -----
@@ -110,7 +116,7 @@ class TorsionalSystem:
                  edge_stiffness_omega2=None, node_ratio=None, edge_ratio=None,
                  edge_outer_diameter=None, edge_inner_diameter=None, eigen_nodes=None,
                  cylinder_nodes=(), firing_angles_deg=None, cycle=4, engine=None, limits=None,
-                 name="", operating=None):
+                 name="", operating=None, friction_dampers=()):
         j = check_finite_array(inertias, "inertias", ndim=1, min_length=1, error=ModelError)
         if np.any(j <= 0):
             i = int(np.flatnonzero(j <= 0)[0])
@@ -194,6 +200,20 @@ class TorsionalSystem:
         self.limits = limits
         self.name = str(name)
         self.operating = dict(operating or {})
+        from .friction import FrictionDamper
+
+        fd = tuple(friction_dampers or ())
+        for d in fd:
+            if not isinstance(d, FrictionDamper):
+                raise ModelError(f"friction_dampers must hold FrictionDamper, got "
+                                 f"{type(d).__name__}")
+            if not 0 <= d.node < n:
+                raise ModelError(f"friction damper {d.name!r}: node {d.node} out of range "
+                                 f"0..{n - 1}")
+            if not np.isclose(self._node_ratio[d.node], 1.0):
+                raise ModelError(f"friction damper {d.name!r}: its node must turn at "
+                                 "crankshaft speed (ratio 1)")
+        self.friction_dampers = fd
 
     # ----------------------------------------------------------------- properties -------
     @property
@@ -272,7 +292,7 @@ class TorsionalSystem:
                     eigen_nodes=self._eigen_nodes, cylinder_nodes=self.cylinder_nodes,
                     firing_angles_deg=self.firing_angles_deg, cycle=self.cycle,
                     engine=self.engine, limits=self.limits, name=self.name,
-                    operating=self.operating)
+                    operating=self.operating, friction_dampers=self.friction_dampers)
         unknown = set(changes) - set(args)
         if unknown:
             raise ModelError(f"replace(): unknown argument(s) {sorted(unknown)}")

@@ -18,11 +18,20 @@ shaft, web width b across it, crank radius R; every term scaled by D_ref⁴)::
 
 Validity: both were fitted to crankshafts *without* overlap of pin and journal
 (R ≥ (D_j + D_p)/2) and with webs wider than thick; for overlapped throws they over-estimate
-the flexibility (Ker Wilson vol. 1 ch. 3; Nestorides 1958 §3.1) and :func:`throw_stiffness`
-warns. Their scatter against measured throws is of the order ±10-20 %; the result says so.
-The Tuplin (1953) and BICERA (Nestorides 1958, with its overlap charts) formulas of the same
-family are **not** implemented: their coefficients could not be checked against the printed
-source while this module was written, and an unchecked empirical formula is worse than none.
+the flexibility, and :func:`throw_stiffness` warns. Their scatter against measured throws is
+of the order ±10-20 %; the result says so.
+
+**Source status (read this before relying on the numbers).** The two formulas above were
+written from memory of Ker Wilson vol. 1 ch. 3 and have *not* been checked against a printed
+or otherwise readable copy of Carter (1928), Ker Wilson (1956) or Nestorides (1958): searches of
+the available public material (web pages, documentation, public code) found none of these texts,
+no reproduction of the formulas, and no published worked example or table of measured against
+formula stiffness. Their coefficients are therefore unverified, the tests check only the
+implementation against the form written here, and every result carries this in its ``note``.
+For the same reason the Tuplin (1953) and BICERA (Nestorides 1958, with its overlap charts)
+formulas are **not** implemented: no readable source gave their coefficients, and an unchecked
+empirical formula is worse than none. A throw stiffness from the engine maker, a
+finite-element model or a measurement should be preferred (``stiffness =`` in the TOML).
 
 Distributed inertia
 -------------------
@@ -236,6 +245,8 @@ def throw_stiffness(throw: CrankThrow, *, method: str = "wilson",
                          "positive; the throw is far outside the formula's range")
     valid = not problems
     note = "; ".join(problems) if problems else "within the formula's range"
+    note += ("; coefficients not verified against a printed source (see "
+             "predict.torsion.throws)")
     if problems:
         log.warning("throw_stiffness(method=%r): outside the formula's range: %s", method, note)
     k = g * np.pi * d4 / (32.0 * le)

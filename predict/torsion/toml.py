@@ -33,6 +33,20 @@ Layout (SI unless the key names another unit; values at each part's own speed)::
     [[shaftline.gear]]      driver, driven, ratio, mesh_stiffness (optional: rigid mesh)
     [[shaftline.ground]]    node, stiffness, damping
     [[shaftline.damper]]    type = "viscous" | "tuned" | "pendulum" | "friction", node, ...
+                            (friction: ring_inertia, slip_torque and either
+                            model = "harmonic-balance" — the default without a design point:
+                            the non-linear slip/stick ring, forced response by harmonic
+                            balance — or design_frequency + design_amplitude, the linearised
+                            equivalent viscous damper)
+
+    [excitation]                           # a bench without an engine (motor-driven):
+    node = "motor"                         # where the exciting torque acts
+    orders = [1, 2, 6]                     # excitation orders (per turn of the reference shaft)
+    torque = [12.0, 4.0, 1.5]              # N·m amplitudes; leave out when unknown (criticals
+                                           #   are then compared by speed, not amplitude)
+    phase_deg = [0, 0, 0]                  # optional
+    law = "constant"                       # or "speed_squared" (torque ∝ speed², e.g. a fan)
+    reference_rpm = 1500.0                 # speed where the torques apply for speed_squared
 
     [limits]                               # rule data, see load_limits
     application = "propulsion"
@@ -61,7 +75,7 @@ _DAMPER_KEYS = {
     "viscous": ("ring_inertia", "damping"),
     "tuned": ("ring_inertia", "stiffness", "damping", "loss_factor"),
     "pendulum": ("mass", "pivot_radius", "length", "damping"),
-    "friction": ("ring_inertia", "slip_torque", "design_frequency", "design_amplitude"),
+    "friction": ("ring_inertia", "slip_torque"),
 }
 
 
@@ -383,6 +397,22 @@ def from_toml(path):
                 kw[key] = t.number(key, 0.0, low=0.0, **_DAMPER_UNITS[key])
             else:
                 kw[key] = t.positive(key, **_DAMPER_UNITS[key])
+        if kind == "friction":
+            kw["design_frequency"] = t.positive("design_frequency", None,
+                                                  **_DAMPER_UNITS["design_frequency"])
+            kw["design_amplitude"] = t.positive("design_amplitude", None,
+                                                  **_DAMPER_UNITS["design_amplitude"])
+            lin = kw["design_frequency"] is not None or kw["design_amplitude"] is not None
+            kw["model"] = t.string("model", "linearised" if lin else "harmonic-balance",
+                                   options=("harmonic-balance", "linearised"))
+            if kw["model"] == "linearised" and not (kw["design_frequency"] and
+                                                    kw["design_amplitude"]):
+                t.fail("model", '= "linearised" needs design_frequency (rad/s) and '
+                                "design_amplitude (rad)")
+            if kw["model"] == "harmonic-balance" and lin:
+                t.fail("design_frequency" if kw["design_frequency"] else "design_amplitude",
+                       'belongs to model = "linearised"; the harmonic-balance friction '
+                       "damper has no design point")
         t.check_unknown()
         func = {"viscous": _dampers.add_viscous_damper, "tuned": _dampers.add_tuned_damper,
                 "pendulum": _dampers.add_pendulum_absorber,
@@ -393,10 +423,36 @@ def from_toml(path):
     lt = doc.table("limits", None)
     if lt is not None:
         limits = load_limits(lt, engine=engine)
+    excitation = _excitation(doc.table("excitation", None), line)
     doc.check_unknown(["description", "engine"])
     system = wrap(sl, line.build, limits=limits)
     if limits is not None:
         system = system.replace(limits=_complete_limits(limits, system, lt))
     return system.replace(operating=dict(
         speed_range_rpm=None if speed_range is None else tuple(speed_range), imep=imep,
-        source=str(path)))
+        source=str(path), excitation=excitation))
+
+
+def _excitation(t, line):
+    """The ``[excitation]`` table of a bench without an engine, as a plain dict (or None)."""
+    if t is None:
+        return None
+    nodes = list(getattr(line, "_alias", {})) or None
+    node = t.string("node", None, options=nodes) if nodes else t.string("node", None)
+    orders = t.numbers("orders", low=0.0, strict_low=True, unit="1", plausible=(1e-2, 100.0))
+    torque = t.numbers("torque", None, length=orders.size, low=0.0, unit="N*m",
+                       plausible=(1e-4, 1e8))
+    phase = t.numbers("phase_deg", None, length=orders.size, unit="deg",
+                      plausible=(1e-3, 720.0))
+    law = t.string("law", "constant", options=["constant", "speed_squared"])
+    ref = t.positive("reference_rpm", None, unit="rpm", plausible=_SPEED)
+    if law == "speed_squared" and ref is None:
+        t.fail("reference_rpm", "is needed for law = 'speed_squared' (the speed at which the "
+                                "torques apply)")
+    if len(set(orders.tolist())) != orders.size:
+        t.fail("orders", f"= {orders.tolist()} repeats an order")
+    t.check_unknown(["description"])
+    return {"node": node, "orders": orders.tolist(),
+            "torque": None if torque is None else torque.tolist(),
+            "phase_deg": None if phase is None else phase.tolist(), "law": law,
+            "reference_rpm": ref, "source": t.where()}

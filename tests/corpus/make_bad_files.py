@@ -1,4 +1,5 @@
-"""Generate the bad-record corpus ``tests/corpus/bad/records/`` (issue 10, file formats).
+"""Generate the bad-record corpus ``tests/corpus/bad/records/`` (issue 10, file formats; issues
+14 and 19: real-rig text and spreadsheet exports, duplicate columns, external links).
 
 Every file is small (< 100 kB) and broken in one documented way: zero length, truncated,
 wrong magic bytes, header/body mismatch, NaN/inf runs, clipping, non-monotonic or duplicated
@@ -225,8 +226,39 @@ def make_all(out: Path) -> list[Path]:
         Path(str(out / "bad_sidecar_json.wav") + ".json").write_text('{"channels": [')
         with h5py.File(add("foreign_layout.h5"), "w") as f:
             f.create_dataset("acc", data=np.zeros(10))
+        made += make_import_faults(out, good[".h5"])
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
+    return made
+
+
+def make_import_faults(out: Path, good_h5: Path) -> list[Path]:
+    """Faults of real-rig exports and of record files (issues 14 and 19): text whose dialect
+    or header cannot be inferred, duplicate column names, ragged rows, legacy and empty
+    workbooks, an HDF5 record whose channel is an external link."""
+    import h5py
+    import openpyxl
+
+    made = []
+
+    def add(name):
+        made.append(out / name)
+        return out / name
+
+    add("duplicate_columns.csv").write_text("time [s],acc [g],acc [g]\n0,1,2\n0.001,2,3\n")
+    add("headerless.txt").write_text("0\t0.5\t1.5\n0.001\t0.6\t1.4\n0.002\t0.7\t1.3\n")
+    add("ambiguous_delimiter.txt").write_text("0,5\n0,6\n0,7\n")
+    add("ragged_rows.csv").write_text("time [s],acc [g]\n0,1\n0.001,2,3\n0.002,3\n")
+    add("bad_cell_decimal_comma.csv").write_text(
+        "Zeit [s];Druck [bar]\n0;1,5\n0,001;1,6\n0,002;---\n0,003;1,8\n")
+    add("legacy.xls").write_bytes(b"\xd0\xcf\x11\xe0\xa1\xb1\x1a\xe1" + bytes(56))
+    wb = openpyxl.Workbook()
+    wb.active.append(["notes only", "no numbers"])
+    wb.save(add("no_numbers.xlsx"))
+    shutil.copy(good_h5, add("external_link.h5"))
+    with h5py.File(out / "external_link.h5", "r+") as f:
+        del f["channels/acc"]
+        f["channels/acc"] = h5py.ExternalLink("elsewhere.h5", "/channels/acc")
     return made
 
 

@@ -94,12 +94,32 @@ ERRORS = {
     # CSV / WAV specifics
     "no_time_column.csv": r"no time column; expected a first column named 'time \[s\]' \(found "
                           r"columns \['acc \[g\]', 'vel \[mm/s\]'\]\)",
-    "non_numeric.csv": r"CSV contains a non-numeric value \(.*'overload'\); expected numbers in "
-                       r"every data cell",
-    "header_only.csv": r"CSV has a header but no data rows",
+    "non_numeric.csv": r"line 3, column 2: 'overload' is not a number \(read as comma-separated, "
+                       r"decimal point\); expected numbers in every data cell",
+    "header_only.csv": r"the table has a header but no data rows \(1 line\(s\), the last "
+                       r"'time \[s\],acc \[g\]'\)",
     "no_unit.csv": r"column 'acc' names no unit; expected 'acc \[unit\]', e.g. 'acc \[g\]'",
     "bad_sidecar_json.wav": r"bad_sidecar_json.wav.json: sidecar is not valid JSON .*expected "
                             r"the schema in measure.readers.wav",
+    # real-rig exports and record files (issues 14, 19)
+    "duplicate_columns.csv": r"columns 2 and 3 are both named 'acc' \(comma-separated, decimal "
+                             r"point, 1 header row, UTF-8\); channel names must be unique",
+    "headerless.txt": r"no header row \(read as tab-separated, decimal point, no header row, "
+                      r"UTF-8\): channel names and units cannot be inferred for its 3 "
+                      r"column\(s\); give a channel map",
+    "ambiguous_delimiter.txt": r"the delimiter cannot be inferred: every row reads as one column "
+                               r"with decimal comma \(1 column\); or comma-separated with "
+                               r"decimal point \(2 columns\); set delimiter and decimal",
+    "ragged_rows.csv": r"line 3 has 3 field\(s\) where the table has 2 \(read as "
+                       r"comma-separated, decimal point\): '0.001,2,3'",
+    "bad_cell_decimal_comma.csv": r"line 4, column 2: '---' is not a number \(read as "
+                                  r"semicolon-separated, decimal comma\)",
+    "legacy.xls": r"'.xls' is a legacy Excel workbook: save it as .xlsx \(or CSV\)",
+    "no_numbers.xlsx": r"sheet 'Sheet' has no row of numbers \(1 rows\); expected a table of "
+                       r"numbers",
+    "external_link.h5": r"HDF5 object 'channels/acc' is an external link to "
+                        r"elsewhere.h5:/channels/acc; a record must hold its own data "
+                        r"\(external links and virtual datasets are not followed\)",
 }
 
 #: files usable in part: read with allow_nonfinite=True -> (channel, masked samples, span text)

@@ -70,3 +70,17 @@ def test_generator_refuses_overwrite(tmp_path):
     assert res.returncode == 1 and "pass --overwrite to replace them" in res.stderr
     assert (tmp_path / "i4_runup.tdms").read_bytes() == b"keep me"
     assert sorted(p.name for p in tmp_path.iterdir()) == ["i4_runup.tdms"]
+
+
+def test_raw_genset_export_matches_its_generator_and_imports(sample_data, tmp_path):
+    """sample_data/raw: the committed raw export is what make_raw.py writes, and its map reads
+    it to the 60-2 wheel it holds (58 edges per revolution, the runt tooth 57 named)."""
+    script = sample_data / "raw" / "make_raw.py"
+    made = runpy.run_path(str(script))["make"](tmp_path)
+    for p in made:
+        assert p.read_bytes() == (sample_data / "raw" / p.name).read_bytes(), p.name
+    rec = io.read(sample_data / "raw" / "genset_60-2.txt",
+                  map=sample_data / "raw" / "genset_60-2_map.toml")
+    assert rec["crank"].attrs["runt_teeth"] == [57]
+    assert "58.00 per revolution" in rec["crank"].attrs["decoding"]
+    assert rec.attrs["engine_id"] == "G1 genset"

@@ -93,15 +93,35 @@ def test_shaft_stiffness_and_stepped_shaft():
         shaft_stiffness(1.0, 0.1, bore=0.2)
 
 
-def test_crank_throw_inertia_energy_average():
-    """Mean over a revolution of m_rec (dx/dψ)² equals m_rec r² (1/2 + λ²/8) up to O(λ⁴) (λ = 0.2 here)."""
-    e = Engine(crank_angles_deg=[0], crank_radius=0.1, rod_length=0.5, reciprocating_mass=4.0,
-               rotating_mass=3.0)
-    psi = np.linspace(0, 2 * np.pi, 20001)[:-1]
-    _, dx, _ = e.piston_motion(psi)
-    exact_mean = 4.0 * np.mean(dx[0] ** 2)
+def test_crank_throw_inertia_is_the_exact_energy_mean():
+    """J = m_rot r² + m_rec ⟨x'²⟩ + ΔJ ⟨φ'²⟩, against quadrature of the closed-form velocity
+    x' = −r sin ψ − r² sin ψ cos ψ / √(l² − r² sin² ψ) (and φ' = r cos ψ / √(l² − r² sin² ψ));
+    the textbook 1/2 + λ²/8 is low by the series' next terms λ⁴/16 + 5λ⁶/128."""
+    from scipy.integrate import quad
+
+    r, l, m_rec, m_rot, dj = 0.1, 0.25, 4.0, 3.0, -0.02
+    e = Engine(crank_angles_deg=[0], crank_radius=r, rod_length=l, reciprocating_mass=m_rec,
+               rotating_mass=m_rot, rod_inertia_correction=dj)
+
+    def xdot2(p):
+        return (r * np.sin(p) + r * r * np.sin(p) * np.cos(p)
+                / np.sqrt(l * l - (r * np.sin(p)) ** 2)) ** 2
+
+    def phidot2(p):
+        return (r * np.cos(p)) ** 2 / (l * l - (r * np.sin(p)) ** 2)
+
+    mean_x = quad(xdot2, 0, 2 * np.pi, epsabs=0, epsrel=1e-13)[0] / (2 * np.pi)
+    mean_p = quad(phidot2, 0, 2 * np.pi, epsabs=0, epsrel=1e-13)[0] / (2 * np.pi)
     j = crank_throw_inertia(e, 1, 0.5)
-    assert j - 0.5 - 3.0 * 0.01 == pytest.approx(exact_mean, rel=0.25 * 0.2 ** 4)
+    assert j == pytest.approx(0.5 + m_rot * r * r + m_rec * mean_x + dj * mean_p, rel=1e-12)
+    plain = Engine(crank_angles_deg=[0], crank_radius=r, rod_length=l, reciprocating_mass=m_rec)
+    lam = r / l
+    short = crank_throw_inertia(plain, 1, exact=False)
+    assert short == pytest.approx(m_rec * r * r * (0.5 + lam ** 2 / 8), rel=1e-14)
+    missing = crank_throw_inertia(plain, 1) - short
+    # λ² ⟨sin²ψ cos²ψ / (1 − λ² sin²ψ)⟩ = λ²/8 + λ⁴/16 + 5λ⁶/128 + 7λ⁸/256 …
+    assert missing == pytest.approx(m_rec * r * r * (lam ** 4 / 16 + 5 * lam ** 6 / 128),
+                                    rel=1.2 * 7 / 16 * lam ** 4)
 
 
 def test_gear_referral_by_ratio_squared():

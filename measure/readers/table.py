@@ -1,0 +1,343 @@
+"""Tables of columns (delimited text, spreadsheets) and the Record read from their headers.
+
+A :class:`Table` is what a text export or a spreadsheet holds: columns of numbers, maybe a header
+row of names, maybe a units row, maybe a sample rate stated above the header. It reads only the
+columns asked for. :func:`table_record` turns a table into a Record from its headers alone
+(``name [unit]`` or a units row, a time column or a stated sample rate); when the headers do
+not say enough, the error names what is missing and points to a channel map
+(:mod:`measure.channelmap`), which gives the rest.
+"""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+import numpy as np
+
+from crankbench.predict.errors import RecordError
+
+from .text import Dialect, read_columns, sniff
+
+__all__ = ["Table", "TextTable", "SheetTable", "table_record", "split_header", "TIME_NAMES",
+           "open_table", "TABLE_FORMATS"]
+
+_HEADER_RE = re.compile(r"^\s*(?P<name>.*?)\s*(?:\[(?P<u1>[^\]]*)\]|\((?P<u2>[^)]*)\))\s*$")
+#: column names taken as the time axis (case-insensitive, unit stripped)
+TIME_NAMES = {"time", "t", "zeit", "timestamp", "time_s", "x_value", "temps", "tiempo", "tempo"}
+#: format modules whose files are tables (a channel map reads their columns)
+TABLE_FORMATS = ("csv", "xlsx")
+
+
+def split_header(text):
+    """``"p [bar]"`` or ``"p (bar)"`` -> ``("p", "bar")``; no unit -> ``(text, None)``.
+
+    Examples
+    --------
+    >>> split_header("Pressure cyl 1 (bar)"), split_header("crank")
+    (('Pressure cyl 1', 'bar'), ('crank', None))
+    """
+    if text is None:
+        return None, None
+    m = _HEADER_RE.match(str(text))
+    if m:
+        unit = m.group("u1") if m.group("u1") is not None else m.group("u2")
+        return m.group("name"), unit.strip()
+    return str(text).strip(), None
+
+
+class Table:
+    """Columns of a file (override :meth:`read`).
+
+    Attributes
+    ----------
+    file : str
+    names : list of (str or None)
+        Header text of each column.
+    units : list of (str or None)
+        Unit of each column from a units row (None where none).
+    n_columns : int
+    sample_rate : float or None
+        Stated in the file (Hz), if found.
+    """
+
+    file: str
+    names: list
+    units: list
+    n_columns: int
+    sample_rate: float | None = None
+
+    def describe(self) -> str:
+        """How the table was read (dialect, sheet)."""
+        raise NotImplementedError
+
+    def read(self, columns) -> np.ndarray:
+        """Columns (0-based indices) as a (k, rows) float64 array."""
+        raise NotImplementedError
+
+    def label(self, index: int) -> str:
+        """``column 3 ('Pressure [bar]')`` for messages."""
+        name = self.names[index] if index < len(self.names) else None
+        return f"column {index + 1}" + (f" ({name!r})" if name else "")
+
+
+class TextTable(Table):
+    """A delimited text file (:mod:`measure.readers.text`)."""
+
+    def __init__(self, path, dialect: Dialect | None = None, **hints):
+        self.path = Path(path)
+        self.file = str(path)
+        self.dialect = dialect or sniff(path, **hints)
+        d = self.dialect
+        self.n_columns = d.n_columns
+        self.names = list(d.names) + [None] * (d.n_columns - len(d.names))
+        self.units = list(d.units) + [None] * (d.n_columns - len(d.units))
+        self.sample_rate = d.sample_rate
+
+    def describe(self) -> str:
+        return self.dialect.describe()
+
+    def read(self, columns) -> np.ndarray:
+        return read_columns(self.path, self.dialect, columns, file=self.file)
+
+
+class SheetTable(Table):
+    """One worksheet of an ``.xlsx`` workbook (openpyxl, read-only).
+
+    Header rows are the rows above the first row of numbers whose cells hold text; a row whose
+    texts are all unit spellings is the units row. Date/time cells in a column become seconds
+    from the first one.
+    """
+
+    def __init__(self, path, sheet=None, *, header_rows=None, skip_rows=None):
+        import openpyxl
+
+        self.path = Path(path)
+        self.file = str(path)
+        wb = openpyxl.load_workbook(self.path, read_only=True, data_only=True)
+        try:
+            if sheet is None:
+                ws = wb.worksheets[0]
+            elif isinstance(sheet, int):
+                if not 1 <= sheet <= len(wb.worksheets):
+                    raise RecordError(f"{self.file}: sheet {sheet} does not exist; the workbook "
+                                      f"has {len(wb.worksheets)} sheet(s): "
+                                      f"{', '.join(wb.sheetnames)}")
+                ws = wb.worksheets[sheet - 1]
+            else:
+                if sheet not in wb.sheetnames:
+                    from crankbench.predict._validate import suggest
+
+                    raise RecordError(f"{self.file}: no sheet {sheet!r}"
+                                      f"{suggest(sheet, wb.sheetnames)}; sheets: "
+                                      f"{', '.join(wb.sheetnames)}")
+                ws = wb[sheet]
+            self.sheet = ws.title
+            rows = [list(r) for r in ws.iter_rows(values_only=True)]
+        finally:
+            wb.close()
+        self._parse(rows, header_rows, skip_rows)
+
+    def _parse(self, rows, header_rows, skip_rows):
+        import datetime as dt
+
+        def numeric(v):
+            return isinstance(v, (int, float, dt.datetime, dt.time, dt.timedelta)) and \
+                not isinstance(v, bool)
+
+        while rows and all(v is None for v in rows[-1]):
+            rows.pop()
+        width = max((len(r) for r in rows), default=0)
+        while width and all(len(r) < width or r[width - 1] is None for r in rows):
+            width -= 1
+        rows = [(r + [None] * width)[:width] for r in rows]
+        if header_rows is not None or skip_rows is not None:
+            first = int(skip_rows or 0) + int(header_rows or 0)
+        else:
+            first = next((i for i, r in enumerate(rows)
+                          if any(numeric(v) for v in r) and all(
+                              numeric(v) or v is None for v in r)), None)
+            if first is None:
+                raise RecordError(f"{self.file}: sheet {self.sheet!r} has no row of numbers "
+                                  f"({len(rows)} rows); expected a table of numbers")
+        head = rows[:first]
+        data = rows[first:]
+        if not data:
+            raise RecordError(f"{self.file}: sheet {self.sheet!r} has a header but no data rows")
+        header = [r for r in head if any(isinstance(v, str) and v.strip() for v in r)]
+        n_header = 0
+        for r in reversed(header):  # header rows: the text rows right above the data, filled
+            filled = sum(v is not None for v in r)
+            if sum(isinstance(v, str) for v in r) >= max(1, 0.5 * filled) and \
+                    filled >= max(1, 0.5 * width):
+                n_header += 1
+            else:
+                break
+        header = header[len(header) - n_header:] if n_header else []
+        from .text import _looks_like_units, _rate_from
+
+        names, units = [None] * width, [None] * width
+        texts = [[("" if v is None else str(v)).strip() for v in r] for r in header]
+        unit_rows = [r for r in texts if _looks_like_units(r)]
+        name_rows = [r for r in texts if not _looks_like_units(r)]
+        if name_rows:
+            names = [t or None for t in name_rows[0]]
+        if unit_rows and name_rows:
+            units = [t.strip("[]()").strip() or None for t in unit_rows[0]]
+        self.sample_rate = _rate_from([" ".join(str(v) for v in r if v is not None)
+                                       for r in rows[:first]])
+        self.names, self.units, self.n_columns = names, units, width
+        self.header_rows, self.skip_rows = n_header, first - n_header
+        self._data = data
+
+    def describe(self) -> str:
+        return (f"sheet {self.sheet!r}, {self.header_rows} header row(s), "
+                f"{self.skip_rows} row(s) before the header")
+
+    def read(self, columns) -> np.ndarray:
+        import datetime as dt
+
+        out = np.full((len(columns), len(self._data)), np.nan)
+        for j, c in enumerate(columns):
+            if not 0 <= c < self.n_columns:
+                raise RecordError(f"{self.file}: column {c + 1} does not exist; {self.describe()}"
+                                  f" has {self.n_columns} column(s)")
+            first_time = None
+            for i, row in enumerate(self._data):
+                v = row[c]
+                if v is None:
+                    continue
+                if isinstance(v, bool) or isinstance(v, str):
+                    text = str(v).strip()
+                    try:
+                        v = float(text.replace(",", ".")) if text else float("nan")
+                    except ValueError:
+                        line = self.skip_rows + self.header_rows + i + 1
+                        raise RecordError(f"{self.file}: sheet {self.sheet!r}, row {line}, "
+                                          f"{self.label(c)}: {text!r} is not a number; expected "
+                                          "numbers in every data cell") from None
+                elif isinstance(v, (dt.datetime, dt.time, dt.timedelta)):
+                    if isinstance(v, dt.time):
+                        v = dt.timedelta(hours=v.hour, minutes=v.minute, seconds=v.second,
+                                         microseconds=v.microsecond)
+                    first_time = v if first_time is None else first_time
+                    v = (v - first_time).total_seconds()
+                out[j, i] = float(v)
+        return out
+
+
+def open_table(path, module_name, *, source=None) -> Table:
+    """The :class:`Table` of a text or spreadsheet file, with the map's ``[source]`` hints."""
+    source = dict(source or {})
+    if module_name == "xlsx":
+        return SheetTable(path, source.get("sheet"), header_rows=source.get("header_rows"),
+                          skip_rows=source.get("skip_rows"))
+    hints = {k: source[k] for k in ("delimiter", "decimal", "header_rows", "skip_rows",
+                                     "encoding") if k in source}
+    return TextTable(path, **hints)
+
+
+def _time_from(table, index, unit, file, t):
+    """Check and convert the time column ``t`` (values as read)."""
+    from ..units import to_si
+
+    finite = np.flatnonzero(np.isfinite(t))
+    n = int(finite[-1]) + 1 if finite.size else 0
+    t = t[:n]
+    if unit not in (None, "", "s"):
+        t, si, _ = to_si(t, unit, channel=table.names[index])
+        if si != "s":
+            raise RecordError(f"{file}: time {table.label(index)} has unit {unit!r}; expected "
+                              "a time unit (s, ms)")
+    if n < 2:
+        raise RecordError(f"{file}: time {table.label(index)} has {n} value(s); expected at "
+                          "least 2 to infer the sample rate")
+    if not np.all(np.isfinite(t)):
+        i = int(np.flatnonzero(~np.isfinite(t))[0])
+        raise RecordError(f"{file}: time {table.label(index)} is empty or NaN/inf at data row "
+                          f"{i + 1}; expected a time in every row")
+    return t
+
+
+def duplicate_names(table) -> None:
+    """Refuse two columns with the same header (they would silently become one channel)."""
+    seen: dict = {}
+    for i, name in enumerate(table.names):
+        if not name:
+            continue
+        key = split_header(name)[0]
+        if key in seen:
+            raise RecordError(
+                f"{table.file}: columns {seen[key] + 1} and {i + 1} are both named {key!r} "
+                f"({table.describe()}); channel names must be unique — rename one, or read "
+                "the file with a channel map that names each column by its number")
+        seen[key] = i
+
+
+def table_record(table: Table, *, channels=None):
+    """A Record from a table's headers alone (no channel map).
+
+    Each column header is ``name [unit]`` (or ``name (unit)``, or a units row gives the unit);
+    the time axis is the column named time/t (with a time unit) or, without one, the sample
+    rate stated in the file.
+
+    Raises
+    ------
+    RecordError
+        No header row, no unit for a column, no time column and no stated sample rate,
+        duplicate names — each naming the file, the column, how the file was read and the map
+        setting that would supply what is missing.
+    """
+    from ._common import build_dataset, select, si_channel
+
+    file = table.file
+    if not any(table.names):
+        raise RecordError(
+            f"{file}: no header row (read as {table.describe()}): channel names and units "
+            f"cannot be inferred for its {table.n_columns} column(s); give a channel map "
+            "(measure.read(path, map=...), --map MAP.toml) naming each column's units")
+    duplicate_names(table)
+    parsed = []
+    for i, header in enumerate(table.names):
+        name, unit = split_header(header)
+        if unit is None and i < len(table.units) and table.units[i]:
+            unit = table.units[i]
+        parsed.append((name or f"column {i + 1}", unit))
+    headers = [str(h) for h in table.names]
+    time_idx = next((i for i, (name, _) in enumerate(parsed)
+                     if name and name.strip().lower() in TIME_NAMES), None)
+    if time_idx is None and not table.sample_rate:
+        raise RecordError(f"{file}: no time column; expected a first column named 'time [s]' "
+                          f"(found columns {headers}), or a sample rate: give a channel map "
+                          "with [source] sample_rate (Hz) or time_column")
+    names = [p[0] for i, p in enumerate(parsed) if i != time_idx]
+    wanted = select(names, channels, file=file)
+    idx = [i for i, (name, _) in enumerate(parsed) if i != time_idx and name in wanted]
+    for i in idx:
+        name, unit = parsed[i]
+        if unit is None:
+            raise RecordError(f"{file}: column {headers[i]!r} names no unit; expected "
+                              f"'{name} [unit]', e.g. '{name} [g]', or a channel map giving its "
+                              "units")
+    both = table.read(([time_idx] if time_idx is not None else []) + idx)  # one pass
+    t = None
+    if time_idx is not None:
+        t = _time_from(table, time_idx, parsed[time_idx][1], file, both[0])
+        span = t[-1] - t[0]
+        fs = (t.size - 1) / span if np.isfinite(span) and span > 0 else float("nan")
+        data = both[1:]
+    else:
+        fs = float(table.sample_rate)
+        data = both
+    if t is None:
+        n = data.shape[1] if data.size else 0
+        from ..record import time_coordinate
+
+        t = time_coordinate(n, fs)
+    out = []
+    for row, i in enumerate(idx):
+        name, unit = parsed[i]
+        values = data[row, :t.size]
+        values, attrs = si_channel(name, values, {"units": unit, "sample_rate": fs}, file=file)
+        out.append((name, "time", values, attrs))
+    return build_dataset(out, {"time": t}, {})
