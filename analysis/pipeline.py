@@ -20,7 +20,9 @@ Steps and their fidelity knobs:
 5. :func:`analysis.match_criticals`;
 6. limit checks: measured vibratory stress = measured order amplitude × the model's stress per
    unit node amplitude of that order (the classical torsiograph evaluation), summed over orders
-   (an upper bound on the superposed stress), against the continuous/transient limits.
+   (an upper bound on the superposed stress), against the continuous/transient limits;
+7. block/mount vibration: every vibrograph channel placed on the engine block against the
+   engine model on its mounts, per (sensor, order) (:mod:`analysis.vibrograph`).
 """
 
 from __future__ import annotations
@@ -136,10 +138,14 @@ class PipelineResult:
         Every parameter used.
     timings : dict
         Seconds per step.
-    balance : tuple of (channel, BalanceComparison or None, pandas.DataFrame)
-        Orders 1 and 2 at each vibrograph mounted at a named mount: the comparison with the
-        predicted balance residuals through the mount model (None when the prediction is zero
-        by design), and a table of predicted and measured maxima per order.
+    balance : tuple
+        Kept for compatibility (empty): the vibrograph channels are compared in
+        ``vibrograph``.
+    vibrograph : VibrographResult or None
+        Block/mount vibration per (sensor, order) against the shaft line's engine on its
+        mounts (:func:`analysis.vibrograph.compare_vibrograph`), with the residual forces and
+        moments when enough sensors; None when the engine has no ``[mounts]`` or the record
+        no placeable vibrograph channel.
     """
 
     source: str
@@ -164,6 +170,7 @@ class PipelineResult:
     timings: dict = field(default_factory=dict)
     balance: tuple = ()
     extra_verdicts: tuple = ()
+    vibrograph: object = None
 
     @property
     def steady(self) -> bool:
@@ -174,26 +181,17 @@ class PipelineResult:
     @property
     def verdicts(self) -> tuple:
         """Every check as a :class:`analysis.verdict.Verdict`: the comparison with the model,
-        each limit check, the balance comparisons (informational) and any added by other
-        steps (``extra_verdicts``, e.g. a steady-state order comparison)."""
-        from .verdict import Verdict
-
+        each limit check, the block/mount vibration against the engine on its mounts (one
+        combined verdict of :attr:`vibrograph`) and any added by other steps
+        (``extra_verdicts``, e.g. a steady-state order comparison)."""
         lo, hi = self.speed_range_rpm
         out = [self.comparison.verdict(
             steady=self.steady,
             basis=f"record {self.source}, channel {self.channel} at {self.node}, "
                   f"{lo:.0f}–{hi:.0f} rpm, {len(self.resonances)} resonance(s) found")]
         out += [c.verdict for c in self.limits]
-        for channel, comp, _ in self.balance:
-            if comp is None:
-                continue
-            detail = ", ".join(f"order {r.order:g}: ×{r.median_ratio:.2f}"
-                               for _, r in comp.table.iterrows())
-            out.append(Verdict.from_bool(
-                f"balance residuals at {channel}", comp.passed,
-                rule=f"median measured/predicted within a factor {comp.factor:g}",
-                basis=f"channel {channel}, orders 1 and 2 against the mount model",
-                reason=detail, required=False))
+        if self.vibrograph is not None:
+            out.append(self.vibrograph.verdict)
         return tuple(out) + tuple(self.extra_verdicts)
 
     @property
@@ -238,6 +236,10 @@ class PipelineResult:
                 "unmatched_predicted_significant": s["unmatched_predicted_significant"],
                 "max_abs_deviation_pct": s["max_abs_deviation_pct"],
                 "model_agrees": s["agrees"],
+                "vibration_worst_ratio": self.vibrograph.summary()["vibration_worst_ratio"]
+                if self.vibrograph is not None else float("nan"),
+                "vibration_verdict": self.vibrograph.verdict.status
+                if self.vibrograph is not None else "no vibrograph channel",
                 "elapsed_s": float(sum(self.timings.values()))}
 
 
@@ -337,13 +339,17 @@ def predicted_response(system, speed_rpm, orders, node, *, load, quantity="angle
 
 
 def _prediction(system, orders, node, quantity, units, load, lo, hi, base_points, *,
-                fraction=0.05, max_fit=8):
+                fraction=0.05, max_fit=8, min_prominence=0.05):
     """Critical speeds in range, identified on the predicted response like the measurement.
 
     The predicted steady-state order response at ``node`` is passed through the same
     resonance finder as the measured track (SDOF modal fit), so measured and predicted
     critical speeds, damping and amplitudes are estimated the same way; each predicted
-    resonance is assigned the mode of the nearest undamped critical of its order.
+    resonance is assigned the mode of the nearest undamped critical of its order. A critical
+    is *significant* (expected in the measurement) when the finder identifies it on the
+    predicted curve with the prominence the measured finder demands (``min_prominence``) and
+    its amplitude is at least 5 % of the largest: a bump of a few per cent on a large
+    background cannot be identified in a measured track either.
     """
     import xarray as xr
 
@@ -378,7 +384,8 @@ def _prediction(system, orders, node, quantity, units, load, lo, hi, base_points
 
     found = find_resonances(track, orders=fit_orders, response="velocity"
                             if quantity == "angular_velocity" else "displacement",
-                            min_amplitude_fraction=0.0, min_snr=1e-6, min_prominence=0.01,
+                            min_amplitude_fraction=0.0, min_snr=1e-6,
+                            min_prominence=min_prominence,
                             sweep_correction=False).to_frame() if fit_orders else \
         pd.DataFrame(columns=["order", "speed_rpm", "frequency_hz", "amplitude",
                               "damping_ratio"])
@@ -432,8 +439,9 @@ def _track(x, fs, rpm, orders, *, method, bandwidth_orders, revolutions):
 def analyse(record, model, *, channel=None, speed_channel=None, orders=None, max_order=12.0,
             method="vkf", bandwidth_orders=None, revolutions=4, load=None, gate=0.15,
             tolerance=0.03, amplitude_tolerance=0.5, machine_class=None,
-            vibration_standard=None, operating_range_rpm=None, base_points=1500, order_fraction=0.05, max_tracked=8,
-            resonance_options=None, progress=None, channel_map=None) -> PipelineResult:
+            vibration_standard=None, operating_range_rpm=None, base_points=1500,
+            order_fraction=0.05, max_tracked=8, resonance_options=None,
+            vibration_tolerance=0.5, progress=None, channel_map=None) -> PipelineResult:
     """Run the chain on one record against one shaft-line model.
 
     Parameters
@@ -483,6 +491,9 @@ def analyse(record, model, *, channel=None, speed_channel=None, orders=None, max
         O(N K²) in the number of orders K.
     resonance_options : dict, optional
         Passed to :func:`analysis.find_resonances`.
+    vibration_tolerance : float
+        Ratio band of the vibrograph comparison (:func:`analysis.vibrograph.compare_vibrograph`)
+        of any block/mount channel when the engine has ``[mounts]``.
     progress : callable, optional
         ``progress(step_name)`` called before each step (CLI progress bars).
     channel_map : path-like, dict or ChannelMap, optional
@@ -573,7 +584,8 @@ def analyse(record, model, *, channel=None, speed_channel=None, orders=None, max
     step("prediction")
     predicted, response_da, grid, pred_stress = _prediction(
         system, all_orders, node, quantity, units, load, lo, hi, base_points,
-        fraction=order_fraction, max_fit=max_tracked if orders is None else len(all_orders))
+        fraction=order_fraction, max_fit=max_tracked if orders is None else len(all_orders),
+        min_prominence=float((resonance_options or {}).get("min_prominence", 0.05)))
     if orders is None:
         # track the orders whose predicted resonances matter, largest first
         big = predicted["amplitude"].max() if len(predicted) else 0.0
@@ -618,13 +630,14 @@ def analyse(record, model, *, channel=None, speed_channel=None, orders=None, max
     done("resonances")
 
     step("comparison")
-    comparison = match_criticals(resonances, predicted, gate=gate, tolerance=tolerance,
+    predicted, measured = _swept_like_with_like(predicted, resonances, track, quantity, gate)
+    comparison = match_criticals(measured, predicted, gate=gate, tolerance=tolerance,
                                  amplitude_tolerance=amplitude_tolerance,
                                  speed_range_rpm=(lo, hi))
     done("comparison")
 
     step("balance")
-    balance = _balance(rec, system, lo, hi)
+    vibrograph = _vibrograph(rec, system, load, speed_channel, vibration_tolerance)
     done("balance")
 
     step("limits")
@@ -666,79 +679,48 @@ def analyse(record, model, *, channel=None, speed_channel=None, orders=None, max
         speed_range_rpm=(lo, hi), sweep_rate_rpm_per_s=sweep_rate, track=track,
         resonances=resonances, predicted=predicted, response=response_da,
         comparison=comparison, limits=tuple(limits), system=system, record=rec,
-        settings=settings, timings=timings, balance=tuple(balance))
+        settings=settings, timings=timings, vibrograph=vibrograph)
 
 
-def _balance(rec, system, lo, hi, orders=(1.0, 2.0)):
-    """Orders 1 and 2 at the mounts against the balance residuals through the mount model.
+def _swept_like_with_like(predicted, resonances, track, quantity, gate):
+    """Sweep effects before matching (:mod:`analysis.resonance.sweep`): predicted criticals the
+    run does not cover with both flanks (and the sweep delay) are not expected; measured
+    resonances the finder could not correct for the sweep lose the delay the model predicts
+    at the measured rate."""
+    from .resonance import correct_sweep_delay, sweep_expectation
 
-    The predicted response is that of the free inertia forces and moments only
-    (:func:`predict.balance.unbalance`, through :class:`predict.mounts.MountedEngine`, via
-    :class:`measure.synth.vibrograph.MountChannels` without torque reaction): the orders a
-    balance check is about. Orders balanced by design (prediction below 1e-9 of the
-    measurement) are listed with their measured residual level only.
-    """
-    import pandas as pd
-    import xarray as xr
+    if "time" not in track.coords or track.sizes.get("time", 0) < 4 or not len(predicted):
+        return predicted, resonances
+    expected = sweep_expectation(
+        predicted, time=track["time"].values, speed_rpm=track["rpm"].values,
+        response="velocity" if quantity == "angular_velocity" else "displacement")
+    edge = expected["significant"] & ~expected["covered"]
+    for _, r in expected[edge].iterrows():
+        log.info("mode %d order %g: critical at %.0f rpm is not covered by the run with both "
+                 "flanks (and the sweep delay); listed, not judged", r["mode"], r["order"],
+                 r["speed_rpm"])
+    expected.loc[edge, "significant"] = False
+    measured = correct_sweep_delay(resonances.to_frame(), expected, gate=gate)
+    return expected, measured
 
-    from .compare import compare_balance
-    from .orders import order_track
-    from .speedref import speed_reference
+
+def _vibrograph(rec, system, load, speed_channel, tolerance):
+    """The vibrograph comparison of the record's block/mount channels against the shaft line's
+    engine on its mounts; None without ``[mounts]`` or placeable channels."""
+    from .vibrograph import compare_vibrograph
 
     engine = getattr(system, "engine", None)
     source = getattr(engine, "source", None)
     if engine is None or not source:
-        return []
+        return None
     try:
-        from crankbench.predict.mounts import MountedEngine
-
-        mounted = MountedEngine.from_toml(source)
-    except (ValueError, OSError, KeyError):
-        return []  # no [mounts] in the engine model
-    names = {m.name: m.position for m in mounted.mounts}
-    out = []
-    for name in rec.data_vars:
-        v = rec[name]
-        q = v.attrs.get("quantity")
-        direction = str(v.attrs.get("direction", "")).lower()
-        if q not in ("acceleration", "velocity", "displacement") or v.ndim != 1 or \
-                v.attrs.get("location") not in names or direction not in ("x", "y", "z"):
-            continue
-        from crankbench.measure.synth.vibrograph import MountChannels
-
-        grid = np.linspace(lo, hi, 60) * np.pi / 30.0
-        mc = MountChannels(mounted, engine, None, list(orders), [names[v.attrs["location"]]],
-                           grid)
-        pred = np.vstack([np.abs(mc.table(i, 0, direction, q)) for i in range(len(orders))])
-        predicted = xr.DataArray(pred, dims=("order", "rpm"),
-                                 coords={"order": list(orders), "rpm": grid * 30 / np.pi},
-                                 attrs={"units": v.attrs.get("units", "")})
-        fs = float(v.attrs["sample_rate"])
-        rpm = speed_reference(rec, str(name))
-        x = np.nan_to_num(np.asarray(v.values, float))
-        track = order_track(x, fs=fs, speed_rpm=np.nan_to_num(rpm, nan=float(np.nanmedian(rpm))),
-                            orders=list(orders), revolutions=8, overlap=0.5)
-        rows = []
-        live = []
-        for i, o in enumerate(orders):
-            m_max = float(track["amplitude"].sel(order=o).max())
-            p_max = float(pred[i].max())
-            balanced = p_max <= 1e-9 * max(m_max, 1e-300)
-            rows.append(dict(order=o, predicted_max=p_max, measured_max=m_max,
-                             balanced_by_design=balanced))
-            if not balanced:
-                live.append(o)
-        comp = None
-        if live:
-            try:
-                comp = compare_balance(track, predicted, orders=live,
-                                       channel=f"{name} ({v.attrs['location']} {direction})")
-            except AnalysisError as exc:
-                log.debug("balance comparison at %s skipped: %s", name, exc)
-        table = pd.DataFrame(rows)
-        table.attrs["units"] = v.attrs.get("units", "")
-        out.append((str(name), comp, table))
-    return out
+        return compare_vibrograph(rec, source, load=load, speed_channel=speed_channel,
+                                  tolerance=tolerance)
+    except ConfigError as exc:        # no [mounts] in the engine model
+        log.info("no vibrograph comparison: %s", exc)
+    except (RecordError, AnalysisError) as exc:   # no channel to place, nothing to compare
+        log.info("no vibrograph comparison: %s", exc)
+    return None
 
 
 def _superpose(stress, orders):

@@ -32,9 +32,13 @@ from ._validate import check_finite_array, check_nonnegative, check_positive
 from .errors import ModelError
 
 __all__ = ["Mount", "MountedEngine", "MountModes", "MountResponse", "excitation_from_unbalance",
-           "DOF_NAMES"]
+           "BlockExcitation", "block_excitation", "direction_vector", "DOF_NAMES", "LOAD_NAMES"]
 
 DOF_NAMES = ("x", "y", "z", "rx", "ry", "rz")
+#: components of a generalised load on the block: force (N) and moment (N·m) about a point
+LOAD_NAMES = ("force_x", "force_y", "force_z", "moment_x", "moment_y", "moment_z")
+_AXES = {"x": 0, "y": 1, "z": 2, "axial": 0, "horizontal": 1, "lateral": 1, "transverse": 1,
+         "vertical": 2}
 
 
 def _vec3(value, name, *, nonneg=False) -> np.ndarray:
@@ -404,6 +408,59 @@ class MountedEngine:
             return arr
         raise ModelError(f"{name} must have shape (3,) or ({nf}, 3), got {arr.shape}")
 
+    def receptance(self, freq_hz, *, at, directions, point=(0.0, 0.0, 0.0)):
+        """Displacement of sensor points along their directions per unit generalised load.
+
+        Parameters
+        ----------
+        freq_hz : float or array_like
+            Excitation frequencies, Hz.
+        at : array_like
+            (n, 3) sensor points, m.
+        directions : array_like
+            (n, 3) unit vectors of the sensors' sensitive axes (see :func:`direction_vector`).
+        point : array_like
+            Where the loads act, m: forces at ``point``, moments about it.
+
+        Returns
+        -------
+        ndarray (nf, n, 6), complex
+            ``G[f, s, k]``: displacement (m) of sensor ``s`` along its direction per unit
+            component ``k`` of (F_x, F_y, F_z (N), M_x, M_y, M_z (N·m)) at frequency ``f``
+            (:data:`LOAD_NAMES`): the same exact 6×6 solve as :meth:`response`. Velocity and
+            acceleration are ``i w G`` and ``-w**2 G``.
+
+        Examples
+        --------
+        >>> m = [Mount(position=[x, y, -0.3], stiffness=[2e6, 2e6, 4e6])
+        ...      for x in (0.0, 1.0) for y in (-0.4, 0.4)]
+        >>> eng = MountedEngine(mass=800.0, inertia=[40.0, 90.0, 90.0], cg=[0.5, 0.0, 0.0],
+        ...                     mounts=m)
+        >>> g = eng.receptance(0.0, at=[[0.5, 0.0, 0.0]], directions=[[0, 0, 1]],
+        ...                    point=[0.5, 0, 0])
+        >>> round(float(g[0, 0, 2].real * 1e9), 3)       # static: 1 / sum k_z, nm per N
+        62.5
+        """
+        f = np.atleast_1d(check_finite_array(freq_hz, "freq_hz", error=ModelError))
+        if (f < 0).any():
+            raise ModelError("freq_hz must be >= 0")
+        pts = np.atleast_2d(check_finite_array(at, "at", error=ModelError))
+        dirs = np.atleast_2d(check_finite_array(directions, "directions", error=ModelError))
+        if pts.shape[1] != 3 or dirs.shape != pts.shape:
+            raise ModelError(f"at and directions must both be (n, 3), got {pts.shape} and "
+                             f"{dirs.shape}")
+        d = _vec3(point, "point") - self.cg
+        # generalised load about the CG: [F; M + d x F]
+        gamma = np.eye(6)
+        gamma[3:, :3] = _skew(d)
+        # row s: direction_s . T(p_s - cg)
+        rows = np.stack([u @ _transfer(p - self.cg) for p, u in zip(pts, dirs)])   # (n, 6)
+        k, m, c = self.stiffness_matrix(), self.mass_matrix(), self.damping_matrix()
+        h = self._hysteretic()
+        w = 2 * np.pi * f[:, None, None]
+        dyn = (k + 1j * h)[None] - w * w * m[None] + 1j * w * c[None]          # (nf, 6, 6)
+        return rows[None] @ np.linalg.solve(dyn, np.broadcast_to(gamma, dyn.shape))
+
     def transmissibility(self, freq_hz, *, direction="z", point=None):
         """Force transmissibility |F_foundation| / |F_applied| for a unit force along one axis.
 
@@ -544,3 +601,163 @@ def excitation_from_unbalance(unbalance, order):
             "moment": np.array([0.0, -pitch, yaw], dtype=complex),
             "point": np.array([float(unbalance.attrs["reference_position"]), 0.0, 0.0]),
             "freq_hz": order * omega / (2 * np.pi)}
+
+
+def direction_vector(direction) -> np.ndarray:
+    """Unit vector of a sensor's sensitive axis in the mount frame.
+
+    Parameters
+    ----------
+    direction : str or array_like
+        ``"x"``, ``"y"``, ``"z"`` with an optional sign (``"-y"``), the words ``"axial"``
+        (x), ``"horizontal"``/``"lateral"``/``"transverse"`` (y), ``"vertical"`` (z), or
+        three numbers (normalised here).
+
+    Returns
+    -------
+    ndarray (3,)
+
+    Raises
+    ------
+    ModelError
+        An unknown word or a zero vector.
+
+    Examples
+    --------
+    >>> direction_vector("-y").tolist(), direction_vector([0, 3, 4]).tolist()
+    ([0.0, -1.0, 0.0], [0.0, 0.6, 0.8])
+    """
+    if isinstance(direction, str):
+        text = direction.strip().lower()
+        sign = -1.0 if text.startswith("-") else 1.0
+        key = text.lstrip("+-").strip()
+        if key not in _AXES:
+            raise ModelError(f"direction={direction!r} is not one of x, y, z (optionally signed), "
+                             f"{', '.join(k for k in _AXES if len(k) > 1)} or three numbers")
+        out = np.zeros(3)
+        out[_AXES[key]] = sign
+        return out
+    arr = _vec3(direction, "direction")
+    norm = float(np.linalg.norm(arr))
+    if norm == 0.0:
+        raise ModelError(f"direction={arr.tolist()} must not be the zero vector")
+    return arr / norm
+
+
+@dataclass(frozen=True)
+class BlockExcitation:
+    """Per-order shaking loads on the engine block, in the mount frame.
+
+    Each order ``q``'s load (F_x, F_y, F_z, M_x, M_y, M_z) about ``point`` is
+    ``Re[(load(Omega) gas_q + Omega**2 inertia_q) e^{i q psi}]``, ``psi`` the crank angle of
+    cylinder 1 from its firing TDC: ``inertia`` holds the free inertia forces and moments of
+    the balance model (integer orders, rotating masses, counterweights, added masses) and the
+    inertia part of the torque reaction, ``gas`` the gas-torque reaction (roll, ``M_x``) per
+    unit gas load.
+
+    Attributes
+    ----------
+    orders : ndarray (n_o,)
+    inertia : ndarray (n_o, 6), complex
+        Per unit speed squared: N/(rad/s)², N·m/(rad/s)².
+    gas : ndarray (n_o, 6), complex
+        N, N·m per unit load factor.
+    point : ndarray (3,)
+        The reference point on the crankshaft axis (x = the engine's reference position), m.
+    """
+
+    orders: np.ndarray
+    inertia: np.ndarray
+    gas: np.ndarray
+    point: np.ndarray
+
+    def at(self, omega, load=1.0) -> np.ndarray:
+        """Loads (n_s, n_o, 6) at crank speeds ``omega`` (rad/s) and gas-load factors."""
+        w = np.atleast_1d(np.asarray(omega, float))
+        lf = np.broadcast_to(np.asarray(load, float), w.shape)
+        return lf[:, None, None] * self.gas[None] + (w**2)[:, None, None] * self.inertia[None]
+
+
+def _roll_harmonics(engine, excitation, orders):
+    """Total crankshaft torque per order: gas part and inertia part per unit speed squared,
+    N·m, ``T(psi) = Re[(gas + Omega**2 inertia) e^{i q psi}]`` summed over the cylinders with
+    their firing angles."""
+    g = excitation.harmonics(np.array([0.0]), orders)[0]            # (n_o, z)
+    i1 = excitation.harmonics(np.array([1.0]), orders)[0] - g
+    phase = np.exp(-1j * np.deg2rad(np.outer(orders, engine.firing_angles_deg())))
+    return (g * phase).sum(axis=1), (i1 * phase).sum(axis=1)
+
+
+def block_excitation(engine, orders, *, excitation=None, counterweights=(),
+                     torque_reaction=True):
+    """Shaking loads per order on the block of an engine: inertia forces and moments of every
+    layout (:func:`predict.balance.unbalance`) and the crankshaft-torque reaction.
+
+    Parameters
+    ----------
+    engine : predict.engine.Engine
+    orders : sequence of float
+        Orders of the cycle (half orders for a 4-stroke carry only the torque reaction).
+    excitation : predict.torsion.excitation.Excitation, optional
+        Cylinder torque harmonics (gas and inertia) covering ``orders``. None: the inertia
+        part of the torque reaction alone, from :func:`predict.forces.engine_torque` (an
+        engine without combustion data), unless ``torque_reaction`` is False.
+    counterweights : sequence of predict.balance.Counterweight
+        Masses fixed to the crankshaft (counterweights, added or trial masses).
+    torque_reaction : bool
+        Include the reaction to the crankshaft torque (roll, ``M_x``).
+
+    Returns
+    -------
+    BlockExcitation
+
+    Notes
+    -----
+    The balance model's phasors refer to the shaft angle θ of throw 1; θ = ψ + θ_f with θ_f
+    the shaft angle of cylinder 1's firing TDC, so an order-n phasor gains ``e^{i n θ_f}``.
+    The reaction on the block is the crankshaft torque about +x (the crank turns about −x).
+
+    Examples
+    --------
+    >>> from crankbench.predict.engine import Engine
+    >>> e = Engine(crank_angles_deg=[0], crank_radius=0.05, rod_length=0.2,
+    ...            reciprocating_mass=2.0)
+    >>> ex = block_excitation(e, [1.0, 2.0])
+    >>> # vertical force, N: m r w² (1, A₂), A₂ = λ + λ³/4 + 15λ⁵/128 + … = 0.25403 (λ = 1/4)
+    >>> np.abs(ex.at(100.0)[0, :, 2]).round(2).tolist()
+    [1000.0, 254.03]
+    """
+    from .balance import unbalance
+
+    orders = np.atleast_1d(check_finite_array(orders, "orders", error=ModelError))
+    if (orders <= 0).any():
+        raise ModelError(f"orders={orders.tolist()} must all be > 0")
+    n_o = orders.size
+    inertia = np.zeros((n_o, 6), complex)
+    gas = np.zeros((n_o, 6), complex)
+    theta_f = float(engine.firing_tdc_shaft_angle)
+    integer = sorted({int(round(q)) for q in orders if abs(q - round(q)) < 1e-9})
+    ub = unbalance(engine, omega=1.0, orders=tuple(integer),
+                   counterweights=tuple(counterweights)) if integer else None
+    point = np.array([float(engine.reference_position), 0.0, 0.0])
+    for i, q in enumerate(orders):
+        n = int(round(q))
+        if ub is not None and abs(q - n) < 1e-9:
+            ex = excitation_from_unbalance(ub, n)
+            shift = np.exp(1j * n * theta_f)
+            inertia[i, :3] = ex["force"] * shift
+            inertia[i, 3:] = ex["moment"] * shift
+    if excitation is not None and torque_reaction:
+        roll_gas, roll_in = _roll_harmonics(engine, excitation, orders)
+        inertia[:, 3] += roll_in
+        gas[:, 3] += roll_gas
+    elif torque_reaction:
+        from .forces import engine_torque
+
+        # inertia torque per unit speed squared over one working cycle (exact to round-off
+        # for the orders a 1440-point cycle resolves)
+        n = 1440
+        psi = np.arange(n) * (np.pi * engine.cycle) / n
+        torque = engine_torque(engine, psi, omega=1.0)
+        inertia[:, 3] += 2.0 * np.exp(-1j * np.outer(orders, psi)) @ torque / n
+    return BlockExcitation(orders=orders, inertia=inertia, gas=gas, point=point)

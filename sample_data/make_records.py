@@ -1,16 +1,23 @@
 """Regenerate ``sample_data/records/``: a small I4 run-up in every supported format.
 
-The record is an inline four-cylinder engine running up linearly from 1500 to 3000 rpm in 4 s:
+The record is the in-line four of ``sample_data/engines/i4.toml`` on its mounts, running up
+linearly from 1500 to 3000 rpm in 4 s at the model's combustion load (imep 13 bar, constant):
 
-* ``acc_block_z`` — engine-block vertical acceleration, 10 kHz, float32, dominated by the
-  second engine order (the I4's unbalanced secondary inertia force, amplitude growing with the
-  square of speed) with a smaller fourth order and white measurement noise;
+* ``acc_block_z`` — vertical acceleration of the engine block at the front of the cylinder
+  head, ``position`` = [-0.08, 0.0, 0.35] m in the engine frame (docs/DESIGN.md, "Vibrograph
+  sensors"), 10 kHz, float32: every order the model excites at that point — the second-order
+  free force and the torque reaction at orders 2, 4, 6, … — computed through the mount model
+  by the synthetic bench (:class:`measure.synth.vibrograph.MountChannels`, the loads of
+  :func:`predict.mounts.block_excitation`), plus white measurement noise;
 * ``speed`` — shaft speed from the bench's speed channel, 100 Hz (rad/s in the Record);
-* ``tacho`` — edge times of a 60-2 trigger wheel (58 teeth per revolution, gap of two).
+* ``tacho`` — edge times of a 60-2 trigger wheel (58 teeth per revolution, gap of two), the
+  first tooth after the gap at cylinder 1's firing TDC (``tdc_offset_deg`` = 0).
 
-Ground truth (order amplitudes along the run) is stored in ``i4_runup.h5``'s ``truth`` group.
-Every file stays under 2 MB. Deterministic (fixed seed): running it twice gives identical
-samples. Refuses to replace existing files unless ``--overwrite``.
+``crankbench compare sample_data/records/i4_runup.h5 sample_data/engines/i4.toml`` sets it
+against its own model. Ground truth (order amplitudes and phases along the run, phase referred
+to cylinder 1's firing TDC) is stored in ``i4_runup.h5``'s ``truth`` group. Every file stays
+under 2 MB. Deterministic (fixed seed): running it twice gives identical samples. Refuses to
+replace existing files unless ``--overwrite``.
 
 Run::
 
@@ -39,13 +46,14 @@ FS_SPEED = 100.0           # Hz
 DURATION = 4.0             # s
 SPEED_START_RPM = 1500.0
 SPEED_END_RPM = 3000.0
-ORDER2_AT_3000 = 2.0       # m/s^2 peak of order 2 at 3000 rpm
-ORDER4_AT_3000 = 0.4       # m/s^2 peak of order 4 at 3000 rpm
-ORDER4_PHASE = 0.6         # rad
+POSITION = (-0.08, 0.0, 0.35)   # m, engine frame: front of the cylinder head
+DIRECTION = "z"
+MAX_ORDER = 24.0           # every order the model's excitation carries
 NOISE_RMS = 0.05           # m/s^2
 TEETH = 60
 MISSING = 2
 FORMATS = (".h5", ".csv", ".mf4", ".tdms", ".uff", ".wav")
+MODEL = ROOT / "sample_data" / "engines" / "i4.toml"
 
 
 def speed_rpm(t):
@@ -72,19 +80,44 @@ def tooth_times():
     return t[(t > 0) & (t < DURATION)]
 
 
+def _model_channel(omega_grid):
+    """Order responses of the sensor on the speed grid (rad/s): (orders, complex table)."""
+    from crankbench.measure.synth.vibrograph import MountChannels
+    from crankbench.predict.balance_tolerance import BalanceSpec
+    from crankbench.predict.engine import Engine
+    from crankbench.predict.mounts import MountedEngine
+    from crankbench.predict.torsion.excitation import engine_excitation
+
+    engine = Engine.from_toml(MODEL)
+    orders = np.arange(0.5, MAX_ORDER + 0.25, 0.5)
+    mc = MountChannels(MountedEngine.from_toml(MODEL), engine,
+                       engine_excitation(engine, orders=orders), orders, [POSITION],
+                       omega_grid, counterweights=BalanceSpec.from_toml(MODEL).masses)
+    table = np.array([mc.table(k, 0, DIRECTION, "acceleration") for k in range(orders.size)])
+    keep = np.abs(table).max(axis=1) > 1e-9 * np.abs(table).max()
+    return orders[keep], table[keep]
+
+
 def order_amplitudes(rpm):
-    """Peak amplitudes (m/s^2) of orders 2 and 4 at speed ``rpm``: both grow as speed^2."""
-    scale = (np.asarray(rpm) / SPEED_END_RPM) ** 2
-    return ORDER2_AT_3000 * scale, ORDER4_AT_3000 * scale
+    """Complex amplitudes (m/s^2, peak; phase from cylinder 1's firing TDC) of every excited
+    order at speeds ``rpm``: (orders, (n_orders, n_speeds) complex)."""
+    rpm = np.atleast_1d(np.asarray(rpm, float))
+    grid = np.linspace(SPEED_START_RPM, SPEED_END_RPM, 301) * np.pi / 30.0
+    orders, table = _model_channel(grid)
+    w = rpm * np.pi / 30.0
+    return orders, np.array([np.interp(w, grid, t.real) + 1j * np.interp(w, grid, t.imag)
+                             for t in table])
 
 
 def build():
     """Return ``(record, truth)``."""
     rng = np.random.default_rng(SEED)
     t = np.arange(int(DURATION * FS_ACC)) / FS_ACC
-    theta = 2.0 * np.pi * revolutions(t)
-    a2, a4 = order_amplitudes(speed_rpm(t))
-    acc = a2 * np.cos(2 * theta) + a4 * np.cos(4 * theta + ORDER4_PHASE)
+    psi = 2.0 * np.pi * revolutions(t)          # cylinder 1 at firing TDC at t = 0
+    orders, amp = order_amplitudes(speed_rpm(t))
+    acc = np.zeros(t.size)
+    for q, a in zip(orders, amp):
+        acc += np.real(a * np.exp(1j * q * psi))
     acc += rng.normal(0.0, NOISE_RMS, t.size)
     t_speed = np.arange(int(DURATION * FS_SPEED)) / FS_SPEED
     # the bench's speed channel: true speed plus 0.5 rpm quantisation
@@ -92,23 +125,29 @@ def build():
     record = make_record({
         "acc_block_z": dict(data=acc.astype(np.float32), sample_rate=FS_ACC, units="m/s^2",
                             quantity="acceleration", location="engine block, front",
-                            direction="z", sensitivity=10.2, sensitivity_units="mV/(m/s^2)"),
+                            direction=DIRECTION, sensitivity=10.2,
+                            sensitivity_units="mV/(m/s^2)",
+                            attrs={"position": list(POSITION)}),
         "speed": dict(data=speed, sample_rate=FS_SPEED, units="rpm"),
         "tacho": dict(data=tooth_times(), units="s", quantity="pulse_times",
-                      pulses_per_rev=TEETH, missing_teeth=MISSING),
+                      pulses_per_rev=TEETH, missing_teeth=MISSING,
+                      attrs={"tdc_offset_deg": 0.0}),
     }, start_time="2026-01-15T09:30:00+00:00",
         attrs={"engine_id": "I4-demo", "test_id": "runup-1500-3000"})
     rpm_grid = np.linspace(SPEED_START_RPM, SPEED_END_RPM, 31)
-    g2, g4 = order_amplitudes(rpm_grid)
+    _, g = order_amplitudes(rpm_grid)
     truth = xr.Dataset(
-        {"amplitude": (("rpm", "order"), np.stack([g2, g4], axis=1),
+        {"amplitude": (("rpm", "order"), np.abs(g).T,
                        {"units": "m/s^2", "convention": "peak", "channel": "acc_block_z"}),
-         "phase": (("rpm", "order"), np.tile([0.0, ORDER4_PHASE], (rpm_grid.size, 1)),
-                   {"units": "rad", "reference": "tacho tooth 0 at t = 0"})},
+         "phase": (("rpm", "order"), np.angle(g).T,
+                   {"units": "rad", "reference": "cylinder 1 firing TDC (tacho tooth 0) at "
+                                                 "t = 0: signal = amplitude cos(order psi + "
+                                                 "phase)"})},
         coords={"rpm": ("rpm", rpm_grid, {"units": "rpm"}),
-                "order": ("order", [2.0, 4.0], {"units": "1"})},
-        attrs={"description": "order amplitudes of acc_block_z along the run-up",
-               "noise_rms": NOISE_RMS})
+                "order": ("order", orders, {"units": "1"})},
+        attrs={"description": "order amplitudes of acc_block_z along the run-up, from the "
+                              "engine model on its mounts (sample_data/engines/i4.toml)",
+               "noise_rms": NOISE_RMS, "model": "sample_data/engines/i4.toml"})
     return record, truth
 
 

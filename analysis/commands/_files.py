@@ -120,8 +120,9 @@ def check_outputs(outputs, inputs, *, error=None) -> None:
             if same_file(out, src):
                 verb = "is" if os.path.abspath(out) == os.path.abspath(src) else \
                     "resolves to (is a link to)"
-                raise error(f"{how} {verb} an input ({what}): an output never replaces an "
-                            "input, whatever --overwrite says; choose another output name")
+                raise error(f"{how} {verb} one of the inputs ({what}): an output never "
+                            "replaces an input, whatever --overwrite says; choose another "
+                            "output name")
         for other, other_how in done:
             if same_file(out, other):
                 raise error(f"{how} and {other_how} are the same file {out}; every output "

@@ -9,7 +9,8 @@ import logging
 from crankbench.analysis.commands._args import add_list, number, positive_order
 from crankbench.analysis.pipeline import LoadCase, load_from_record_file
 
-__all__ = ["add_common_arguments", "check_common", "options_from_args", "progress_bar"]
+__all__ = ["add_common_arguments", "check_common", "options_from_args", "vibrograph_options",
+           "progress_bar"]
 
 log = logging.getLogger("crankbench")
 
@@ -59,6 +60,10 @@ def add_common_arguments(parser) -> None:
                         help="class of that standard (ISO 10816-6: 1-7, ISO 10816-1: I-IV; "
                              "default: the model's, else chosen from the engine's power and "
                              "mounting)")
+    parser.add_argument("--vibration-tolerance", type=number(low=0.0, high=100.0, strict_low=True),
+                        default=0.5, metavar="T",
+                        help="block/mount vibration against the engine model: measured/"
+                             "predicted order amplitude within [1/(1+T), 1+T] (default 0.5)")
 
 
 def check_common(args, *, records=(), model=None) -> None:
@@ -90,24 +95,31 @@ def check_common(args, *, records=(), model=None) -> None:
         except CrankbenchError as exc:
             raise ConfigError(f"--machine-class {args.machine_class!r} is not a class of "
                               f"{standard} ({exc})") from None
-    system = None
-    if model is not None:
-        from crankbench.predict.torsion import from_toml
+    engine = None
+    if model is not None:   # a bad model fails now, not after the record is tracked
+        from crankbench.analysis.vibrograph import model_kind
 
-        system = from_toml(model)  # a bad model fails now, not after the record is tracked
+        if model_kind(model) == "engine":     # vibrograph comparison against the engine
+            from crankbench.predict.engine import Engine
+
+            engine = Engine.from_toml(model)
+        else:
+            from crankbench.predict.torsion import from_toml
+
+            engine = from_toml(model).engine
         if args.load_law == "propeller" and args.reference_rpm is None and getattr(
-                system.engine, "rated_speed_rpm", None) is None:
+                engine, "rated_speed_rpm", None) is None:
             raise ConfigError(f"--load-law propeller needs --reference-rpm: the engine of {model} "
                               "has no rated_speed_rpm")
     if args.orders and max(args.orders) > MAX_ORDER:
         raise ConfigError(f"--orders {max(args.orders):g} is above the highest order the "
                           f"prediction covers ({MAX_ORDER:g})")
-    if args.orders and system is not None and system.engine is not None:
-        step = 0.5 if system.cycle == 4 else 1.0
+    if args.orders and engine is not None:
+        step = 0.5 if engine.cycle == 4 else 1.0
         odd = [q for q in args.orders if abs(q / step - round(q / step)) > 1e-9]
         if odd:
             raise ConfigError(f"--orders {','.join(f'{q:g}' for q in odd)}: not an order of this "
-                              f"{system.cycle}-stroke engine (multiples of {step:g})")
+                              f"{engine.cycle}-stroke engine (multiples of {step:g})")
     for path in records:
         names = _channels(path, getattr(args, "map", None))
         if names is None:
@@ -150,7 +162,16 @@ def options_from_args(args, record_path=None) -> dict:
                 method=args.method, bandwidth_orders=args.bandwidth_orders, load=load,
                 gate=args.gate, tolerance=args.tolerance,
                 machine_class=args.machine_class,
-                vibration_standard=getattr(args, "vibration_standard", None))
+                vibration_standard=getattr(args, "vibration_standard", None),
+                vibration_tolerance=getattr(args, "vibration_tolerance", 0.5))
+
+
+def vibrograph_options(options) -> dict:
+    """The options of :func:`analysis.vibrograph.compare_vibrograph` among those of
+    :func:`options_from_args` (an engine model: no torsional channel, no criticals)."""
+    return dict(load=options.get("load"), speed_channel=options.get("speed_channel"),
+                orders=options.get("orders"),
+                tolerance=options.get("vibration_tolerance", 0.5))
 
 
 def progress_bar(total_steps: int = 7, *, desc: str = "", disable: bool = False):

@@ -1,6 +1,8 @@
 """``crankbench batch 'runs/*.h5' --model MODEL.toml [-o summary.csv] [--scheduler ADDRESS]``.
 
-Runs the chain of :mod:`analysis.pipeline` on many records in parallel with dask — threads
+Runs the chain of :mod:`analysis.pipeline` (a shaft-line model) or the vibrograph comparison
+(an engine model with ``[mounts]``: the row carries the worst measured/predicted ratio and the
+verdict) on many records in parallel with dask — threads
 in this process by default, or an existing ``dask.distributed`` cluster with ``--scheduler``
 (``pip install 'crankbench[distributed]'``) — and writes one summary row per record (CSV,
 atomically). A record that fails is reported with its error and skipped; the others go on.
@@ -44,7 +46,7 @@ def configure(parser) -> None:
     parser.add_argument("pattern", metavar="PATTERN", nargs="+",
                         help="record files or glob patterns (quote them: 'runs/*.h5')")
     parser.add_argument("--model", required=True, metavar="MODEL.toml",
-                        help="shaft-line model (TOML)")
+                        help="shaft-line model, or an engine model with [mounts] (TOML)")
     parser.add_argument("-o", "--output", default="summary.csv", metavar="FILE",
                         help="summary table (.csv or .json; default summary.csv)")
     parser.add_argument("--overwrite", action="store_true",
@@ -157,14 +159,23 @@ def process_one(record_path, model_path, options, cache_file=None, report_path=N
             opts["load"] = load_from_record_file(record_path)
         elif isinstance(opts["load"], dict):
             opts["load"] = LoadCase(**opts["load"])
-        result = analyse(record_path, model_path, **opts)
+        from crankbench.analysis.vibrograph import compare_vibrograph, model_kind
+
+        if model_kind(model_path) == "engine":
+            from crankbench.analysis.commands._pipeline_cli import vibrograph_options
+            from crankbench.analysis.vibrograph_report import build_vibrograph_report
+
+            result = compare_vibrograph(record_path, model_path, **vibrograph_options(opts))
+            builder = build_vibrograph_report
+        else:
+            from crankbench.analysis.report.build import build_report as builder
+
+            result = analyse(record_path, model_path, **opts)
         row = {"status": "ok", "error": ""}
         row.update(result.summary())
         row["record"] = display
         if report_path is not None:
-            from crankbench.analysis.report.build import build_report
-
-            build_report(result, record_path=record_path, model_path=model_path).save(
+            builder(result, record_path=record_path, model_path=model_path).save(
                 report_path, overwrite=overwrite, option="--overwrite")
             row["report"] = str(report_path)
         if store_run is not None:
@@ -333,6 +344,11 @@ def run(args) -> int:
     if args.reports is not None and Path(args.reports).exists() and \
             not Path(args.reports).is_dir():
         raise ConfigError(f"--reports {args.reports}: exists and is not a folder")
+    from crankbench.analysis.vibrograph import model_kind
+
+    if getattr(args, "store", None) and model_kind(model) == "engine":
+        raise ConfigError("--store keeps shaft-line runs; an engine model's vibrograph "
+                          "comparison is not stored (the summary CSV/JSON has its rows)")
     files = expand(args.pattern)
     plan = _plan(files, model, out, args)          # every output checked against every input
     check_overwrite(out, args.overwrite, option="--overwrite")
@@ -505,7 +521,8 @@ def _print_summary(rows, files, out, args) -> int:
     else:
         cols = [c for c in ("record", "status", "verdict", "resonances", "matched",
                             "max_abs_deviation_pct", "comparison_verdict", "limits_verdict",
-                            "elapsed_s") if c in table]
+                            "vibration_worst_ratio", "vibration_verdict", "elapsed_s")
+                if c in table]
         print_table(table[cols], title=f"{len(files)} records ({len(failed)} failed)")
         for _, r in failed.iterrows():
             print(f"FAILED {r.record}: {r.error}")

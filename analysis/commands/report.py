@@ -1,21 +1,26 @@
 """``crankbench report RECORD MODEL.toml -o report.html [--pdf] [--overwrite]``: test report.
 
-Runs the chain of :mod:`analysis.pipeline` and writes the self-contained HTML report (figures
-embedded, no network) built by :func:`analysis.report.build.build_report`; ``--pdf`` also
-writes a PDF beside it, typeset from the same HTML by WeasyPrint. Outputs are
+Runs the chain of :mod:`analysis.pipeline` (a shaft-line model) or the vibrograph comparison
+of :mod:`analysis.vibrograph` (an engine model with ``[mounts]``) and writes the
+self-contained HTML report (figures embedded, no network) built by
+:func:`analysis.report.build.build_report` or
+:func:`analysis.vibrograph_report.build_vibrograph_report`; ``--pdf`` also writes a PDF beside
+it, typeset from the same HTML by WeasyPrint. Outputs are
 written atomically and never replace an existing file without ``--overwrite``.
 """
 
 from __future__ import annotations
 
-HELP = "write the test report (HTML, optionally PDF) of a record against a shaft-line model"
+HELP = ("write the test report (HTML, optionally PDF) of a record against a shaft-line model or "
+        "an engine model on its mounts")
 
 
 def configure(parser) -> None:
     from crankbench.analysis.commands._pipeline_cli import add_common_arguments
 
     parser.add_argument("record", metavar="RECORD", help="record file (any supported format)")
-    parser.add_argument("model", metavar="MODEL.toml", help="shaft-line model (TOML)")
+    parser.add_argument("model", metavar="MODEL.toml",
+                        help="shaft-line model, or an engine model with [mounts] (TOML)")
     parser.add_argument("-o", "--output", required=True, metavar="REPORT.html",
                         help="report file (.html; .pdf writes only the PDF)")
     parser.add_argument("--pdf", action="store_true", help="also write REPORT.pdf")
@@ -79,7 +84,6 @@ def run(args) -> int:
     import logging
     from pathlib import Path
 
-    from crankbench.analysis._output import print_json
     from crankbench.analysis.commands._pipeline_cli import options_from_args, progress_bar
     from crankbench.analysis.pipeline import analyse
     from crankbench.measure._atomic import check_overwrite
@@ -103,8 +107,12 @@ def run(args) -> int:
         check_overwrite(path, args.overwrite, option="--overwrite")
     check_common(args, records=[args.record], model=args.model)   # before any work
     options = options_from_args(args, args.record)
-    bar, progress = progress_bar(desc="report",
-                                 disable=args.json or log.getEffectiveLevel() > logging.INFO)
+    from crankbench.analysis.vibrograph import model_kind
+
+    quiet = args.json or log.getEffectiveLevel() > logging.INFO
+    if model_kind(args.model) == "engine":
+        return _run_engine(args, options, out, quiet)
+    bar, progress = progress_bar(desc="report", disable=quiet)
     try:
         result = analyse(args.record, args.model, progress=progress, **options)
     finally:
@@ -125,12 +133,45 @@ def run(args) -> int:
     paths = write_outputs(result, out, pdf=args.pdf, overwrite=args.overwrite,
                           title=args.title, parameters=params, record_path=args.record,
                           model_path=args.model, bench_rows=bench_rows)
+    _print_outcome(args, paths, result)
+    return 0
+
+
+def _print_outcome(args, paths, result) -> None:
+    """The written paths and the overall verdict (JSON with the summary under ``--json``)."""
+    from crankbench.analysis._output import print_json
+
     if args.json:
         print_json({"written": [str(p) for p in paths], "summary": result.summary()})
-    else:
-        for p in paths:
-            print(f"report written: {p}")
-        v = result.verdict
-        print(f"verdict: {v.status.upper()}" + (f" — {v.reason}" if v.status != "pass" else
-                                                "  (every required check passed)"))
+        return
+    for p in paths:
+        print(f"report written: {p}")
+    v = result.verdict
+    print(f"verdict: {v.status.upper()}" + (f" — {v.reason}" if v.status != "pass" else
+                                            "  (every required check passed)"))
+
+
+def _run_engine(args, options, out, quiet) -> int:
+    """An engine model on its mounts: the vibrograph report."""
+    from pathlib import Path
+
+    from crankbench.analysis.commands._pipeline_cli import progress_bar, vibrograph_options
+    from crankbench.analysis.vibrograph import compare_vibrograph
+    from crankbench.analysis.vibrograph_report import build_vibrograph_report
+
+    bar, progress = progress_bar(3, desc="report", disable=quiet)
+    try:
+        result = compare_vibrograph(args.record, args.model, progress=progress,
+                                    **vibrograph_options(options))
+    finally:
+        bar.close()
+    params = {"method": "COT", "vibration tolerance": args.vibration_tolerance}
+    rep = build_vibrograph_report(result, title=args.title, parameters=params,
+                                  record_path=args.record, model_path=args.model)
+    targets = [out]
+    if args.pdf and out.suffix.lower() != ".pdf":
+        targets.append(out.with_suffix(".pdf"))
+    paths = [rep.save(Path(t), overwrite=args.overwrite, option="--overwrite")
+             for t in targets]
+    _print_outcome(args, paths, result)
     return 0

@@ -224,23 +224,10 @@ def build_report(result, *, title=None, parameters=None, record_path=None, model
                        verdict=result.verdicts[0])
     for v in result.verdicts[1 + len(result.limits):]:
         rep.add_verdict(v)
-    for channel, comp, table in getattr(result, "balance", ()):
-        bsec = "Balance residuals at the mounts"
-        units = table.attrs.get("units", "")
-        table = table.copy()
-        # a prediction that is zero by design is printed as 0, not as its round-off
-        table.loc[table["balanced_by_design"], "predicted_max"] = 0.0
-        rep.add_table(table, title=f"{channel}: orders 1 and 2", section=bsec,
-                      amplitude_units=units,
-                      caption="Peak amplitudes. Predicted: free inertia forces "
-                              "and moments of the engine model through the mount model; "
-                              "orders balanced by design show the measured residual only.")
-        if comp is not None:
-            rep.add_table(comp.table, title=f"{channel}: measured / predicted", section=bsec,
-                          caption=f"passed: median ratio within a factor {comp.factor:g}")
-            if figures:
-                rep.add_figure(comp.plot(), title=f"{channel}: balance orders against speed",
-                               section=bsec)
+    if getattr(result, "vibrograph", None) is not None:
+        from ..vibrograph_report import add_vibrograph
+
+        add_vibrograph(rep, result.vibrograph, figures=figures)
     rep.add_limit_checks(result.limits, figures=figures)
     return rep
 

@@ -32,7 +32,8 @@ for the damper mode of the 6L32 scene at the free end); see ``tests/analysis/tes
 
 from .finder import OrderCurve, Resonance, ResonanceTable, find_resonances
 from .sdof import RESPONSES, _modal_fit, _parabolic, half_power_damping, sdof_response
-from .sweep import sweep_peak_loss
+from .sweep import correct_sweep_delay, sweep_expectation, sweep_peak_loss
 
 __all__ = ["Resonance", "ResonanceTable", "OrderCurve", "find_resonances",
-           "half_power_damping", "sdof_response", "sweep_peak_loss", "RESPONSES"]
+           "half_power_damping", "sdof_response", "sweep_peak_loss", "sweep_expectation",
+           "correct_sweep_delay", "RESPONSES"]

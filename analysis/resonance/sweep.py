@@ -16,7 +16,7 @@ from crankbench.predict.errors import AnalysisError
 
 from .sdof import RESPONSES, _background, _modal_fit, _peak_and_half_power, half_power_damping
 
-__all__ = ["sweep_peak_loss"]
+__all__ = ["sweep_peak_loss", "sweep_expectation", "correct_sweep_delay"]
 
 def _swept_envelope(zeta, s, p, *, lead=None, lag=None):
     """Response envelope of an SDOF through a linear sweep, in normalised time τ = ω_n t.
@@ -250,16 +250,241 @@ def _swept_fit(x, c, order, rate, fn0, zeta0, p, complex_data, terms="cl",
     total = np.sum(np.abs(c - np.mean(c)) ** 2)
     r2 = 1.0 - np.sum(np.abs(res) ** 2) / total if total > 0 else 0.0
     fn, zeta = float(np.exp(sol.x[0])), float(np.exp(sol.x[1]))
-    # the steady-state order amplitude the fitted model predicts: same R and background, the
-    # steady SDOF response in place of the swept envelope
     # the steady-state order amplitude the fitted model predicts (same R and residual terms,
-    # the steady SDOF response in place of the swept envelope): its largest value over the
-    # resonance's neighbourhood ``peak_range`` (default: the window)
+    # the steady SDOF response in place of the swept envelope) at its resonance: the local
+    # maximum of the steady curve within one half-power width of the SDOF's peak, or - a
+    # shoulder on a rising background has none - its value at that peak. (The largest value
+    # over the whole window would read the background's slope, not the resonance: +15 % on
+    # the 6L32 order-2.5 shoulder.)
     x_lo, x_hi = (x.min(), x.max()) if peak_range is None else peak_range
     xg = np.linspace(max(x.min(), x_lo), min(x.max(), x_hi), 4001)
     nu = xg / fn
     h = (1j * nu) ** p / (1.0 - nu**2 + 2j * zeta * nu)
-    steady = coef[0] * (h if complex_data else np.abs(h)) + _background(xg, xm, terms) @ coef[1:]
-    return fn, zeta, float(r2), float(np.max(np.abs(steady)))
+    steady = np.abs(coef[0] * (h if complex_data else np.abs(h))
+                    + _background(xg, xm, terms) @ coef[1:])
+    x_res = fn * np.sqrt(max(1.0 - 2.0 * zeta**2, 1e-12)) ** (1 - p)
+    near = np.abs(xg - x_res) <= zeta * fn
+    k = np.flatnonzero(near)
+    if k.size >= 3:
+        inner = k[1:-1][(steady[k[1:-1]] >= steady[k[:-2]]) & (steady[k[1:-1]] >= steady[k[2:]])]
+        if inner.size:
+            peak = float(steady[inner[np.argmin(np.abs(xg[inner] - x_res))]])
+            return fn, zeta, float(r2), peak
+    return fn, zeta, float(r2), float(np.interp(x_res, xg, steady))
 
 
+
+
+def _crossing_rate(time, speed_rpm, target_rpm, half_window_rpm):
+    """Local sweep rate (rpm/s) where the run first crosses ``target_rpm``: slope of a straight
+    line through the samples within ``half_window_rpm`` of that crossing; NaN if it never
+    crosses."""
+    d = speed_rpm - target_rpm
+    cross = np.flatnonzero(np.signbit(d[:-1]) != np.signbit(d[1:]))
+    if cross.size == 0:
+        return float("nan")
+    i = int(cross[0])
+    lo = hi = i
+    n = speed_rpm.size
+    while lo > 0 and abs(speed_rpm[lo - 1] - target_rpm) <= half_window_rpm:
+        lo -= 1
+    while hi < n - 1 and abs(speed_rpm[hi + 1] - target_rpm) <= half_window_rpm:
+        hi += 1
+    lo, hi = max(0, min(lo, i - 2)), min(n - 1, max(hi, i + 3))
+    t, r = time[lo:hi + 1], speed_rpm[lo:hi + 1]
+    if np.ptp(t) <= 0:
+        return float("nan")
+    return float(np.polyfit(t - t.mean(), r, 1)[0])
+
+
+def sweep_expectation(criticals, *, time, speed_rpm, response="displacement", flanks=1.0):
+    """Where, how high and whether at all each predicted resonance shows in a swept record.
+
+    A mode crossed at a finite rate peaks later, lower and wider than its steady-state
+    resonance curve (:func:`sweep_peak_loss`). Given the record's speed trace, each predicted
+    critical gets the local sweep rate where the run crosses it, the delay and loss of its
+    peak at that rate (from its predicted natural frequency and damping), and whether the run
+    covers it: the flank the sweep comes from (``flanks`` half-power half-widths ``ζ n``
+    before the critical) and the delayed peak lie inside the speed range. A resonance the
+    run enters on its flank cannot be identified (the response has not built up, the fit has
+    one side), so it is not expected in the measurement.
+
+    Parameters
+    ----------
+    criticals : pandas.DataFrame
+        Predicted critical speeds with ``order``, ``speed_rpm``, ``frequency_hz`` and
+        optionally ``damping_ratio`` (NaN or absent: no sweep effect, coverage of the speed
+        itself) and ``amplitude``.
+    time : array_like
+        Times of the speed samples, s.
+    speed_rpm : array_like
+        Speed of the run at those times, rpm (for example the ``rpm`` coordinate of an order
+        track).
+    response : {'displacement', 'velocity', 'acceleration'}
+        Measured quantity (sets which peak the delay refers to).
+    flanks : float
+        Half-power half-widths required on the side the sweep comes from.
+
+    Returns
+    -------
+    pandas.DataFrame
+        A copy with ``sweep_rate_rpm_per_s`` (local rate at the crossing, NaN if never
+        crossed), ``sweep_eta`` (α/(ζ f_n)²), ``sweep_shift_rpm`` (delay of the swept peak,
+        same sign as the sweep), ``sweep_fit_shift_rpm`` (the same read by an SDOF modal fit
+        of the swept curve), ``sweep_peak_loss`` (fraction of the steady peak lost),
+        ``speed_rpm_swept``, ``amplitude_swept`` and ``covered``.
+
+    Examples
+    --------
+    >>> import pandas as pd
+    >>> crit = pd.DataFrame({"order": [0.5, 6.0], "speed_rpm": [1062.0, 2574.0],
+    ...                      "frequency_hz": [8.85, 257.4], "damping_ratio": [0.069, 0.068],
+    ...                      "amplitude": [6.7e-4, 7.1e-4]})
+    >>> t = np.linspace(0.0, 20.0, 401)
+    >>> out = sweep_expectation(crit, time=t, speed_rpm=1000.0 + 250.0 * t)
+    >>> out[["sweep_rate_rpm_per_s", "covered"]].round(1).values.tolist()
+    [[250.0, False], [250.0, True]]
+    >>> round(float(out["sweep_shift_rpm"].iloc[1]), 1)
+    4.5
+    """
+    import pandas as pd
+
+    check_option(response, "response", RESPONSES)
+    t = np.asarray(time, float)
+    rpm = np.asarray(speed_rpm, float)
+    if t.shape != rpm.shape or t.ndim != 1 or t.size < 4:
+        raise AnalysisError(f"time and speed_rpm must be 1-D of equal length >= 4, got shapes "
+                            f"{t.shape} and {rpm.shape}")
+    ok = np.isfinite(t) & np.isfinite(rpm)
+    t, rpm = t[ok], rpm[ok]
+    if not isinstance(criticals, pd.DataFrame):
+        raise AnalysisError(f"criticals must be a pandas DataFrame, got "
+                            f"{type(criticals).__name__}")
+    for col in ("order", "speed_rpm"):
+        if col not in criticals:
+            raise AnalysisError(f"criticals need a column {col!r}; columns: "
+                                f"{list(criticals.columns)}")
+    out = criticals.copy()
+    lo, hi = float(rpm.min()), float(rpm.max())
+    cols = {k: [] for k in ("sweep_rate_rpm_per_s", "sweep_eta", "sweep_shift_rpm",
+                            "sweep_fit_shift_rpm", "sweep_peak_loss", "covered")}
+    for _, c in out.iterrows():
+        q, n = float(c["order"]), float(c["speed_rpm"])
+        f = float(c["frequency_hz"]) if "frequency_hz" in c and np.isfinite(
+            c["frequency_hz"]) else n * q / 60.0
+        zeta = float(c["damping_ratio"]) if "damping_ratio" in c else float("nan")
+        z_ok = np.isfinite(zeta) and 0.0 < zeta <= 0.5
+        rate = _crossing_rate(t, rpm, n, max((zeta if z_ok else 0.02) * n, 1e-9))
+        shift = fit_shift = loss = 0.0
+        eta = float("nan")
+        if z_ok and np.isfinite(rate) and rate != 0.0:
+            eff = sweep_peak_loss(natural_frequency=f, damping_ratio=zeta,
+                                  sweep_rate=q * rate / 60.0, response=response)
+            eta, loss = eff["eta"], eff["loss"]
+            shift = eff["shift"] * 60.0 / q
+            fit_shift = eff["fit_shift"] * 60.0 / q if np.isfinite(eff["fit_shift"]) else shift
+        half = (zeta if z_ok else 0.0) * n           # half-power half-width, rpm
+        if not np.isfinite(rate):
+            covered = False
+        elif rate >= 0:    # approached from below: lower flank, then the (delayed) peak
+            covered = bool(lo <= n - flanks * half and n + shift <= hi)
+        else:
+            covered = bool(n + flanks * half <= hi and lo <= n + shift)
+        for key, value in (("sweep_rate_rpm_per_s", rate), ("sweep_eta", eta),
+                           ("sweep_shift_rpm", shift), ("sweep_fit_shift_rpm", fit_shift),
+                           ("sweep_peak_loss", loss), ("covered", covered)):
+            cols[key].append(value)
+    for key, values in cols.items():
+        out[key] = np.asarray(values, bool if key == "covered" else float)
+    out["speed_rpm_swept"] = out["speed_rpm"] + out["sweep_shift_rpm"]
+    if "amplitude" in out:
+        out["amplitude_swept"] = out["amplitude"] * (1.0 - out["sweep_peak_loss"])
+    return out
+
+
+def correct_sweep_delay(measured, expected, *, gate=0.15):
+    """Take the predicted sweep delay out of measured resonances the finder left uncorrected.
+
+    :func:`analysis.find_resonances` corrects a peak for the sweep when its swept modal fit
+    converges; otherwise (a one-sided window, a fit that left its window, a half-power
+    estimate only) the reported critical speed still carries the delay — at 250 rpm/s a
+    first driveline mode appears tens of per cent late. This step removes, from each such
+    measured resonance, the delay the *model* expects at the measured local sweep rate for
+    the nearest predicted critical of the same order (within ``gate`` of its swept position;
+    only criticals the run covers, when ``expected`` has the ``covered`` column), so that
+    measurement and prediction are compared like with like. Corrected rows get
+    ``sweep_corrected`` True and ``" + model sweep delay"`` appended to ``method``.
+
+    Parameters
+    ----------
+    measured : pandas.DataFrame
+        Resonances (``ResonanceTable.to_frame()``): ``order``, ``speed_rpm``,
+        ``sweep_corrected``, ``method``, optionally ``amplitude``, ``resonant_amplitude``.
+    expected : pandas.DataFrame
+        From :func:`sweep_expectation`.
+    gate : float
+        Largest relative distance between the measured speed and the predicted swept one.
+
+    Returns
+    -------
+    pandas.DataFrame
+        A corrected copy of ``measured`` (same columns).
+
+    Examples
+    --------
+    >>> import pandas as pd
+    >>> meas = pd.DataFrame({"order": [0.5], "speed_rpm": [1120.0], "frequency_hz": [9.33],
+    ...                      "amplitude": [1e-3], "amplitude_corrected": [1e-3],
+    ...                      "resonant_amplitude": [5e-4], "sweep_corrected": [False],
+    ...                      "method": ["modal fit"]})
+    >>> exp = pd.DataFrame({"order": [0.5], "speed_rpm": [1062.0],
+    ...                     "sweep_shift_rpm": [62.0], "sweep_fit_shift_rpm": [60.0],
+    ...                     "sweep_peak_loss": [0.2], "speed_rpm_swept": [1124.0]})
+    >>> out = correct_sweep_delay(meas, exp)
+    >>> float(out.speed_rpm[0]), round(float(out.amplitude_corrected[0]), 6), out.method[0]
+    (1060.0, 0.001125, 'modal fit + model sweep delay')
+    """
+    import pandas as pd
+
+    if not isinstance(measured, pd.DataFrame) or not isinstance(expected, pd.DataFrame):
+        raise AnalysisError("measured and expected must be pandas DataFrames")
+    out = measured.copy()
+    if out.empty or expected.empty or "sweep_corrected" not in out:
+        return out
+    if "method" in out:
+        out["method"] = out["method"].astype(object)
+    for i, r in out.iterrows():
+        if bool(r["sweep_corrected"]):
+            continue
+        same = expected[np.isclose(expected["order"].to_numpy(float), float(r["order"]))]
+        if "covered" in same:
+            same = same[same["covered"].to_numpy(bool)]
+        if same.empty:
+            continue
+        swept = same["speed_rpm_swept"].to_numpy(float)
+        dist = np.abs(float(r["speed_rpm"]) - swept) / same["speed_rpm"].to_numpy(float)
+        k = int(np.argmin(dist))
+        if not dist[k] <= gate:
+            continue
+        c = same.iloc[k]
+        fit = "fit" in str(r.get("method", ""))
+        shift = float(c["sweep_fit_shift_rpm"] if fit else c["sweep_shift_rpm"])
+        loss = float(c["sweep_peak_loss"])
+        if not np.isfinite(shift) or (shift == 0.0 and loss == 0.0):
+            continue
+        out.at[i, "speed_rpm"] = float(r["speed_rpm"]) - shift
+        if "frequency_hz" in out:
+            out.at[i, "frequency_hz"] = (float(r["speed_rpm"]) - shift) * float(r["order"]) / 60
+        if "amplitude_corrected" in out and "resonant_amplitude" in out and 0 <= loss < 1:
+            res = float(r["resonant_amplitude"])
+            if np.isfinite(res):
+                out.at[i, "amplitude_corrected"] = float(r["amplitude"]) + res * (
+                    1.0 / (1.0 - loss) - 1.0)
+        if "sweep_shift_rpm" in out:
+            out.at[i, "sweep_shift_rpm"] = shift
+        if "sweep_peak_loss" in out:
+            out.at[i, "sweep_peak_loss"] = loss
+        out.at[i, "sweep_corrected"] = True
+        if "method" in out:
+            out.at[i, "method"] = f"{r['method']} + model sweep delay"
+    return out

@@ -181,7 +181,7 @@ def synthesize(scene, *, method="split", integration_rate=None):
     tors = [s for s in scene.sensors if s.kind in ("torsiograph", "encoder", "tacho")]
     modal = None
     if tors:
-        from .torsional import ModalModel, equivalent_viscous_system, order_forcing
+        from .torsional import ModalModel, order_forcing
 
         system = scene.shaftline
         rates = [s.sample_rate for s in tors if s.kind == "torsiograph"]
@@ -191,7 +191,8 @@ def synthesize(scene, *, method="split", integration_rate=None):
         psi = psi0 + prof.angle(tg)
         spd = prof.speed(tg)
         load_fn = lambda w: scene.load.scale(w / RPM)  # noqa: E731 - gas scale vs speed
-        modal = ModalModel.from_system(system, omega=float(np.mean(spd)))
+        modal = ModalModel.from_system(system, omega=float(np.mean(spd)),
+                                       max_frequency_hz=2.0 * f_max)
         gas, inertia = order_forcing(system, excitation, orders)
         node_names = sorted({s.params["node"] for s in tors}, key=system.node_names.index)
         nodes = [modal.node_index(nm) for nm in node_names]
@@ -203,9 +204,10 @@ def synthesize(scene, *, method="split", integration_rate=None):
         ph_x = np.zeros_like(amp_x)
         amp_v = np.zeros_like(amp_x)
         ph_v = np.zeros_like(amp_x)
+        diagnostics: dict = {}
         for k, q in enumerate(orders):
             x, v = modal.respond(tg, psi, q, gas[k], inertia[k], spd, load=load_fn,
-                                 nodes=nodes, method=method)
+                                 nodes=nodes, method=method, diagnostics=diagnostics)
             x_tot += x.real
             v_tot += v.real
             back = np.exp(-1j * q * psi[it])
@@ -217,7 +219,12 @@ def synthesize(scene, *, method="split", integration_rate=None):
                                            nodes)
         fidelity.update(integration_rate_hz=rate, modal_condition=modal.condition,
                         rigid_body_regularised=modal.regularised,
-                        hysteretic_damping="equivalent viscous at the most strained mode",
+                        damping="the model's own: steady state by its exact harmonic solve "
+                                "(hysteretic loss factors included); each mode's sweep "
+                                "transient with its damping at that mode's frequency",
+                        steady_interpolation_rel_error=float(
+                            diagnostics.get("steady_interpolation_rel_error", 0.0)),
+                        steady_points=int(diagnostics.get("steady_points", 0)),
                         hermite_interpolation_rel_error=float(
                             (TWO_PI * f_max / rate) ** 4 / 384.0))
         for s in tors:
@@ -354,16 +361,13 @@ def _resample(tg, data, ts, rate, fs, derivative=None):
 
 
 def _steady_state(system, excitation, orders, rpm, load, nodes):
-    """Steady-state node angles/velocities per order from predict.torsion (second method)."""
-    from .torsional import equivalent_viscous_system
-
-    visc = equivalent_viscous_system(system)
+    """Steady-state node angles/velocities per order from predict.torsion (the prediction)."""
     g = excitation.harmonics(np.array([0.0]), orders)[0]
     i1 = excitation.harmonics(np.array([1.0]), orders)[0] - g
     w = np.maximum(rpm, 1e-9) * RPM
     harm = load[:, None, None] * g[None] + (w**2)[:, None, None] * i1[None]
-    res = visc.forced_response(np.maximum(rpm, 1e-9), torque=harm, orders=orders,
-                               superpose=False)
+    res = system.forced_response(np.maximum(rpm, 1e-9), torque=harm, orders=orders,
+                                 superpose=False)
     ang = np.abs(res.angle[:, :, nodes])                          # (n_s, n_o, nodes), real
     vel = ang * (orders[None, :, None] * w[:, None, None])
     return ang, vel
@@ -394,7 +398,8 @@ def _mount_channels(scene, sensors, excitation, orders, psi0, t_truth, rpm_truth
     speeds = prof.speed_rpm * RPM
     n_grid = 150 if np.ptp(speeds) > 0 else 1
     grid = np.linspace(speeds.min(), speeds.max(), n_grid)
-    mc = MountChannels(mounted, scene.engine, excitation, orders, np.array(points), grid)
+    mc = MountChannels(mounted, scene.engine, excitation, orders, np.array(points), grid,
+                       counterweights=tuple(scene.balance_masses) + tuple(scene.imbalance))
     load_fn = lambda w: scene.load.scale(w / RPM)  # noqa: E731
     step = float(orders[0])
     # per sensor: response tables on the speed grid and the orders worth synthesising
@@ -457,8 +462,11 @@ def _mount_channels(scene, sensors, excitation, orders, psi0, t_truth, rpm_truth
         ts = np.arange(data[p].size) / fs
         values = _read_out(data[p], ts, s.imperfections, rng, s, s.params["quantity"])
         units = truth_rows[-len(sensors) + p][1]
+        attrs = dict(_instrument_attrs(s), position=[float(v) for v in points[p]])
+        if "mount" in s.params:
+            attrs["mount"] = s.params["mount"]
         channels[s.name] = dict(data=values, sample_rate=fs, units=units,
-                                quantity=s.params["quantity"], attrs=_instrument_attrs(s),
+                                quantity=s.params["quantity"], attrs=attrs,
                                 location=s.params.get("location", s.params.get(
                                     "mount", f"point {points[p]}")),
                                 direction=s.params["direction"])
@@ -519,7 +527,7 @@ def _truth_dataset(scene, orders, t_truth, rpm_truth, rows, modal, fidelity):
         data_vars["amplitude_steady"] = (("channel", "order", "time"), steady,
                                          {"amplitude": "peak", "long_name": "steady-state "
                                           "amplitude at the same speed (predict.torsion."
-                                          "forced_response, equivalent viscous model)"})
+                                          "forced_response: the prediction)"})
     if scene.shaftline is not None:
         prof = scene.profile
         span = (float(prof.speed_rpm.min()), float(prof.speed_rpm.max()))

@@ -27,6 +27,12 @@ A scene is read from TOML (paths relative to the scene file)::
     [imperfections]                            # defaults for every sensor
     jitter_s = 2e-8
 
+    [[imbalance]]                              # optional: masses added to the crankshaft of
+    mass = 0.02                                # the synthesized engine only (a known test
+    radius = 0.05                              # imbalance: kg, m from the axis, deg ahead of
+    angle_deg = 90.0                           # throw 1, m along the crankshaft)
+    position = 0.1
+
     [[sensor]]
     kind = "torsiograph"                       # torsiograph | encoder | tacho | vibrograph |
     name = "tv_free_end"                       # pressure | speed
@@ -42,7 +48,8 @@ Sensor keys by kind: *torsiograph* ``node``, ``quantity``, ``sample_rate``; *enc
 0.11), ``ringing`` (damping ratio of the pick-up chain, 0 = none) at ``ringing_hz``, and for a
 once-per-revolution mark ``mark_width_deg``, e.g. a TDC mark one or two samples wide);
 *vibrograph* ``point = [x, y, z]`` or ``mount = "name"``, ``direction`` (x/y/z),
-``quantity`` (acceleration/velocity/displacement), ``sample_rate``; *pressure* ``cylinder``,
+``quantity`` (acceleration/velocity/displacement), ``sample_rate`` (the channel carries its
+``position`` and ``direction`` attrs, docs/DESIGN.md "Vibrograph sensors"); *pressure* ``cylinder``,
 ``sample_rate``; *speed* ``sample_rate``. Torsiograph and vibrograph sensors may give a
 seismic instrument, ``instrument_frequency`` (Hz) and ``instrument_damping`` (fraction of
 critical, default 0.65): the channel is then the instrument's reading
@@ -154,6 +161,11 @@ class Scene:
     start_angle_deg : float
     truth_rate : float
         Hz.
+    balance_masses : tuple of predict.balance.Counterweight
+        Masses fixed to the crankshaft by the engine model (``[[balance.mass]]``).
+    imbalance : tuple of predict.balance.Counterweight
+        Masses the scene adds to the synthesized engine only (``[[imbalance]]``): a known
+        imbalance the model does not contain.
     source : str
         Scene file (or "python").
     settings : dict
@@ -171,6 +183,8 @@ class Scene:
     max_order: float = 12.0
     start_angle_deg: float = 0.0
     truth_rate: float = 20.0
+    balance_masses: tuple = ()
+    imbalance: tuple = ()
     source: str = "python"
     settings: dict = field(default_factory=dict)
 
@@ -305,12 +319,25 @@ class Scene:
             defaults = Imperfections.from_table(it)
             it.check_unknown()
         sensors = tuple(_sensor(t, defaults) for t in doc.tables("sensor", []))
+        from crankbench.predict.balance import Counterweight
+        from crankbench.predict.balance_tolerance import BalanceSpec
+
+        imbalance = []
+        for t in doc.tables("imbalance", []):
+            imbalance.append(Counterweight(
+                mass_radius=(t.number("mass", low=0.0, unit="kg", plausible=(1e-6, 1e4))
+                             * t.number("radius", low=0.0, unit="m", plausible=(1e-3, 5.0))),
+                angle_deg=t.number("angle_deg", unit="deg", plausible=(1e-3, 360.0)),
+                position=t.number("position", 0.0, unit="m", plausible=(1e-4, 100.0))))
+            t.check_unknown(["description"])
+        balance_masses = BalanceSpec.from_toml(engine_path).masses
         doc.check_unknown(["description"])
         settings = dict(doc.data)
         try:
             return cls(name=name, engine=engine, shaftline=shaftline, mounts=mounts,
                        profile=profile, load=load, sensors=sensors, seed=seed,
                        max_order=max_order, start_angle_deg=start_angle, truth_rate=truth_rate,
+                       balance_masses=balance_masses, imbalance=tuple(imbalance),
                        source=str(path), settings=settings)
         except ConfigError as exc:  # whole-scene checks: say which file to fix
             raise ConfigError(f"{path}: {exc}") from None

@@ -2,10 +2,12 @@
 mount model.
 
 The engine block is a rigid body on elastic mounts (:class:`predict.mounts.MountedEngine`). Per
-order it is shaken by
+order it is shaken by the loads of :func:`predict.mounts.block_excitation` (the very loads the
+prediction of :mod:`analysis.vibrograph` uses):
 
 * the free inertia forces and moments of :func:`predict.balance.unbalance` (integer orders,
-  amplitude exactly proportional to ``Omega**2``), and
+  amplitude exactly proportional to ``Omega**2``; counterweights and added masses included),
+  and
 * the reaction to the crankshaft torque, the roll moment ``-sum_c T_q,c`` about the crankshaft
   axis (all orders of the cycle, gas part scaled with the load plus ``Omega**2`` times the
   inertia part; :mod:`predict.torsion.excitation`).
@@ -31,25 +33,13 @@ from __future__ import annotations
 
 import numpy as np
 
-from crankbench.predict.errors import ConfigError
 from crankbench.predict._deprecate import renamed
+from crankbench.predict.errors import ConfigError
+from crankbench.predict.mounts import direction_vector
 
 __all__ = ["MountChannels"]
 
 TWO_PI = 2.0 * np.pi
-_AXIS = {"x": 0, "y": 1, "z": 2}
-
-
-def _roll_harmonics(engine, excitation, orders):
-    """Total crankshaft torque per order (gas part, inertia part per unit Omega**2), N·m.
-
-    ``T(psi) = Re[(gas + Omega**2 inertia) e^{i q psi}]``, the sum over the cylinders of their
-    torque harmonics delayed by the firing angles.
-    """
-    g = excitation.harmonics(np.array([0.0]), orders)[0]            # (n_o, z)
-    i1 = excitation.harmonics(np.array([1.0]), orders)[0] - g
-    phase = np.exp(-1j * np.deg2rad(np.outer(orders, engine.firing_angles_deg())))
-    return (g * phase).sum(axis=1), (i1 * phase).sum(axis=1)
 
 
 class MountChannels:
@@ -67,6 +57,9 @@ class MountChannels:
         Sensor points, m.
     omega_grid : numpy.ndarray
         Crankshaft speeds (rad/s) to tabulate the responses on.
+    counterweights : sequence of predict.balance.Counterweight
+        Masses fixed to the crankshaft besides the engine's own (counterweights, added or
+        trial masses): order 1 of the shaking loads.
 
     Attributes
     ----------
@@ -86,9 +79,9 @@ class MountChannels:
     (True, 0.0)
     """
 
-    def __init__(self, mounted, engine, excitation, orders, points, omega_grid):
-        from crankbench.predict.balance import unbalance
-        from crankbench.predict.mounts import excitation_from_unbalance
+    def __init__(self, mounted, engine, excitation, orders, points, omega_grid, *,
+                 counterweights=()):
+        from crankbench.predict.mounts import block_excitation
 
         self.orders = np.asarray(orders, float)
         self.points = np.atleast_2d(np.asarray(points, float))
@@ -96,51 +89,26 @@ class MountChannels:
         n_o, n_p, n_g = self.orders.size, self.points.shape[0], self.omega_grid.size
         self.gas = np.zeros((n_o, n_p, 3, n_g), complex)
         self.inertia = np.zeros((n_o, n_p, 3, n_g), complex)
-        theta_f = float(engine.firing_tdc_shaft_angle)
-        integer = [int(round(q)) for q in self.orders if abs(q - round(q)) < 1e-9 and q >= 1]
-        ub = unbalance(engine, omega=1.0, orders=tuple(integer)) if integer else None
-        if excitation is not None:
-            roll_gas, roll_in = _roll_harmonics(engine, excitation, self.orders)
-        else:
-            roll_gas = roll_in = np.zeros(n_o, complex)
-        exc_f, exc_m, exc_p, exc_g, exc_i = [], [], [], [], []
-        for i, q in enumerate(self.orders):
-            force = np.zeros(3, complex)
-            moment = np.zeros(3, complex)
-            point = np.zeros(3)
-            n = int(round(q))
-            if ub is not None and abs(q - n) < 1e-9 and n in integer:
-                ex = excitation_from_unbalance(ub, n)
-                shift = np.exp(1j * n * theta_f)          # shaft angle theta = psi + theta_f
-                force, moment, point = ex["force"] * shift, ex["moment"] * shift, ex["point"]
-            # roll reaction on the block: -(crankshaft torque) in the direction of rotation,
-            # i.e. +torque about the x axis
-            m_in = moment.copy()
-            m_in[0] += roll_in[i]
-            exc_f.append(force)
-            exc_m.append(m_in)
-            exc_p.append(point)
-            exc_g.append(roll_gas[i])
+        exc = block_excitation(engine, self.orders, excitation=excitation,
+                               counterweights=counterweights)
+        self.excitation = exc
         # orders whose excitation cancels (balanced engines, minor orders of the torque
         # reaction) are skipped: relative 1e-9 of the largest excitation of each kind
         lever = max(1.0, float(np.ptp(np.asarray(engine.cylinder_positions))))
-        size_in = np.array([np.abs(f).max() * lever + np.abs(m).max()
-                            for f, m in zip(exc_f, exc_m)])
-        size_gas = np.abs(np.array(exc_g))
+        size_in = np.abs(exc.inertia[:, :3]).max(axis=1) * lever + \
+            np.abs(exc.inertia[:, 3:]).max(axis=1)
+        size_gas = np.abs(exc.gas).max(axis=1)
         keep_in = size_in > 1e-9 * max(size_in.max(), 1e-300)
         keep_gas = size_gas > 1e-9 * max(size_gas.max(), 1e-300)
         for i, q in enumerate(self.orders):
             freq = q * self.omega_grid / TWO_PI
-            if keep_in[i]:
-                r = mounted.response(np.broadcast_to(exc_f[i], (n_g, 3)),
-                                     np.broadcast_to(exc_m[i], (n_g, 3)), freq,
-                                     point=exc_p[i], at=self.points)
-                self.inertia[i] = np.moveaxis(r.displacement, 0, -1)
-            if keep_gas[i]:
-                m_gas = np.array([exc_g[i], 0.0, 0.0], complex)
-                r = mounted.response(np.zeros((n_g, 3)), np.broadcast_to(m_gas, (n_g, 3)), freq,
-                                     point=exc_p[i], at=self.points)
-                self.gas[i] = np.moveaxis(r.displacement, 0, -1)
+            for keep, loads, out in ((keep_in[i], exc.inertia[i], self.inertia),
+                                     (keep_gas[i], exc.gas[i], self.gas)):
+                if keep:
+                    r = mounted.response(np.broadcast_to(loads[:3], (n_g, 3)),
+                                         np.broadcast_to(loads[3:], (n_g, 3)), freq,
+                                         point=exc.point, at=self.points)
+                    out[i] = np.moveaxis(r.displacement, 0, -1)
 
     def table(self, order_index, point_index, direction, quantity, load_fn=None):
         """The response of one point per unit ``e^{i q psi}`` on the speed grid.
@@ -149,12 +117,12 @@ class MountChannels:
         displacement, velocity, acceleration: a smooth function of speed only, ready to be
         interpolated along the run. ``load_fn(Omega)`` gives the gas-load factor (default 1).
         """
-        axis = _AXIS[direction]
+        u = direction_vector(direction)
         q = self.orders[order_index]
         grid = self.omega_grid
         load = np.ones_like(grid) if load_fn is None else load_fn(grid)
-        disp = load * self.gas[order_index, point_index, axis] + \
-            grid**2 * self.inertia[order_index, point_index, axis]
+        disp = load * (u @ self.gas[order_index, point_index]) + \
+            grid**2 * (u @ self.inertia[order_index, point_index])
         power = {"displacement": 0, "velocity": 1, "acceleration": 2}.get(quantity)
         if power is None:
             raise ConfigError(f"quantity={quantity!r} is not one of 'acceleration', 'velocity', "
@@ -168,10 +136,10 @@ class MountChannels:
         Returns ``A(t)`` such that the signal is ``Re[A(t) e^{i q psi(t)}]``, SI units of the
         quantity (m, m/s or m/s^2).
         """
-        axis = _AXIS[direction]
+        u = direction_vector(direction)
         q = self.orders[order_index]
-        g = self.gas[order_index, point_index, axis]
-        h = self.inertia[order_index, point_index, axis]
+        g = u @ self.gas[order_index, point_index]
+        h = u @ self.inertia[order_index, point_index]
         grid = self.omega_grid
         if grid.size == 1:
             disp = load * g[0] + omega**2 * h[0]

@@ -70,14 +70,13 @@ def _marine():
 
 
 def test_steady_speed_equals_exact_harmonic_solve():
-    """Constant speed: the integrated response equals forced_response of the same (equivalent
-    viscous) model at every node and order to 1e-9."""
+    """Constant speed: the synthesized response equals the prediction, forced_response of the
+    same model with its hysteretic damping, at every node and order to 1e-9."""
     system, orders, exc = _marine()
     mm = ModalModel.from_system(system)
     gas, inertia = order_forcing(system, exc, orders)
-    visc = equivalent_viscous_system(system)
     rpm = 560.0
-    ref = visc.forced_response([rpm], torque=exc, orders=orders, superpose=False)
+    ref = system.forced_response([rpm], torque=exc, orders=orders, superpose=False)
     prof = steady(rpm, duration=1.0)
     t = np.arange(2001) / 2000.0
     psi, w = prof.angle(t), prof.speed(t)
@@ -117,15 +116,14 @@ def _run(duration, start=480.0, end=620.0, fs=1000.0, order=6.0, node="flywheel"
     x, _ = mm.respond(t, psi, order, gas[k], inertia[k], w, nodes=[n])
     rpm = w * 60 / TWO_PI
     sub = slice(None, None, max(1, t.size // 400))
-    visc = equivalent_viscous_system(system)
-    ref = visc.forced_response(rpm[sub], torque=exc, orders=[order], superpose=False)
+    ref = system.forced_response(rpm[sub], torque=exc, orders=[order], superpose=False)
     return rpm[sub], np.abs(x[0, sub]), np.abs(ref.angle[:, 0, n]), mm, orders
 
 
 def test_slow_runup_matches_steady_state_and_critical_speed():
     """A 0.5 rpm/s run-up through the order-6 critical of mode 3 (about 540 rpm): the
-    synthesized flywheel amplitude equals the steady-state forced response (a second method)
-    within 1 % everywhere and peaks within 1 rpm of it. The peak is near the damped model's
+    synthesized flywheel amplitude equals the prediction's steady-state forced response
+    (hysteretic damping, frequency domain) within 1 % everywhere and peaks within 1 rpm of it. The peak is near the damped model's
     critical speed (within 2 %: with Q of about 9 the neighbouring modes' tails shift a node's
     peak by a few rpm)."""
     rpm, amp, steady_amp, mm, orders = _run(280.0)
@@ -143,3 +141,85 @@ def test_fast_runup_shows_transient_effect():
     rpm, amp, steady_amp, _, _ = _run(0.5, fs=4000.0)
     assert amp.max() < 0.95 * steady_amp.max()
     assert rpm[np.argmax(amp)] > rpm[np.argmax(steady_amp)] + 2.0
+
+
+def _hysteretic_three_mass():
+    """Three inertias on springs of different loss factors, one viscous damper to ground."""
+    return TorsionalSystem([1.0, 0.6, 2.0], [(-1, 0), (0, 1), (1, 2)], [4e4, 2.5e4, 6e4],
+                           edge_loss_factor=[0.03, 0.12, 0.05], node_damping=[0.0, 0.0, 4.0])
+
+
+def _frequency_domain_reference(system, t, psi, w, order, gas, load):
+    """Second method: the response of the same hysteretic model by FFT. The forcing's envelope
+    vanishes at both ends of the run (``load``), so the zero-padded transform is exact; the
+    exact receptance ``(K(1 + i eta sgn w) - w**2 J + i w C)^-1`` multiplies every frequency."""
+    n = t.size
+    pad = 8 * n
+    fs = 1.0 / (t[1] - t[0])
+    spec = np.fft.fft(load(w) * np.exp(1j * order * psi), pad)
+    om = TWO_PI * np.fft.fftfreq(pad, 1.0 / fs)
+    eta = np.asarray(system.edge_loss_factor)
+    k_pos = system._laplacian(system.stiffnesses * (1 + 1j * eta))
+    k_neg = system._laplacian(system.stiffnesses * (1 - 1j * eta))
+    z = (np.where((om >= 0)[:, None, None], k_pos[None], k_neg[None])
+         - om[:, None, None] ** 2 * system.inertia_matrix()[None]
+         + 1j * om[:, None, None] * system.damping_matrix()[None])
+    x = np.linalg.solve(z, (spec[:, None] * gas[None, :])[..., None])[..., 0]
+    return np.fft.ifft(x, axis=0)[:n].T
+
+
+def test_hysteretic_sweep_matches_frequency_domain_solution():
+    """A fast run-up (order 1 sweeping 10 Hz/s) through the three modes of a shaft line with
+    loss factors 0.03, 0.12 and 0.05: against the FFT solution of the *same* hysteretic model
+    (a second method, exact for it), the synthesized response is within 2 % of its peak at
+    every node (measured 1.3 %; 0.08 % at a 100 times slower sweep, where the transient is
+    small — what is left is the non-causal hysteretic model's own transient, which no time
+    integration reproduces). One viscous matrix tuned at one mode (the former scheme) was
+    off by 48-50 %."""
+    s = _hysteretic_three_mass()
+    fs, duration = 2000.0, 6.0
+    prof = ramp(600.0, 4200.0, duration=duration)
+    t = np.arange(int(duration * fs) + 1) / fs
+    psi, w = prof.angle(t), prof.speed(t)
+    lo, hi = w.min(), w.max()
+
+    def load(om):
+        return np.sin(np.pi * np.clip((om - lo) / (hi - lo), 0.0, 1.0)) ** 2
+
+    gas = np.array([50.0 + 0j, 0.0, 0.0])
+    ref = _frequency_domain_reference(s, t, psi, w, 1.0, gas, load)
+    scale = np.abs(ref).max(axis=1)
+    for damping, low, high in (("per-mode", 0.0, 0.02), ("single viscous", 0.3, 1.0)):
+        mm = ModalModel.from_system(s, damping=damping)
+        x, _ = mm.respond(t, psi, 1.0, gas, np.zeros(3, complex), w, load=load,
+                          nodes=[0, 1, 2])
+        err = np.abs(x.real - ref.real).max(axis=1) / scale
+        assert np.all((low <= err) & (err < high)), (damping, err)
+
+
+def test_each_mode_has_the_predicted_damping():
+    """The I4 driveline: each mode's damping ratio in the synthesis equals the half-power
+    damping of the prediction's own resonance (exact harmonic solve with the loss factors) for
+    a unit torque at the pulley, within 3 % of its value (the prediction's curve also carries
+    the neighbouring modes); the former single viscous matrix gave mode 4 zeta 0.096 against
+    about 0.050."""
+    from crankbench.analysis.resonance import half_power_damping
+
+    s = from_toml(ROOT / "sample_data/shaftlines/i4.toml")
+    fn, zeta = ModalModel.from_system(s).natural_frequencies()
+    node = s.node_names.index("pulley hub")
+    for mode in (3, 4):                       # crankshaft modes, well separated
+        f0 = fn[mode - 1]
+        f = np.linspace(0.7 * f0, 1.3 * f0, 6001)
+        torque = np.zeros((f.size, 1, s.n_nodes), complex)
+        torque[:, 0, node] = 1.0
+        from crankbench.predict.torsion.forced import harmonic_solve
+
+        amp = np.abs(harmonic_solve(s, TWO_PI * f, [1.0], torque)[:, 0, node])
+        i = int(np.argmax(amp))
+        half = amp[i] / np.sqrt(2.0)
+        f1 = np.interp(half, amp[:i + 1], f[:i + 1])
+        f2 = np.interp(-half, -amp[i:], f[i:])
+        z_pred, _ = half_power_damping(f1, f2, response="displacement")
+        assert zeta[mode - 1] == pytest.approx(z_pred, rel=0.03), (mode, zeta[mode - 1], z_pred)
+    assert zeta[3] == pytest.approx(0.050, abs=0.002)
