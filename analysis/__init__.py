@@ -30,6 +30,9 @@ _LAZY = {
     "match_criticals": "compare",
     "compare_balance": "compare",
     "analyse": "pipeline",
+    "indicator_analysis": "pressure",
+    "indicator_analyses": "pressure",
+    "measured_excitation": "pressure",
     "Report": "report",
     "Verdict": "verdict",
 }

@@ -31,7 +31,7 @@ _DEFAULT_SHOWWARNMSG = getattr(warnings, "_showwarnmsg_impl", None)
 
 #: Sub-commands in the order ``--help`` lists them.
 COMMANDS = ("info", "import", "demo", "synth", "predict", "analyse", "balance", "compare",
-            "report", "batch", "campaign", "bench")
+            "report", "batch", "campaign", "bench", "pressure")
 #: commands whose module name differs (``import`` is a Python keyword)
 _MODULES = {"import": "import_"}
 

@@ -146,6 +146,9 @@ class PipelineResult:
         mounts (:func:`analysis.vibrograph.compare_vibrograph`), with the residual forces and
         moments when enough sensors; None when the engine has no ``[mounts]`` or the record
         no placeable vibrograph channel.
+    pressure : analysis.excitation_compare.ExcitationComparison or None
+        With cylinder pressure in the record: the indicator analysis and the response
+        predicted from the measured excitation beside the model's.
     """
 
     source: str
@@ -169,6 +172,7 @@ class PipelineResult:
     settings: dict = field(default_factory=dict)
     timings: dict = field(default_factory=dict)
     balance: tuple = ()
+    pressure: object = None
     extra_verdicts: tuple = ()
     vibrograph: object = None
 
@@ -306,9 +310,13 @@ def _load_model(model):
                       f"{type(model).__name__}")
 
 
-def predicted_response(system, speed_rpm, orders, node, *, load, quantity="angle"):
+def predicted_response(system, speed_rpm, orders, node, *, load, quantity="angle",
+                       excitation=None):
     """Steady-state order amplitudes at ``node`` and the complex stress of each section.
 
+    ``excitation`` (an :class:`predict.torsion.excitation.Excitation`, e.g. from measured
+    pressure) replaces the model's parametric one; its gas part is scaled by the load law —
+    except for a :class:`predict.gas_torque.SpeedExcitation`, measured at each speed.
     Returns (amplitude (n_s, n_o), stress (n_s, n_o, n_edges) complex Pa — NaN where a
     section has no diameter —, the ForcedResponse).
     """
@@ -319,16 +327,21 @@ def predicted_response(system, speed_rpm, orders, node, *, load, quantity="angle
     from .given_excitation import given_excitation, given_forcing
 
     omega = np.asarray(speed_rpm, float) * np.pi / 30.0
-    if given_excitation(system) is not None:  # a bench without an engine
+    if excitation is None and given_excitation(system) is not None:  # a bench without an engine
         forced, torque = given_forcing(system, speed_rpm, orders)
         res = forced.forced_response(speed_rpm, torque=torque, orders=orders, superpose=False)
     else:
-        imep = load.imep if load.imep is not None else system.operating.get("imep")
-        exc = engine_excitation(system, imep=imep, orders=orders)
-        scale = load.scale(speed_rpm)
-        torque = (exc.gas[None, :] * scale[:, None]
-                  + (omega**2)[:, None] * exc.inertia[None, :])[:, :, None]
-        torque = np.repeat(torque, exc.n_cylinders, axis=2)
+        if excitation is None:
+            imep = load.imep if load.imep is not None else system.operating.get("imep")
+            excitation = engine_excitation(system, imep=imep, orders=orders)
+        if getattr(excitation, "speed_dependent", False):   # measured per speed: no load law
+            torque = excitation.harmonics(omega, orders)
+        else:
+            scale = load.scale(speed_rpm)
+            gas = excitation.harmonics(np.zeros(1), orders)[0]                 # (n_o, z)
+            inertia = excitation.harmonics(np.ones(1), orders)[0] - gas
+            torque = gas[None] * scale[:, None, None] \
+                + (omega**2)[:, None, None] * inertia[None]
         res = system.forced_response(speed_rpm, torque=torque, orders=orders, superpose=False)
     i = system.node_names.index(node)
     amp = np.abs(res.angle[:, :, i])
@@ -646,6 +659,13 @@ def analyse(record, model, *, channel=None, speed_channel=None, orders=None, max
                            standard=vibration_standard, speed_range=(lo, hi))
     done("limits")
 
+    step("measured excitation")                # cylinder pressure, if the record has it
+    from .excitation_compare import measured_excitation_prediction
+
+    pressure = measured_excitation_prediction(rec, system, grid, all_orders, node, quantity,
+                                              units, load, track, response_da)
+    done("measured excitation")
+
     ppr = next((int(rec[n].attrs["pulses_per_rev"]) for n in rec.data_vars
                 if "pulses_per_rev" in rec[n].attrs), None)
     settings = {
@@ -679,7 +699,8 @@ def analyse(record, model, *, channel=None, speed_channel=None, orders=None, max
         speed_range_rpm=(lo, hi), sweep_rate_rpm_per_s=sweep_rate, track=track,
         resonances=resonances, predicted=predicted, response=response_da,
         comparison=comparison, limits=tuple(limits), system=system, record=rec,
-        settings=settings, timings=timings, vibrograph=vibrograph)
+        settings=settings, timings=timings, vibrograph=vibrograph,
+        pressure=pressure)
 
 
 def _swept_like_with_like(predicted, resonances, track, quantity, gate):

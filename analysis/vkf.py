@@ -50,6 +50,7 @@ import numpy as np
 from crankbench.predict._validate import check_int, check_option, check_positive
 from crankbench.predict.errors import AnalysisError
 from crankbench.predict._deprecate import renamed
+from crankbench.predict._threads import single_threaded_blas
 
 from .resample import _as_rpm, _as_signal, shaft_angle
 
@@ -234,6 +235,7 @@ def _solve_block(x, phase, knot_weights, p, m):
 
 
 @renamed(rpm="speed_rpm")
+@single_threaded_blas  # banded solves per block: BLAS threads only cost (issue 21)
 def vold_kalman(x, *, fs=None, speed_rpm, orders, bandwidth_hz=None, bandwidth_orders=None,
                 filter_order: int = 2, decimate: bool = True, block: int = 1 << 15,
                 knots_per_bandwidth: float | None = 40.0):

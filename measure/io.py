@@ -43,7 +43,8 @@ from crankbench.predict.errors import ConfigError, CrankbenchError, RecordError
 from ._atomic import atomic_path, check_overwrite
 from .readers import EXTENSIONS, format_of_magic, module_for
 from .readers._common import REGULAR_KEY
-from .record import CLIP_QUANTITIES, RecordWarning, clipped_spans, nonfinite_spans, validate
+from .record import (CLIP_QUANTITIES, RecordWarning, clipped_spans, nonfinite_spans,
+                     shared_scans, validate)
 
 __all__ = ["read", "write", "open", "read_truth", "iter_blocks", "sha256_of", "EXTENSIONS"]
 
@@ -144,7 +145,7 @@ def _mask_nonfinite(ds: xr.Dataset, path: Path) -> xr.Dataset:
         shown = "; ".join(text[:5]) + (f" and {len(text) - 5} more" if len(text) > 5 else "")
         warnings.warn(f"{path.name}: channel {name!r}: {sum(b - a for a, b in spans)} NaN/inf "
                       f"sample(s) masked as NaN in {len(spans)} span(s): {shown}",
-                      RecordWarning, stacklevel=3)
+                      RecordWarning, stacklevel=4)
         ds[name] = var.copy(data=fixed)
         if flat:
             ds[name].attrs["masked_spans_s"] = np.asarray(flat)
@@ -173,7 +174,7 @@ def _flag_clipping(ds: xr.Dataset, path: Path) -> None:
             f"{sum(b - a for a, b in spans)} sample(s) in {len(spans)} flat run(s) at its "
             f"extremes {hi:.6g} / {lo:.6g} {var.attrs.get('units', '')}: {text}{more}; spans "
             "listed in attr clipped_spans_s — amplitudes there are too low",
-            RecordWarning, stacklevel=3)
+            RecordWarning, stacklevel=4)
         var.attrs["clipped_spans_s"] = np.asarray(flat)
 
 
@@ -236,38 +237,54 @@ def read(path, *, channels=None, allow_nonfinite: bool = False, map=None) -> xr.
         from .channelmap import load_map
 
         cmap = load_map(map)
+    cached = _cached_sha256(path)
+    if cached is not None:  # a file read before: no hashing thread to start and join
+        return _read_checked(path, module, cmap, channels, allow_nonfinite, lambda: cached)
     # hash on a second thread while the reader parses (hashlib releases the GIL)
     with ThreadPoolExecutor(max_workers=1) as pool:
         digest = pool.submit(sha256_of, path)
-        try:
-            if cmap is None:
-                ds = module.read(path, channels=channels)
-            else:
-                ds = _read_mapped(path, module, cmap, channels, allow_nonfinite)
-        except ConfigError as exc:  # the map's fault: name the map and the data file
-            if cmap is None:
-                raise
-            raise ConfigError(f"{cmap.origin} (for {path.name}): {exc}") from None
-        except CrankbenchError as exc:
-            raise _named(path, exc) from None
-        except (MemoryError, KeyboardInterrupt):
+        return _read_checked(path, module, cmap, channels, allow_nonfinite, digest.result)
+
+
+def _cached_sha256(path: Path) -> str | None:
+    """The cached SHA-256 of ``path`` if its size and mtime are unchanged, else None."""
+    st = path.stat()
+    return _HASH_CACHE.get((str(path.resolve()), st.st_size, st.st_mtime_ns))
+
+
+def _read_checked(path, module, cmap, channels, allow_nonfinite, digest) -> xr.Dataset:
+    """Body of :func:`read`: parse (through the channel map ``cmap`` if any), mask, validate,
+    flag clipping, stamp source and hash (``digest()``)."""
+    try:
+        if cmap is None:
+            ds = module.read(path, channels=channels)
+        else:
+            ds = _read_mapped(path, module, cmap, channels, allow_nonfinite)
+    except ConfigError as exc:  # the map's fault: name the map and the data file
+        if cmap is None:
             raise
-        except Exception as exc:  # libraries raise anything on a corrupt file
-            raise _wrap(path, module, exc) from exc
-        if allow_nonfinite:
-            ds = _mask_nonfinite(ds, path)
-        regular = frozenset(ds.encoding.pop(REGULAR_KEY, ()))
+        raise ConfigError(f"{cmap.origin} (for {path.name}): {exc}") from None
+    except CrankbenchError as exc:
+        raise _named(path, exc) from None
+    except (MemoryError, KeyboardInterrupt):
+        raise
+    except Exception as exc:  # libraries raise anything on a corrupt file
+        raise _wrap(path, module, exc) from exc
+    if allow_nonfinite:
+        ds = _mask_nonfinite(ds, path)
+    regular = frozenset(ds.encoding.pop(REGULAR_KEY, ()))
+    with shared_scans():  # the NaN/inf check and the clipping check: one scan
         try:
             validate(ds, allow_nonfinite=allow_nonfinite, _regular_dims=regular)
         except RecordError as exc:
             raise _named(path, exc) from None
         _flag_clipping(ds, path)
-        ds.attrs["source"] = path.name
-        ds.attrs["sha256"] = digest.result()
-        if cmap is not None:
-            ds.attrs.update(raw_source=path.name, raw_sha256=ds.attrs["sha256"],
-                            channel_map=cmap.text, channel_map_source=Path(cmap.origin).name,
-                            channel_map_sha256=cmap.sha256)
+    ds.attrs["source"] = path.name
+    ds.attrs["sha256"] = digest()
+    if cmap is not None:
+        ds.attrs.update(raw_source=path.name, raw_sha256=ds.attrs["sha256"],
+                        channel_map=cmap.text, channel_map_source=Path(cmap.origin).name,
+                        channel_map_sha256=cmap.sha256)
     return ds
 
 

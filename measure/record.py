@@ -24,8 +24,10 @@ and ``channel_map_sha256``. Mixed sample rates are never resampled.
 
 from __future__ import annotations
 
+import contextlib
 import datetime as _dt
 import math
+import threading
 from collections.abc import Mapping
 
 import numpy as np
@@ -85,6 +87,53 @@ def time_coordinate(n: int, sample_rate: float, start: float = 0.0) -> np.ndarra
     return t
 
 
+#: samples per block of the cache-friendly scans below (1 MB of float64: min and max of a block
+#: read it from memory once)
+_SCAN_BLOCK = 1 << 17
+
+
+_SCAN_CACHE = threading.local()
+
+
+@contextlib.contextmanager
+def shared_scans():
+    """Within the block, :func:`nonfinite_spans` and :func:`clipped_spans` share one scan of
+    each array (``measure.read`` validates, then flags clipping, on samples nobody changes in
+    between). Per thread; forgotten on exit."""
+    outer = getattr(_SCAN_CACHE, "table", None)
+    _SCAN_CACHE.table = {} if outer is None else outer
+    try:
+        yield
+    finally:
+        if outer is None:
+            _SCAN_CACHE.table = None
+
+
+def _block_extremes(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Minimum and maximum of each block of :data:`_SCAN_BLOCK` samples (NaN propagates): one
+    pass over memory where ``x.min()`` then ``x.max()`` are two."""
+    table = getattr(_SCAN_CACHE, "table", None)
+    if table is not None:
+        key = (x.__array_interface__["data"][0], x.shape, x.strides, x.dtype.str)
+        if key not in table:
+            table[key] = _block_extremes_uncached(x)
+        return table[key]
+    return _block_extremes_uncached(x)
+
+
+def _block_extremes_uncached(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    n = x.size
+    starts = range(0, n, _SCAN_BLOCK)
+    lows = np.empty(len(starts), dtype=x.dtype)
+    highs = np.empty(len(starts), dtype=x.dtype)
+    with np.errstate(invalid="ignore"):
+        for b, a in enumerate(starts):
+            block = x[a:a + _SCAN_BLOCK]
+            lows[b] = block.min()
+            highs[b] = block.max()
+    return lows, highs
+
+
 def nonfinite_spans(values: np.ndarray) -> list[tuple[int, int]]:
     """Index spans ``[start, stop)`` of consecutive NaN/inf values.
 
@@ -95,9 +144,10 @@ def nonfinite_spans(values: np.ndarray) -> list[tuple[int, int]]:
     """
     values = np.asarray(values)
     if values.size and values.dtype.kind == "f":
+        lows, highs = _block_extremes(values.reshape(-1))
         with np.errstate(invalid="ignore"):  # -inf + inf
-            if np.isfinite(values.min() + values.max()):
-                return []  # min/max propagate NaN and inf: two reductions clear the usual case
+            if np.isfinite(lows.min() + highs.max()):
+                return []  # min/max propagate NaN and inf: one pass clears the usual case
     bad = ~np.isfinite(values)
     if not bad.any():
         return []
@@ -136,25 +186,29 @@ def clipped_spans(values: np.ndarray, *, min_run: int = 3) -> list[tuple[int, in
         x = x.astype(np.float64)
     if x.size == 0:
         return []
+    x = x.reshape(-1)
+    lows, highs = _block_extremes(x)
     with np.errstate(invalid="ignore"):
-        hi, lo = x.max(), x.min()
+        hi, lo = highs.max(), lows.min()
     if np.isfinite(hi) and np.isfinite(lo):
         finite = None  # all finite (NaN/inf would propagate into min/max)
+        # only blocks holding an extreme can hold a run at it (a run crossing a block edge
+        # puts the level in both blocks): the equality scans below skip all others
+        blocks = {hi: np.flatnonzero(highs == hi), lo: np.flatnonzero(lows == lo)}
     else:
         finite = np.isfinite(x)
         if not finite.any():
             return []
         hi, lo = np.max(x, where=finite, initial=-np.inf), np.min(x, where=finite, initial=np.inf)
+        blocks = None
     if hi == lo:
         return []
     spans = []
     step = None
     for level in (hi, lo):
-        at = x == level
-        if at.sum() < 2 * min_run:
+        starts, stops = _runs_at(x, level, None if blocks is None else blocks[level])
+        if int(np.sum(stops - starts)) < 2 * min_run:
             continue
-        edges = np.diff(np.concatenate(([0], at.view(np.int8), [0])))
-        starts, stops = np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)
         keep = stops - starts >= min_run
         starts, stops = starts[keep], stops[keep]
         if starts.size < 2:
@@ -168,6 +222,26 @@ def clipped_spans(values: np.ndarray, *, min_run: int = 3) -> list[tuple[int, in
             continue
         spans += [(int(a), int(b)) for a, b in zip(starts, stops)]
     return sorted(spans)
+
+
+def _runs_at(x: np.ndarray, level, blocks) -> tuple[np.ndarray, np.ndarray]:
+    """Start and stop indices of the runs of ``x == level``, scanning only the given blocks of
+    :data:`_SCAN_BLOCK` samples (all of ``x`` when ``blocks`` is None)."""
+    if blocks is None:
+        groups = [(0, x.size)]
+    else:  # contiguous groups of blocks
+        cut = np.flatnonzero(np.diff(blocks) > 1) + 1
+        groups = [(int(g[0]) * _SCAN_BLOCK, min((int(g[-1]) + 1) * _SCAN_BLOCK, x.size))
+                  for g in np.split(blocks, cut) if g.size]
+    starts, stops = [], []
+    for a, b in groups:
+        at = x[a:b] == level
+        edges = np.diff(np.concatenate(([0], at.view(np.int8), [0])))
+        starts.append(np.flatnonzero(edges == 1) + a)
+        stops.append(np.flatnonzero(edges == -1) + a)
+    if not starts:
+        return np.zeros(0, int), np.zeros(0, int)
+    return np.concatenate(starts), np.concatenate(stops)
 
 
 def _describe_spans(spans, t) -> str:
@@ -331,7 +405,7 @@ def validate(record: xr.Dataset, *, allow_nonfinite: bool = False,
             units_t = coord.attrs.get("units", "s")
             if units_t != "s":
                 raise RecordError(f"time coordinate {dim!r} has units {units_t!r}; expected 's'")
-            ends[dim] = _ends(coord)
+            ends[dim] = _ends(coord, record.xindexes.get(dim))
             if dim in _regular_dims or _lazy_index(record, dim):
                 # built as start + i / sample_rate by a reader: strictly increasing and
                 # evenly spaced by construction; only the rate needs checking
@@ -353,14 +427,17 @@ def validate(record: xr.Dataset, *, allow_nonfinite: bool = False,
 
 
 def _lazy_index(record: xr.Dataset, dim: str) -> bool:
-    index = record.xindexes.get(dim)
-    return index is not None and type(index).__name__ == "RangeIndex"
+    from .timeindex import is_implicit_time  # implicit regular clocks (issue 21)
+
+    return is_implicit_time(record.xindexes.get(dim))
 
 
-def _ends(coord) -> tuple[int, float, float]:
+def _ends(coord, index=None) -> tuple[int, float, float]:
     n = coord.size
     if n < 2:
         return n, 0.0, 0.0
+    if hasattr(index, "sample_rate") and hasattr(index, "start"):  # implicit: its numbers
+        return n, index.start, index.start + (n - 1) / index.sample_rate
     return n, float(coord[0]), float(coord[-1])
 
 

@@ -44,6 +44,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from crankbench.predict._threads import single_threaded_blas
 from crankbench.predict._validate import (check_finite_array, check_int, check_option,
                                check_positive)
 from crankbench.predict.errors import AnalysisError
@@ -190,6 +191,7 @@ class ToothCalibration:
         return fig
 
 
+@single_threaded_blas  # many small least-squares fits (issue 21)
 def calibrate_teeth(edge_times, *, pulses_per_rev, missing_teeth=0, reference_times=None,
                     exclude_orders=(), repair=True):
     """Tooth-spacing errors of a pulse wheel from a calibration record.
@@ -320,6 +322,7 @@ def _remove_orders(error, orders, n):
     return out - out[0]
 
 
+@single_threaded_blas  # many small least-squares fits (issue 21)
 def butt_joint_calibration(edge_times, *, pulses_per_rev):
     """Zebra-tape butt-joint correction from the record itself.
 
@@ -505,6 +508,7 @@ class TorsiographResult:
         return fig
 
 
+@single_threaded_blas  # many small least-squares fits (issue 21)
 def angular_vibration(edge_times, *, pulses_per_rev, missing_teeth=0, max_order=12.0,
                       revs_per_block=2, calibration=None, reference_times=None,
                       butt_joint=False, tdc_offset_deg=0.0, mean_motion="spline",

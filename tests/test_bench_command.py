@@ -44,10 +44,57 @@ def test_bench_rejects_unknown_suite(monkeypatch, capsys):
     assert "--suite='dem' is not one of 'demo' (did you mean 'demo'?)" in capsys.readouterr().err
 
 
-def test_median_time_reports_per_call_time():
+def test_median_time_reports_per_call_cpu_time():
+    """CPU time per call: a busy loop counts, sleeping (waiting, not computing) does not."""
     import time
-    t = median_time(lambda: time.sleep(0.002), repeats=3, warmup=0)
-    assert 0.0015 < t < 0.05
+
+    def spin():
+        t0 = time.process_time()
+        while time.process_time() - t0 < 0.002:
+            pass
+
+    assert 0.0019 < median_time(spin, repeats=3, warmup=0) < 0.02
+    assert median_time(lambda: time.sleep(0.002), repeats=3, warmup=0) < 0.001
+
+
+def test_compare_interleaves_and_pairs_ratios():
+    """Interleaved rounds, rotating order; paired ratio of a 2x cost with its spread."""
+    import time
+
+    from crankbench.analysis.bench import compare
+
+    order = []
+
+    def spin(seconds, name):
+        def run():
+            order.append(name)
+            t0 = time.process_time()
+            while time.process_time() - t0 < seconds:
+                pass
+        return run
+
+    t = compare({"a": spin(0.004, "a"), "b": spin(0.002, "b")}, rounds=4, warmup=1,
+                min_time=0.0)
+    assert order == ["a", "b", "a", "b", "b", "a", "a", "b", "b", "a"]  # warm-up, rotation
+    ratio, lo, hi = t.ratio("a", "b")
+    assert 1.6 < ratio < 2.5 and lo <= ratio <= hi
+    row = t.row("demo", "slow", "a", "b", "n=1", 0.0, "abs", "exact")
+    assert row.paired and row.rounds == 4 and row.versus.startswith(f"{ratio:.3g}x slower than b")
+    fast = t.row("demo", "fast", "b", ("a", "method a"), "n=1", 0.0, "abs", "exact")
+    assert "x faster than method a" in fast.versus
+
+
+def test_rows_from_separate_medians_say_unpaired():
+    row = Row("demo", "m", "s", 0.0, "abs", "ref", 1.0, baseline="base", ratio=3.0)
+    assert row.versus == "3x slower than base, unpaired"
+
+
+def test_machine_description():
+    from crankbench.analysis.bench import machine
+
+    info = machine()
+    assert info["cpus_logical"] >= 1 and info["numpy"] and info["python"]
+    assert all("internal_api" in lib for lib in info["blas"])
 
 
 def test_verbosity_flags_work_before_and_after_the_command(capsys):

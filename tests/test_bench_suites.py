@@ -55,8 +55,14 @@ def test_pareto_distance_definition():
 def test_paired_ratio_sees_a_twofold_cost():
     import time as _time
 
-    r = paired_ratio(lambda: _time.sleep(0.004), lambda: _time.sleep(0.002), pairs=3,
-                     min_time=0.0)
+    def spin(seconds):
+        def run():
+            t0 = _time.process_time()
+            while _time.process_time() - t0 < seconds:
+                pass
+        return run
+
+    r = paired_ratio(spin(0.004), spin(0.002), pairs=3, min_time=0.0)
     assert 1.3 < r < 3.0
 
 

@@ -7,7 +7,7 @@ marine):
   1…8 from the exact per-order coefficients; error = largest phasor difference against the
   second route (exact per-cylinder forces summed in time over 1024 samples of one revolution,
   FFT), relative to the engine's total centrifugal force; bound 1e-9. Baseline = that
-  time-domain route, timed side by side.
+  time-domain route, timed in interleaved rounds (:func:`analysis.bench.compare`).
 * ``time-domain FFT, N samples`` (N = 16…256): aliasing error of the FFT route with fewer
   samples against the exact order-domain phasors (informational: shows how many samples the
   time-domain route needs for a given accuracy), timed against the order-domain route.
@@ -19,7 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
-from . import Row, median_time
+from . import Row, compare
 
 __all__ = ["run"]
 
@@ -62,27 +62,26 @@ def run(quick: bool) -> list[Row]:
         def time_domain(n=1024):
             return _fft_route(engine, omega, orders, n)
 
-        t_ord = median_time(order_domain, repeats=repeats, min_time=0.01)
-        t_time = median_time(time_domain, repeats=repeats, min_time=0.01)
+        ns = (16, 32, 64, 256) if not quick else (16, 64)
+        cands = {"order": order_domain, "time": time_domain}
+        cands.update({f"N={n}": (lambda n=n: time_domain(n)) for n in ns})
+        timing = compare(cands, rounds=repeats, min_time=0.01)
         ds = order_domain()
         P, Q, PM, QM = time_domain()
         err = max(np.abs(ds["force_forward_phasor"].values - P).max() / scale,
                   np.abs(ds["force_backward_phasor"].values - Q).max() / scale,
                   np.abs(ds["moment_forward_phasor"].values - PM).max() / (scale * span),
                   np.abs(ds["moment_backward_phasor"].values - QM).max() / (scale * span))
-        rows.append(Row(suite=SUITE, method=f"unbalance {name}", setting="orders 1..8",
-                        error=float(err), error_kind="max |Δphasor| / Σ m r ω²",
-                        reference="time-domain sum + FFT, 1024 samples/rev", time_s=t_ord,
-                        baseline="time-domain sum + FFT (1024)", ratio=t_ord / t_time,
-                        bound=1e-9))
-        for n in ((16, 32, 64, 256) if not quick else (16, 64)):
-            t = median_time(lambda n=n: time_domain(n), repeats=repeats, min_time=0.005)
+        rows.append(timing.row(SUITE, f"unbalance {name}", "order",
+                               ("time", "time-domain sum + FFT (1024)"), "orders 1..8",
+                               float(err), "max |Δphasor| / Σ m r ω²",
+                               "time-domain sum + FFT, 1024 samples/rev", bound=1e-9))
+        for n in ns:
             P, Q, PM, QM = time_domain(n)
             e = max(np.abs(ds["force_forward_phasor"].values - P).max() / scale,
                     np.abs(ds["force_backward_phasor"].values - Q).max() / scale)
-            rows.append(Row(suite=SUITE, method=f"time-domain FFT {name}", setting=f"N={n}",
-                            error=float(e), error_kind="max |Δphasor| / Σ m r ω²",
-                            reference="order-domain exact phasors", time_s=t,
-                            baseline="order domain", ratio=t / t_ord,
-                            note="aliasing of orders > N/2 - 8"))
+            rows.append(timing.row(SUITE, f"time-domain FFT {name}", f"N={n}",
+                                   ("order", "order domain"), f"N={n}", float(e),
+                                   "max |Δphasor| / Σ m r ω²", "order-domain exact phasors",
+                                   note="aliasing of orders > N/2 - 8"))
     return rows

@@ -30,7 +30,9 @@ Metric of the ``pareto distance`` rows (``error_kind = "excess cost rel"``): wit
 fidelity the automatic choice picked (series order, iteration count, piece count) and f* the
 lowest manual fidelity whose error is within the same tolerance, distance = max(0,
 t(f_auto) / t(f*) − 1), where the two times are taken side by side — alternating calls,
-median of the per-pair ratios — so a loaded machine slows both alike. It is 0 when the
+median of the per-pair ratios of CPU time — so a loaded machine slows both alike. Every other
+time of the suite comes from one interleaved comparison of all settings of a sweep
+(:func:`analysis.bench.compare`). It is 0 when the
 automatic choice is f* itself (nothing cheaper meets the tolerance) or extends the front (no
 manual setting meets the tolerance); ``inf`` if the automatic choice misses the tolerance. The
 cost compared is that of running the chosen setting: for the kinematic series the one-off
@@ -54,11 +56,9 @@ tolerance asked for: the bench fails if the automatic choice does not deliver it
 
 from __future__ import annotations
 
-import time
-
 import numpy as np
 
-from . import Row, median_time
+from . import Row, compare
 
 __all__ = ["run", "pareto_distance", "paired_ratio"]
 
@@ -110,34 +110,20 @@ def pareto_distance(auto_fidelity, auto_error: float, manual, tol: float, *,
 
 
 def paired_ratio(func_a, func_b, *, pairs: int = 7, min_time: float = 0.005) -> float:
-    """Median over ``pairs`` alternating measurements of time(func_a) / time(func_b).
+    """Median over ``pairs`` interleaved rounds of CPU time(func_a) / CPU time(func_b)
+    (:func:`analysis.bench.compare`).
 
     Each measurement loops the call for about ``min_time`` seconds; alternating A and B makes
     a slow-down of the machine hit both alike.
     """
-    func_a()
-    func_b()
-    loops = []
-    for f in (func_a, func_b):
-        t0 = time.perf_counter()
-        f()
-        loops.append(max(1, int(min_time / max(time.perf_counter() - t0, 1e-9))))
-    ratios = []
-    for _ in range(pairs):
-        per = []
-        for f, n in zip((func_a, func_b), loops):
-            t0 = time.perf_counter()
-            for _ in range(n):
-                f()
-            per.append((time.perf_counter() - t0) / n)
-        ratios.append(per[0] / per[1])
-    return float(np.median(ratios))
+    return compare({"a": func_a, "b": func_b}, rounds=pairs, min_time=min_time).ratio("a", "b")[0]
 
 
-def _timer(quick: bool):
+def _timed(quick: bool, cands: dict):
+    """All candidates of one sweep in interleaved rounds."""
     if quick:
-        return lambda f: median_time(f, repeats=5, min_time=0.008)
-    return lambda f: median_time(f, repeats=11, min_time=0.02)
+        return compare(cands, rounds=5, min_time=0.008)
+    return compare(cands, rounds=11, min_time=0.02)
 
 
 def _distance_row(method, tol, auto, manual, label, bound, quick):
@@ -164,14 +150,13 @@ def _distance_row(method, tol, auto, manual, label, bound, quick):
                time_s=t_auto, baseline=f"{label}={cheapest} (side by side)",
                ratio=measured.get(cheapest, 1.0 if cheapest == f_auto else float("nan")),
                bound=bound, note=f"auto {label}={f_auto} vs cheapest {cheapest}",
-               extra={"auto": f_auto, "cheapest": cheapest})
+               extra={"auto": f_auto, "cheapest": cheapest}, paired=bool(measured))
 
 
 def _kinematics_rows(quick: bool) -> list[Row]:
     from crankbench.predict import kinematics as kin
 
     rows: list[Row] = []
-    timer = _timer(quick)
     n_eval = 20_000 if quick else 100_000
     theta_eval = np.linspace(0.0, 2 * np.pi, n_eval)
     theta_err = np.linspace(0.0, 2 * np.pi, 3600, endpoint=False)
@@ -180,46 +165,47 @@ def _kinematics_rows(quick: bool) -> list[Row]:
         method = f"acceleration_series λ={lam:g}"
         l = 1.0 / lam
         ref = kin.piston_acceleration(theta_err, crank_radius=1.0, rod_length=l, omega=1.0)
-        t_exact = timer(lambda: kin.piston_acceleration(theta_eval, crank_radius=1.0,
-                                                        rod_length=l, omega=1.0))
+        series = {n: kin.acceleration_series(lam, max_order=n)
+                  for n in range(2, 21 if quick else 25, 2)}
+        chosen = {tol: kin.acceleration_series(lam, tol=tol) for tol in tols}
+        cands = {"exact": lambda: kin.piston_acceleration(theta_eval, crank_radius=1.0,
+                                                          rod_length=l, omega=1.0)}
+        for key, s in [*series.items(), *((f"tol={t:g}", c) for t, c in chosen.items())]:
+            cands[str(key)] = (lambda s=s: s.acceleration(theta_eval, crank_radius=1.0,
+                                                          omega=1.0))
+        timing = _timed(quick, cands)
+        base = ("exact", "exact closed form")
         manual = []
-        for n in range(2, 21 if quick else 25, 2):
-            s = kin.acceleration_series(lam, max_order=n)
-            t = timer(lambda s=s: s.acceleration(theta_eval, crank_radius=1.0, omega=1.0))
+        for n, s in series.items():
             err = float(np.abs(s.acceleration(theta_err, crank_radius=1.0, omega=1.0)
                                - ref).max())
-            manual.append((n, t, err, lambda s=s: s.acceleration(theta_eval, crank_radius=1.0,
-                                                                 omega=1.0)))
-            rows.append(Row(suite=SUITE, method=method, setting=f"max_order={n} (manual)",
-                            error=err, error_kind="max abs / (r ω²)",
-                            reference="exact closed form", time_s=t,
-                            baseline="exact closed form", ratio=t / t_exact,
-                            throughput=n_eval / t, throughput_unit="angles/s",
-                            note="manual sweep (informational)"))
+            manual.append((n, timing.time(str(n)), err, cands[str(n)]))
+            rows.append(timing.row(SUITE, method, str(n), base, f"max_order={n} (manual)", err,
+                                   "max abs / (r ω²)", "exact closed form",
+                                   throughput_items=n_eval, throughput_unit="angles/s",
+                                   note="manual sweep (informational)"))
         for tol in tols:
-            t_choose = median_time(lambda tol=tol: (kin._sqrt_coefficients.cache_clear(),
-                                                    kin.acceleration_series(lam, tol=tol)),
-                                   repeats=3, warmup=0)
-            s = kin.acceleration_series(lam, tol=tol)
-            t = timer(lambda s=s: s.acceleration(theta_eval, crank_radius=1.0, omega=1.0))
+            s = chosen[tol]
+            key = f"tol={tol:g}"
             err = float(np.abs(s.acceleration(theta_err, crank_radius=1.0, omega=1.0)
                                - ref).max())
-            rows.append(Row(suite=SUITE, method=method,
-                            setting=f"tol={tol:g} auto → max_order={s.max_order}", error=err,
-                            error_kind="max abs / (r ω²)", reference="exact closed form",
-                            time_s=t, baseline="exact closed form", ratio=t / t_exact,
-                            throughput=n_eval / t, throughput_unit="angles/s", bound=tol,
-                            note=f"stated error bound {s.error_bound:.3g}",
-                            extra={"max_order": s.max_order, "error_bound": s.error_bound}))
-            auto = (s.max_order, err, t,
-                    lambda s=s: s.acceleration(theta_eval, crank_radius=1.0, omega=1.0))
+            rows.append(timing.row(SUITE, method, key, base,
+                                   f"tol={tol:g} auto → max_order={s.max_order}", err,
+                                   "max abs / (r ω²)", "exact closed form",
+                                   throughput_items=n_eval, throughput_unit="angles/s",
+                                   bound=tol, note=f"stated error bound {s.error_bound:.3g}",
+                                   extra={"max_order": s.max_order,
+                                          "error_bound": s.error_bound}))
+            auto = (s.max_order, err, timing.time(key), cands[key])
             rows.append(_distance_row(method, tol, auto, manual, "max_order", 0.25, quick))
-            rows.append(Row(suite=SUITE, method=method, setting=f"choice cost tol={tol:g}",
-                            error=0.0, error_kind="(informational)",
-                            reference="order_for_tolerance + coefficients, caches cleared",
-                            time_s=t_choose, baseline="one evaluation of the chosen series",
-                            ratio=t_choose / t,
-                            note="one-off per (λ, tol); amortised over evaluations"))
+            choice = compare({"choose": lambda tol=tol: (kin._sqrt_coefficients.cache_clear(),
+                                                         kin.acceleration_series(lam, tol=tol)),
+                              "eval": cands[key]}, rounds=3, min_time=0.005)
+            rows.append(choice.row(SUITE, method, "choose",
+                                   ("eval", "one evaluation of the chosen series"),
+                                   f"choice cost tol={tol:g}", 0.0, "(informational)",
+                                   "order_for_tolerance + coefficients, caches cleared",
+                                   note="one-off per (λ, tol); amortised over evaluations"))
     return rows
 
 
@@ -227,40 +213,45 @@ def _stodola_rows(quick: bool) -> list[Row]:
     from crankbench.predict.lateral.approx import MassShaft, lumped_exact, stodola
 
     rows: list[Row] = []
-    timer = _timer(quick)
     d, length = 0.05, 1.2
     shaft = MassShaft(length=length, youngs_modulus=2.11e11, area_moment=np.pi * d ** 4 / 64,
                       masses=[30.0, 50.0, 20.0], positions=[0.3, 0.6, 1.0],
                       mass_per_length=7810.0 * np.pi * d ** 2 / 4)
     method = "stodola (3 disks + shaft mass)"
     ref = lumped_exact(shaft, n_segments=20)
-    t_ref = timer(lambda: lumped_exact(shaft, n_segments=20))
-    manual, seen = [], set()
+    sweep, seen = [], set()
     for rtol in (3e-1, 1e-1, 1e-2, 1e-3, 1e-4, 1e-6, 1e-8, 1e-10, 1e-12, 1e-14):
         res = stodola(shaft, rtol=rtol, max_iter=2000)
-        if res.iterations in seen:
-            continue
-        seen.add(res.iterations)
-        t = timer(lambda rtol=rtol: stodola(shaft, rtol=rtol, max_iter=2000))
+        if res.iterations not in seen:
+            seen.add(res.iterations)
+            sweep.append((rtol, res))
+    tols = (1e-3, 1e-6, 1e-10) if quick else (1e-2, 1e-3, 1e-4, 1e-6, 1e-8, 1e-10)
+    cands = {"ref": lambda: lumped_exact(shaft, n_segments=20)}
+    cands.update({f"manual {r:g}": (lambda r=r: stodola(shaft, rtol=r, max_iter=2000))
+                  for r, _ in sweep})
+    cands.update({f"auto {t:g}": (lambda t=t: stodola(shaft, rtol=t, max_iter=2000))
+                  for t in tols})
+    timing = _timed(quick, cands)
+    base = ("ref", "lumped_exact (dense eigh)")
+    manual = []
+    for rtol, res in sweep:
+        key = f"manual {rtol:g}"
         err = abs(res.omega - ref.omega) / ref.omega
-        manual.append((res.iterations, t, err,
-                       lambda rtol=rtol: stodola(shaft, rtol=rtol, max_iter=2000)))
-        rows.append(Row(suite=SUITE, method=method,
-                        setting=f"{res.iterations} iterations (manual)", error=err,
-                        error_kind="rel", reference="dense eigh of the lumped model",
-                        time_s=t, baseline="lumped_exact (dense eigh)", ratio=t / t_ref,
-                        note="manual sweep: a stop after this many iterations "
-                             "(informational)", extra={"iterations": res.iterations}))
-    for tol in ((1e-3, 1e-6, 1e-10) if quick else (1e-2, 1e-3, 1e-4, 1e-6, 1e-8, 1e-10)):
+        manual.append((res.iterations, timing.time(key), err, cands[key]))
+        rows.append(timing.row(SUITE, method, key, base,
+                               f"{res.iterations} iterations (manual)", err, "rel",
+                               "dense eigh of the lumped model",
+                               note="manual sweep: a stop after this many iterations "
+                                    "(informational)", extra={"iterations": res.iterations}))
+    for tol in tols:
+        key = f"auto {tol:g}"
         res = stodola(shaft, rtol=tol, max_iter=2000)
-        t = timer(lambda tol=tol: stodola(shaft, rtol=tol, max_iter=2000))
         err = abs(res.omega - ref.omega) / ref.omega
-        rows.append(Row(suite=SUITE, method=method,
-                        setting=f"rtol={tol:g} auto → {res.iterations} iterations", error=err,
-                        error_kind="rel", reference="dense eigh of the lumped model", time_s=t,
-                        baseline="lumped_exact (dense eigh)", ratio=t / t_ref, bound=tol,
-                        extra={"iterations": res.iterations}))
-        auto = (res.iterations, err, t, lambda tol=tol: stodola(shaft, rtol=tol, max_iter=2000))
+        rows.append(timing.row(SUITE, method, key, base,
+                               f"rtol={tol:g} auto → {res.iterations} iterations", err, "rel",
+                               "dense eigh of the lumped model", bound=tol,
+                               extra={"iterations": res.iterations}))
+        auto = (res.iterations, err, timing.time(key), cands[key])
         rows.append(_distance_row(method, tol, auto, manual, "iterations", 1.0, quick))
     return rows
 
@@ -269,7 +260,6 @@ def _coastdown_rows(quick: bool) -> list[Row]:
     from crankbench.measure.synth.profile import RPM, exponential_coastdown, from_table
 
     rows: list[Row] = []
-    timer = _timer(quick)
     n0, n1, tau = 1500.0, 300.0, 8.0
     total = tau * np.log(n0 / n1)
     t_err = np.linspace(0.0, total, 200_001)
@@ -280,35 +270,44 @@ def _coastdown_rows(quick: bool) -> list[Row]:
     def error(profile):
         return float(np.abs(profile.speed(t_err) / RPM - exact).max())
 
-    manual = []
-    for pieces in (1, 2, 4, 8, 16, 32, 64, 128, 256, 512):
+    def table(pieces):
         knots = np.linspace(0.0, total, pieces + 1)
-        prof = from_table(knots, n0 * np.exp(-knots / tau))
-        t = timer(lambda prof=prof: prof.angle(t_eval))
+        return from_table(knots, n0 * np.exp(-knots / tau))
+
+    tols = (5.0, 0.5, 0.01) if quick else (5.0, 1.0, 0.5, 0.1, 0.01)
+    auto = {tol: exponential_coastdown(n0, n1, time_constant=tau, tolerance_rpm=tol)
+            for tol in tols}
+    swept = (1, 2, 4, 8, 16, 32, 64, 128, 256, 512)
+    profiles = {p: table(p) for p in swept}
+    for prof in auto.values():  # one piece fewer than each automatic choice: the front is
+        fewer = prof.time.size - 2  # resolved right below it
+        if fewer >= 1 and fewer not in profiles:
+            profiles[fewer] = table(fewer)
+    cands = {f"{p} pieces": (lambda prof=prof: prof.angle(t_eval))
+             for p, prof in sorted(profiles.items())}
+    cands.update({f"tol {t:g}": (lambda prof=prof: prof.angle(t_eval))
+                  for t, prof in auto.items()})
+    timing = _timed(quick, cands)
+    manual = []
+    for pieces, prof in sorted(profiles.items()):
+        key = f"{pieces} pieces"
         err = error(prof)
-        manual.append((pieces, t, err, lambda prof=prof: prof.angle(t_eval)))
-        rows.append(Row(suite=SUITE, method=method, setting=f"{pieces} pieces (manual)",
-                        error=err, error_kind="max abs rpm", reference="n0 exp(-t/tau)",
-                        time_s=t, baseline="", throughput=t_eval.size / t,
-                        throughput_unit="angles/s", note="manual sweep (informational)"))
-    for tol in ((5.0, 0.5, 0.01) if quick else (5.0, 1.0, 0.5, 0.1, 0.01)):
-        prof = exponential_coastdown(n0, n1, time_constant=tau, tolerance_rpm=tol)
+        manual.append((pieces, timing.time(key), err, cands[key]))
+        if pieces in swept:
+            rows.append(timing.row(SUITE, method, key, None, f"{pieces} pieces (manual)", err,
+                                   "max abs rpm", "n0 exp(-t/tau)",
+                                   throughput_items=t_eval.size, throughput_unit="angles/s",
+                                   note="manual sweep (informational)"))
+    for tol, prof in auto.items():
+        key = f"tol {tol:g}"
         pieces = prof.time.size - 1
-        t = timer(lambda prof=prof: prof.angle(t_eval))
         err = error(prof)
-        rows.append(Row(suite=SUITE, method=method,
-                        setting=f"tolerance_rpm={tol:g} auto → {pieces} pieces", error=err,
-                        error_kind="max abs rpm", reference="n0 exp(-t/tau)", time_s=t,
-                        throughput=t_eval.size / t, throughput_unit="angles/s", bound=tol,
-                        extra={"pieces": pieces}))
-        if pieces > 1 and pieces - 1 not in {m[0] for m in manual}:
-            # one piece fewer, so the front is resolved right below the automatic choice
-            knots = np.linspace(0.0, total, pieces)
-            fewer = from_table(knots, n0 * np.exp(-knots / tau))
-            manual.append((pieces - 1, float("nan"), error(fewer),
-                           lambda p=fewer: p.angle(t_eval)))
-        auto = (pieces, err, t, lambda prof=prof: prof.angle(t_eval))
-        rows.append(_distance_row(method, tol, auto, manual, "pieces", 0.25, quick))
+        rows.append(timing.row(SUITE, method, key, None,
+                               f"tolerance_rpm={tol:g} auto → {pieces} pieces", err,
+                               "max abs rpm", "n0 exp(-t/tau)", throughput_items=t_eval.size,
+                               throughput_unit="angles/s", bound=tol, extra={"pieces": pieces}))
+        rows.append(_distance_row(method, tol, (pieces, err, timing.time(key), cands[key]),
+                                  manual, "pieces", 0.25, quick))
     return rows
 
 

@@ -6,7 +6,8 @@ Rows, for λ = 0.25 and λ = 0.45:
   Clenshaw's recurrence; error = max |a_series − a_exact| / (r ω²) over 3600 crank angles,
   against the exact closed form; bound = :func:`predict.kinematics.truncation_bound` (the sum of
   the dropped |aₙ|, attained at TDC); time per call on 10⁵ angles (2·10⁴ with ``--quick``),
-  baseline = the exact closed form timed side by side in the same run;
+  baseline = the exact closed form, all timed in interleaved rounds
+  (:func:`analysis.bench.compare`);
 * ``series_coefficients``: the exact Fourier coefficients a₂…a₂₀ against mpmath quadrature at
   60 digits (max relative error; bound 1e-13), timed against one mpmath coefficient;
 * ``exact formula``: the closed form against mpmath's second derivative of the piston
@@ -17,7 +18,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from . import Row, median_time
+from . import Row, compare
 
 __all__ = ["run"]
 
@@ -40,27 +41,26 @@ def run(quick: bool) -> list[Row]:
         def exact(th=theta_eval):
             return kin.piston_acceleration(th, crank_radius=r, rod_length=l, omega=w)
 
-        t_exact = median_time(exact, repeats=repeats, min_time=0.01)
+        def series(th=theta_eval, n=2):
+            return kin.piston_acceleration(th, crank_radius=r, rod_length=l, omega=w,
+                                           max_order=n)
+
+        cands = {"exact": exact}
+        cands.update({f"N={n}": (lambda n=n: series(n=n)) for n in range(2, 13)})
+        timing = compare(cands, rounds=repeats, min_time=0.01)
+        t_exact = timing.time("exact")
         ref = exact(theta_err)
         for n in range(2, 13):
-            def series(th=theta_eval, n=n):
-                return kin.piston_acceleration(th, crank_radius=r, rod_length=l, omega=w,
-                                               max_order=n)
-
-            t = median_time(series, repeats=repeats, min_time=0.01)
-            err = float(np.abs(series(theta_err) - ref).max())
-            rows.append(Row(
-                suite=SUITE, method=f"series λ={lam:g}", setting=f"max_order={n}", error=err,
-                error_kind="max abs / (r ω²)", reference="exact closed form", time_s=t,
-                baseline="exact closed form", ratio=t / t_exact,
-                throughput=n_eval / t, throughput_unit="angles/s",
+            err = float(np.abs(series(theta_err, n) - ref).max())
+            rows.append(timing.row(
+                SUITE, f"series λ={lam:g}", f"N={n}", ("exact", "exact closed form"),
+                f"max_order={n}", err, "max abs / (r ω²)", "exact closed form",
+                throughput_items=n_eval, throughput_unit="angles/s",
                 bound=kin.truncation_bound(lam, n) * (1 + 1e-9) + 1e-15,
                 note="bound = Σ|a_n| beyond N"))
-        rows.append(Row(suite=SUITE, method=f"exact λ={lam:g}", setting="closed form",
-                        error=0.0, error_kind="max abs / (r ω²)", reference="itself",
-                        time_s=t_exact, baseline="exact closed form", ratio=1.0,
-                        throughput=n_eval / t_exact, throughput_unit="angles/s",
-                        note="baseline"))
+        rows.append(timing.row(SUITE, f"exact λ={lam:g}", "exact", None, "closed form", 0.0,
+                               "max abs / (r ω²)", "itself", throughput_items=n_eval,
+                               throughput_unit="angles/s", note="baseline"))
 
         # coefficients against mpmath quadrature
         orders = range(2, 21, 2) if not quick else range(2, 13, 2)
@@ -73,18 +73,16 @@ def run(quick: bool) -> list[Row]:
                 return float(n**2 * c / lm)
 
             refs = {n: mp_coef(n) for n in orders}
-            t_mp = median_time(lambda: mp_coef(8), repeats=1, warmup=0)
-        top = max(orders)
-        kin._sqrt_coefficients.cache_clear()
-        t_coef = median_time(lambda: (kin._sqrt_coefficients.cache_clear(),
-                                      kin.series_coefficients(lam, top)),
-                             repeats=repeats, min_time=0.005)
+            top = max(orders)
+            timing = compare({"ours": lambda: (kin._sqrt_coefficients.cache_clear(),
+                                               kin.series_coefficients(lam, top)),
+                              "mpmath": lambda: mp_coef(8)}, rounds=3 if quick else 5,
+                             min_time=0.005)
         a = kin.series_coefficients(lam, top)
         rel = max(abs(a[n] - v) / abs(v) for n, v in refs.items())
-        rows.append(Row(suite=SUITE, method=f"series_coefficients λ={lam:g}",
-                        setting=f"orders 2..{top}", error=float(rel), error_kind="max rel",
-                        reference="mpmath quad, 60 digits", time_s=t_coef,
-                        baseline="one mpmath coefficient", ratio=t_coef / t_mp, bound=1e-13))
+        rows.append(timing.row(SUITE, f"series_coefficients λ={lam:g}", "ours",
+                               ("mpmath", "one mpmath coefficient"), f"orders 2..{top}",
+                               float(rel), "max rel", "mpmath quad, 60 digits", bound=1e-13))
 
         # exact closed form against mpmath's derivative of the position
         pts = np.linspace(0.05, 2 * np.pi, 12 if quick else 48)
@@ -97,5 +95,5 @@ def run(quick: bool) -> list[Row]:
         rows.append(Row(suite=SUITE, method=f"exact formula λ={lam:g}", setting="closed form",
                         error=err, error_kind="max abs / (r ω²)",
                         reference="mpmath diff of x(θ), 30 digits", time_s=t_exact,
-                        baseline="exact closed form", ratio=1.0, bound=1e-12))
+                        bound=1e-12, paired=True))
     return rows

@@ -18,6 +18,8 @@ Rows:
   ≈ 45 s) on Friswell et al. Example 5.9.1 (6 Timoshenko elements, and a 48-element version):
   natural frequencies at 0 and 4000 rpm and synchronous critical speeds, error = max relative
   difference to ROSS (bound 1e-4), ratio = our time / ROSS time for build + solve.
+
+Every ratio comes from interleaved rounds after a warm-up (:func:`analysis.bench.compare`).
 """
 
 from __future__ import annotations
@@ -27,13 +29,12 @@ import io
 import logging
 import os
 import sys
-import time
 import warnings
 
 import numpy as np
 import scipy.linalg
 
-from . import Row, median_time
+from . import Row, compare
 
 __all__ = ["run"]
 
@@ -65,17 +66,18 @@ def _approx_rows(quick: bool) -> list[Row]:
     cases.append(("shaft mass + 3 disks", b, ref, "EB FE 64 elements (error < 1e-9)"))
     repeats = 3 if quick else 7
     for label, shaft, exact, reference in cases:
-        t_base = median_time(lambda: lumped_exact(shaft), repeats=repeats, min_time=0.01)
         methods = [("rayleigh", lambda: rayleigh(shaft), "", "upper"),
                    ("dunkerley", lambda: dunkerley(shaft), "", "lower")]
         for tol in ((1e-3, 1e-6) if quick else (1e-3, 1e-6, 1e-10)):
             methods.append(("stodola", lambda tol=tol: stodola(shaft, rtol=tol, n_segments=80),
                             f"rtol={tol:g}", "bracket"))
+        cands = {"base": lambda: lumped_exact(shaft)}
+        cands.update({f"{name} {setting}": func for name, func, setting, _ in methods})
+        timing = compare(cands, rounds=repeats, min_time=0.01)
         for name, func, setting, bound_kind in methods:
             res = func()
             signed = (res.omega - exact) / exact
             err = abs(signed)
-            t = median_time(func, repeats=repeats, min_time=0.01)
             if bound_kind == "upper":
                 held = signed >= -1e-12
             elif bound_kind == "lower":
@@ -87,11 +89,11 @@ def _approx_rows(quick: bool) -> list[Row]:
                 bound = 2 * float(setting.split("=")[1]) + (5e-8 if shaft.mass_per_length else 0)
             else:
                 bound = float("inf") if held else 0.0
-            rows.append(Row(SUITE, name, f"{label}; {setting}".rstrip("; "), err, "rel",
-                            reference, t, baseline="lumped_exact (dense eigh)",
-                            ratio=t / t_base, bound=bound,
-                            note=f"{bound_kind} bound held: {held}",
-                            extra={"iterations": res.iterations, "bound": bound_kind}))
+            rows.append(timing.row(SUITE, name, f"{name} {setting}",
+                                   ("base", "lumped_exact (dense eigh)"),
+                                   f"{label}; {setting}".rstrip("; "), err, "rel", reference,
+                                   bound=bound, note=f"{bound_kind} bound held: {held}",
+                                   extra={"iterations": res.iterations, "bound": bound_kind}))
     return rows
 
 
@@ -139,18 +141,20 @@ def _fe_rows(quick: bool) -> list[Row]:
             err = float(np.max(np.abs(om - exact) / exact))
             estimate = float(np.max(modes.error_estimate[::2] / exact))
             errors.append((n, err))
-            t = median_time(lambda n=n: pinned(n, theory, length, diameter, rotary)
-                            .natural_frequencies(n_modes=6, error_estimate=False),
-                            repeats=repeats, min_time=0.01)
             model = pinned(n, theory, length, diameter, rotary)._assemble()
-            t_base = median_time(lambda m=model: scipy.linalg.eigh(m.K, m.M),
-                                 repeats=repeats, min_time=0.01)
+            timing = compare(
+                {"ours": lambda n=n: pinned(n, theory, length, diameter, rotary)
+                    .natural_frequencies(n_modes=6, error_estimate=False),
+                 "eigh": lambda m=model: scipy.linalg.eigh(m.K, m.M)},
+                rounds=repeats, min_time=0.01)
             rate = (np.log2(errors[-2][1] / err) if len(errors) > 1 else float("nan"))
-            rows.append(Row(SUITE, f"fe {theory}", f"n={n}", err, "max rel (3 modes)",
-                            reference, t, baseline="scipy.linalg.eigh(K, M) alone",
-                            ratio=t / t_base, bound=max(3 * estimate, 1e-12),
-                            note="bound = 3 × Richardson estimate",
-                            extra={"rate_vs_previous": rate, "error_estimate": estimate}))
+            rows.append(timing.row(SUITE, f"fe {theory}", "ours",
+                                   ("eigh", "scipy.linalg.eigh(K, M) alone"), f"n={n}", err,
+                                   "max rel (3 modes)", reference,
+                                   bound=max(3 * estimate, 1e-12),
+                                   note="bound = 3 × Richardson estimate",
+                                   extra={"rate_vs_previous": rate,
+                                          "error_estimate": estimate}))
     return rows
 
 
@@ -221,28 +225,31 @@ def _ross_rows(quick: bool) -> list[Row]:
                                                         error_estimate=False).omega
                 theirs = build_ross().run_modal(speed=speed, num_modes=24, sparse=False).wd
                 diff = max(np.min(np.abs(theirs - w)) / w for w in ours)
-                t_ours = median_time(lambda s=speed: build_ours().natural_frequencies(
-                    s, n_modes=6, error_estimate=False), repeats=5, min_time=0.02)
-                t_ross = median_time(lambda s=speed: build_ross().run_modal(
-                    speed=s, num_modes=24, sparse=False), repeats=3)
-                rows.append(Row(SUITE, "fe vs ross: natural frequencies",
-                                f"Friswell 5.9.1, {n_el} el, {rpm:g} rpm", float(diff),
-                                "max rel", "ross-rotordynamics run_modal (dense)", t_ours,
-                                baseline="ross build + run_modal", ratio=t_ours / t_ross,
-                                bound=1e-4, note="6 lateral modes matched to nearest ROSS mode"))
+                timing = compare(
+                    {"ours": lambda s=speed: build_ours().natural_frequencies(
+                        s, n_modes=6, error_estimate=False),
+                     "ross": lambda s=speed: build_ross().run_modal(speed=s, num_modes=24,
+                                                                    sparse=False)},
+                    rounds=5, min_time=0.02)
+                rows.append(timing.row(SUITE, "fe vs ross: natural frequencies", "ours",
+                                       ("ross", "ross build + run_modal"),
+                                       f"Friswell 5.9.1, {n_el} el, {rpm:g} rpm", float(diff),
+                                       "max rel", "ross-rotordynamics run_modal (dense)",
+                                       bound=1e-4,
+                                       note="6 lateral modes matched to nearest ROSS mode"))
             ours_c = build_ours().critical_speeds(n_modes=6).omega[:5]
-            t0 = time.perf_counter()
             theirs_c = np.asarray(build_ross().run_critical_speed(num_modes=24, rtol=1e-8).wn())
-            t_ross = time.perf_counter() - t0
             diff = max(np.min(np.abs(theirs_c - w)) / w for w in ours_c)
-            t_ours = median_time(lambda: build_ours().critical_speeds(n_modes=6), repeats=5,
-                                 min_time=0.02)
-            rows.append(Row(SUITE, "fe vs ross: critical speeds", f"Friswell 5.9.1, {n_el} el",
-                            float(diff), "max rel", "ross run_critical_speed(rtol=1e-8)",
-                            t_ours, baseline="ross build + run_critical_speed (1 run)",
-                            ratio=t_ours / t_ross, bound=1e-4,
-                            note="ours: Hermitian eigen-solve; ROSS: root search on the "
-                                 "Campbell lines"))
+            timing = compare(
+                {"ours": lambda: build_ours().critical_speeds(n_modes=6),
+                 "ross": lambda: build_ross().run_critical_speed(num_modes=24, rtol=1e-8)},
+                rounds=3, min_time=0.0)
+            rows.append(timing.row(SUITE, "fe vs ross: critical speeds", "ours",
+                                   ("ross", "ross build + run_critical_speed"),
+                                   f"Friswell 5.9.1, {n_el} el", float(diff), "max rel",
+                                   "ross run_critical_speed(rtol=1e-8)", bound=1e-4,
+                                   note="ours: Hermitian eigen-solve; ROSS: root search on "
+                                        "the Campbell lines"))
     return rows
 
 

@@ -7,7 +7,8 @@ Rows:
   deviation of channel 1 at 400 random samples from the exact quasi-steady response evaluated
   at each sample's own speed (no speed-grid interpolation), relative to the channel's peak;
   bound 1e-3. Baseline = generating the same number of samples of plain numpy sines
-  (``np.sin`` of a linear phase per channel), timed side by side; the issue's target is
+  (``np.sin`` of a linear phase per channel), timed in interleaved rounds after a warm-up
+  (:func:`analysis.bench.compare`, CPU time; wall time in ``extra``); the issue's target is
   <= 10 s for the 60 s scene.
 * ``synthesize marine 6L demo``: the sample scene ``marine_6l_runup.toml`` (8 channels, 40 s
   run-up with torsional response through the criticals); error = largest relative difference
@@ -32,7 +33,7 @@ from pathlib import Path
 
 import numpy as np
 
-from . import Row, median_time
+from . import Row, compare
 
 __all__ = ["run"]
 
@@ -70,19 +71,13 @@ def _synth_rows(quick: bool) -> list[Row]:
     holder = {}
 
     def synth():
-        import time
-
-        c0 = time.process_time()
         holder["run"] = synthesize(scene)
-        holder["cpu"] = time.process_time() - c0
 
     def sines():
         t = np.arange(int(duration * fs) + 1) / fs
         return [np.sin(TWO_PI * (30.0 + 10 * k) * t) for k in range(4)]
 
-    repeats = 1 if not quick else 2
-    t_syn = median_time(synth, repeats=repeats, warmup=0)
-    t_base = median_time(sines, repeats=3)
+    timing = compare({"synth": synth, "sines": sines}, rounds=2 if quick else 3, min_time=0.0)
     run = holder["run"]
     # reference: the exact quasi-steady response at each chosen sample's own speed
     rng = np.random.default_rng(0)
@@ -105,30 +100,30 @@ def _synth_rows(quick: bool) -> list[Row]:
         amp[order_sort] = a
         exact += (amp * np.exp(1j * q * psi)).real
     err = float(np.max(np.abs(x[idx] - exact)) / np.max(np.abs(x)))
-    rows = [Row(suite=SUITE, method="synthesize (4 ch x 50 kHz)",
-                setting=f"{duration:g} s run-up, I4 on mounts, orders to 12",
-                error=err, error_kind="max |Δ| / peak",
-                reference="exact response at each sample's speed", time_s=t_syn,
-                baseline="np.sin, same sample count", ratio=t_syn / t_base,
-                throughput=n_samples / t_syn, throughput_unit="samples/s", bound=1e-3,
-                note="issue target: <= 10 s for 60 s",
-                extra={"cpu_s": holder["cpu"], "samples": n_samples})]
+    rows = [timing.row(SUITE, "synthesize (4 ch x 50 kHz)", "synth",
+                       ("sines", "np.sin, same sample count"),
+                       f"{duration:g} s run-up, I4 on mounts, orders to 12", err,
+                       "max |Δ| / peak", "exact response at each sample's speed",
+                       throughput_items=n_samples, throughput_unit="samples/s", bound=1e-3,
+                       note="issue target: <= 10 s for 60 s",
+                       extra={"wall_s": timing.time("synth", clock="wall"),
+                              "samples": n_samples})]
     if not quick:
         holder2 = {}
 
         def marine():
             holder2["run"] = synthesize(_root() / "sample_data/scenes/marine_6l_runup.toml")
 
-        t_m = median_time(marine, repeats=1, warmup=0)
+        timing = compare({"marine": marine, "sines": sines}, rounds=2, min_time=0.0)
         truth = holder2["run"].truth
         a = truth["amplitude"].sel(channel="tv_flywheel", order=6.0).values[40:-40]
         s = truth["amplitude_steady"].sel(channel="tv_flywheel", order=6.0).values[40:-40]
-        rows.append(Row(suite=SUITE, method="synthesize marine 6L demo",
-                        setting="sample scene, 42 s, 8 channels", error=float(
-                            np.max(np.abs(a / s - 1))), error_kind="max rel",
-                        reference="steady-state forced response (flywheel, order 6)",
-                        time_s=t_m, baseline="np.sin, same sample count",
-                        ratio=t_m / t_base, note="slow sweep: transient effect small"))
+        rows.append(timing.row(SUITE, "synthesize marine 6L demo", "marine",
+                               ("sines", "np.sin, 4 channels of the 60 s I4 scene's length"),
+                               "sample scene, 42 s, 8 channels",
+                               float(np.max(np.abs(a / s - 1))), "max rel",
+                               "steady-state forced response (flywheel, order 6)",
+                               note="slow sweep: transient effect small"))
     return rows
 
 
@@ -151,17 +146,17 @@ def _tacho_rows(quick: bool) -> list[Row]:
         def naive(edges=edges, n=n):
             return 60.0 / (n * np.diff(edges))
 
-        tm = median_time(method, repeats=3, min_time=0.01)
-        tb = median_time(naive, repeats=3, min_time=0.01)
+        timing = compare({"method": method, "naive": naive}, rounds=3 if quick else 5,
+                         min_time=0.01)
         sp = method()
         truth = n0 + (n1 - n0) * sp.time / duration
         err = float(np.sqrt(np.mean((sp.speed_rpm - truth) ** 2)))
-        rows.append(Row(suite=SUITE, method=f"tacho speed, {n} pulses/rev",
-                        setting="20 kHz pick-up, 1 rev window + 1 rev smoothing",
-                        error=err, error_kind="rms rpm", reference="imposed linear run-up",
-                        time_s=tm, baseline="60/(N dt) per interval", ratio=tm / tb,
-                        throughput=edges.size / tm, throughput_unit="edges/s",
-                        bound=0.5 if n == 60 else float("inf")))
+        rows.append(timing.row(SUITE, f"tacho speed, {n} pulses/rev", "method",
+                               ("naive", "60/(N dt) per interval"),
+                               "20 kHz pick-up, 1 rev window + 1 rev smoothing", err,
+                               "rms rpm", "imposed linear run-up",
+                               throughput_items=edges.size, throughput_unit="edges/s",
+                               bound=0.5 if n == 60 else float("inf")))
     return rows
 
 
@@ -185,20 +180,20 @@ def _floor_rows(quick: bool) -> list[Row]:
             dev = tq - np.polyval(np.polyfit(np.arange(tq.size), tq, 1), np.arange(tq.size))
             return np.abs(np.fft.rfft(dev))
 
-        tm = median_time(method, repeats=3)
-        tb = median_time(naive, repeats=3)
+        timing = compare({"method": method, "naive": naive}, rounds=3 if quick else 5,
+                         min_time=0.01)
         res = method()
         floor = error_floor(speed_rpm=1500, pulses_per_rev=n, timer_resolution=tau)
         observed = float(res.orders["amplitude"].sel(order=slice(2, None)).mean())
         err = abs(observed / floor.order_amplitude_mean - 1)
-        rows.append(Row(suite=SUITE, method=f"torsiograph floor, timer {tau:g} s",
-                        setting="60 lines, 1500 rpm, 2-rev blocks, orders <= 12",
-                        error=float(err), error_kind="|observed/predicted - 1|",
-                        reference="error_floor (Rayleigh mean of white timing noise)",
-                        time_s=tm, baseline="FFT of edge-time deviations", ratio=tm / tb,
-                        bound=0.25 if tau >= 1e-7 else float("inf"),
-                        note=f"floor {floor.order_amplitude_mean_deg:.2e} deg",
-                        extra={"observed_deg": float(np.degrees(observed))}))
+        rows.append(timing.row(SUITE, f"torsiograph floor, timer {tau:g} s", "method",
+                               ("naive", "FFT of edge-time deviations"),
+                               "60 lines, 1500 rpm, 2-rev blocks, orders <= 12", float(err),
+                               "|observed/predicted - 1|",
+                               "error_floor (Rayleigh mean of white timing noise)",
+                               bound=0.25 if tau >= 1e-7 else float("inf"),
+                               note=f"floor {floor.order_amplitude_mean_deg:.2e} deg",
+                               extra={"observed_deg": float(np.degrees(observed))}))
     return rows
 
 

@@ -1,46 +1,69 @@
-"""Torsional natural frequencies and forced response: speed against error.
+"""Torsional natural frequencies, mode shapes and forced response: speed against error.
+
+Every timing is paired (:func:`analysis.bench.compare`: interleaved rounds after a warm-up,
+process CPU time, one BLAS thread for all sides). "ours" is always the public call a user
+makes, ``chain(J, k).natural_frequencies()`` -- construction, validation and the solve --; the
+baselines get their input prepared (the scaled tridiagonal ``J^{-1/2} K J^{-1/2}`` for LAPACK),
+so they are the floor of what any solver could cost.
 
 Rows
 ----
-* chains of 10, 100, 1000, 2000 equal masses (error against the closed form
-  ω_k = 2√(k/J) sin(kπ/2n)): our bidiagonal dqds solver against dense ``scipy.linalg.eigh``
-  (baseline) and, when importable, ``opentorsion`` (``Assembly.modal_analysis``, its
-  state-space eigen-solve; ``pip install opentorsion``);
-* hard chains (stiffness ratio 1e9 / inertia ratio 1e6, and 1e12 / 1e8) against mpmath at 50-60
-  digits: the same three solvers;
-* a branched (tree) system against mpmath: tree bisection vs dense eigh;
-* forced response of a 20-mass engine model over 1000 speeds × 24 orders: batched tree
-  elimination (per-order) and with cycle superposition, against a batched dense complex solve.
-
-``--quick`` drops the 2000-mass chain, the peer beyond 10 masses and the 1e12 case, and runs
-the forced response over 300 speeds.
+* **Uniform free chains** of 10 ... 3000 masses (error against the closed form
+  ω_k = 2√(k/J) sin(kπ/2n)): ours (dqds on the squared bidiagonal factor) against LAPACK
+  ``dsterf`` (Pal-Walker-Kahan QR, the fastest tridiagonal eigenvalue routine; normwise
+  accurate only), ``scipy.linalg.eigh_tridiagonal`` (values only), dense ``scipy.linalg.eigh``
+  and the peer ``opentorsion`` (``Assembly.modal_analysis``; up to 100 masses with ``--quick``,
+  1000 in the full run; ``pip install opentorsion``, the ``bench`` extra).
+* **Random chains** (J 1-5 kg·m², k 1e5-1e6 N·m/rad) of 100 and 1000 masses and a **hard
+  grounded chain** of 1000 masses (stiffness ratio 1e12, inertia ratio 1e8; 300 with
+  ``--quick``): ours against ``dsterf``, LAPACK ``dpteqr`` (positive-definite tridiagonal:
+  Cholesky + bidiagonal QR, values only; grounded only) and ``eigh_tridiagonal``; the error of
+  every method against bisection on Sturm counts in extended precision
+  (:mod:`analysis.bench._sturm`, independent of all of them).
+* **Lowest 10 modes of long uniform chains** (10⁴ and 10⁵ masses; 10⁴ with ``--quick``):
+  ``natural_frequencies(n_modes=10)`` (Golub-Kahan bisection; bound = its stated relative
+  error bound 8·n·eps, as for dqds: both are O(n·eps) relative methods) against
+  ``eigh_tridiagonal(select='i')`` (LAPACK bisection on the scaled tridiagonal) and, at 10⁴,
+  ``dsterf`` of all modes; ``mode_shapes(n_modes=10)`` against ``eigh_tridiagonal`` with
+  vectors for the same index range (errors against the closed-form shapes).
+* **A random tree** against mpmath at 50 digits: tree bisection vs dense ``eigh``.
+* **Forced response** of a 20-mass engine model over 1000 speeds × 24 orders (300 with
+  ``--quick``): batched tree elimination, per order and with cycle superposition, against a
+  batched dense complex solve.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from . import Row, median_time
+from . import Row, compare
 
 SUITE = "torsion"
 
 
-def _closed_form(n, j, k):
-    return 2 * np.sqrt(k / j) * np.sin(np.arange(n) * np.pi / (2 * n))
-
-
-def _rel_error(got, ref):
+def _rel_error(got, ref, skip_zero=True):
     got, ref = np.sort(np.asarray(got, float)), np.sort(np.asarray(ref, float))
-    mask = ref > 0
+    mask = ref > 0 if skip_zero else np.ones(ref.size, bool)
     return float(np.max(np.abs(got[mask] - ref[mask]) / ref[mask]))
 
 
-def _eigh_omega(system):
-    import scipy.linalg as sl
+def _tridiagonal(j, k, grounded):
+    """Diagonal and off-diagonal of ``J^{-1/2} K J^{-1/2}`` for a chain."""
+    rj = 1.0 / np.sqrt(j)
+    d = np.zeros(j.size)
+    if grounded:
+        d += k
+        d[:-1] += k[1:]
+        off = k[1:]
+    else:
+        d[:-1] += k
+        d[1:] += k
+        off = k
+    return d * rj * rj, -off * rj[:-1] * rj[1:]
 
-    rj = 1 / np.sqrt(system.inertias)
-    lam = sl.eigh(system.stiffness_matrix() * rj[:, None] * rj[None, :], eigvals_only=True)
-    return np.sqrt(np.clip(lam, 0, None))
+
+def _omega(lam):
+    return np.sqrt(np.clip(np.sort(np.asarray(lam, float)), 0.0, None))
 
 
 def _opentorsion():
@@ -60,112 +83,167 @@ def _ot_omega(ot, inertias, stiffnesses):
     return np.sort(np.asarray(wn, float))[::2]
 
 
-def _mp_reference(inertias, stiffnesses, dps):
-    import mpmath
-
-    mpmath.mp.dps = dps
-    n = len(inertias)
-    h = mpmath.zeros(n, n)
-    r = [1 / mpmath.sqrt(mpmath.mpf(float(j))) for j in inertias]
-    for i, k in enumerate(stiffnesses):
-        k = mpmath.mpf(float(k))
-        h[i, i] += k * r[i] ** 2
-        h[i + 1, i + 1] += k * r[i + 1] ** 2
-        h[i, i + 1] -= k * r[i] * r[i + 1]
-        h[i + 1, i] -= k * r[i] * r[i + 1]
-    ev = mpmath.eigsy(h, eigvals_only=True)
-    return np.array([float(mpmath.sqrt(max(e, 0))) for e in sorted(ev)])
-
-
-def _hard_chain(n, k_ratio, j_ratio, seed):
-    rng = np.random.default_rng(seed)
-    j = 10 ** rng.uniform(0, np.log10(j_ratio), n)
-    j[[0, 1]] = [1.0, j_ratio]
-    k = 10 ** rng.uniform(0, np.log10(k_ratio), n - 1)
-    k[[0, 1]] = [1.0, k_ratio]
-    return j, k
-
-
-def _sterf_row(n, j, k, ref, t_ours):
-    """LAPACK dsterf (Pal-Walker-Kahan QR, values only, *not* relatively accurate) on the
-    scaled tridiagonal: the speed floor of any O(n²) tridiagonal eigenvalue routine here."""
+def _candidates(j, k, grounded, *, dense=True, peer=None):
+    """name -> (callable returning ω rad/s ascending, label)."""
+    import scipy.linalg as sl
     from scipy.linalg import lapack
 
-    d = np.full(n, 2 * k / j)
-    d[[0, -1]] = k / j
-    e = np.full(n - 1, -k / j)
-
-    def sterf():
-        w, info = lapack.dsterf(d.copy(), e.copy())
-        return np.sqrt(np.clip(w, 0, None))
-
-    t = median_time(sterf, repeats=5, min_time=0.02)
-    return Row(SUITE, "LAPACK dsterf (speed floor, normwise only)", f"uniform chain n={n}",
-               _rel_error(sterf(), ref), "max rel", "closed form", t,
-               "bidiagonal dqds (ours)", t / t_ours,
-               note="context: fastest LAPACK tridiagonal eigenvalues, not relatively accurate")
-
-
-def _frequency_rows(quick: bool) -> list[Row]:
     from crankbench.predict.torsion import chain
 
+    d, e = _tridiagonal(j, k, grounded)
+    out = {"ours": (lambda: chain(j, k).natural_frequencies("rad/s"),
+                    "crankbench chain().natural_frequencies() (dqds)"),
+           "dsterf": (lambda: _omega(lapack.dsterf(d, e)[0]), "LAPACK dsterf"),
+           "eigh_tridiagonal": (lambda: _omega(sl.eigh_tridiagonal(d, e, eigvals_only=True)),
+                                "scipy eigh_tridiagonal")}
+    if grounded:
+        out["dpteqr"] = (lambda: _omega(lapack.dpteqr(d, e, np.zeros((1, 1)), compute_z=0)[0]),
+                         "LAPACK dpteqr")
+    if dense:
+        s = chain(j, k)
+
+        def dense_eigh():
+            rj = 1 / np.sqrt(j)
+            return _omega(sl.eigh(s.stiffness_matrix() * rj[:, None] * rj[None, :],
+                                  eigvals_only=True))
+
+        out["eigh"] = (dense_eigh, "scipy.linalg.eigh dense")
+    if peer is not None:
+        out["opentorsion"] = (lambda: _ot_omega(peer, j, k), "opentorsion modal_analysis")
+    return out
+
+
+def _frequency_case(setting, j, k, grounded, ref, reference, *, rounds, min_time,
+                    dense=True, peer=None) -> list[Row]:
+    """Rows for one chain: ours against every baseline, each baseline's own error too."""
+    cands = _candidates(j, k, grounded, dense=dense, peer=peer)
+    slow = {"opentorsion", "eigh"} & set(cands)
+    fast = {name: f for name, (f, _) in cands.items() if name not in slow}
+    timing = compare(fast, rounds=rounds, min_time=min_time)
+    rows = []
+    labels = {name: label for name, (_, label) in cands.items()}
+    bound = 1e-13
+    ours_err = _rel_error(cands["ours"][0](), ref)
+    for name in fast:
+        if name == "ours":
+            continue
+        rows.append(timing.row(SUITE, labels["ours"], "ours", (name, labels[name]), setting,
+                               ours_err, "max rel", reference, throughput_items=j.size,
+                               throughput_unit="masses/s", bound=bound))
+        rows.append(timing.row(SUITE, labels[name] + " (baseline)", name, None, setting,
+                               _rel_error(cands[name][0](), ref), "max rel", reference,
+                               throughput_items=j.size, throughput_unit="masses/s",
+                               note="normwise accurate only" if name in ("dsterf",) else ""))
+    for name in sorted(slow):   # slow peers: fewer rounds, paired with ours
+        t = compare({"ours": fast["ours"], name: cands[name][0]},
+                    rounds=3 if name == "opentorsion" else rounds, min_time=min_time)
+        rows.append(t.row(SUITE, labels[name] + (" (peer)" if name == "opentorsion"
+                                                 else " (baseline)"),
+                          name, ("ours", "crankbench (ours)"), setting,
+                          _rel_error(cands[name][0](), ref), "max rel", reference,
+                          throughput_items=j.size, throughput_unit="masses/s"))
+    return rows
+
+
+def _uniform_rows(quick: bool) -> list[Row]:
     ot = _opentorsion()
     rows = []
-    sizes = (10, 100, 1000) if quick else (10, 100, 1000, 2000)
-    for n in sizes:
-        j, k = 1.5, 4.0e5
-        inertias, stiffnesses = np.full(n, j), np.full(n - 1, k)
-        ref = _closed_form(n, j, k)
+    for n in ((10, 100, 1000) if quick else (10, 100, 300, 1000, 3000)):
+        jj, kk = 1.5, 4.0e5
+        j, k = np.full(n, jj), np.full(n - 1, kk)
+        ref = 2 * np.sqrt(kk / jj) * np.sin(np.arange(n) * np.pi / (2 * n))
+        peer = ot if ot is not None and n <= (100 if quick else 1000) else None
+        rows += _frequency_case(f"uniform free chain n={n}", j, k, False, ref, "closed form",
+                                rounds=5 if quick else 9, min_time=0.02 if quick else 0.05,
+                                dense=n <= 1000, peer=peer)
+    return rows
 
-        def ours():
-            return chain(inertias, stiffnesses).natural_frequencies("rad/s")
 
-        sys_ = chain(inertias, stiffnesses)
-        t_ours = median_time(ours, repeats=7 if n <= 1000 else 3, min_time=0.02)
-        t_base = median_time(lambda: _eigh_omega(sys_), repeats=1 if n >= 1000 else 5,
-                             warmup=0 if n >= 1000 else 1)
-        err_ours = _rel_error(ours(), ref)
-        err_base = _rel_error(_eigh_omega(sys_), ref)
-        rows.append(Row(SUITE, "bidiagonal dqds (ours)", f"uniform chain n={n}", err_ours,
-                        "max rel", "closed form", t_ours, "scipy.linalg.eigh dense",
-                        t_ours / t_base, n / t_ours, "masses/s", bound=1e-13))
-        rows.append(Row(SUITE, "scipy.linalg.eigh dense (baseline)", f"uniform chain n={n}",
-                        err_base, "max rel", "closed form", t_base, "", np.nan, n / t_base,
-                        "masses/s"))
-        if n >= 1000:
-            rows.append(_sterf_row(n, j, k, ref, t_ours))
-        if ot is not None and (n <= 10 or not quick):
-            reps = 3 if n <= 100 else 1
-            t_ot = median_time(lambda: _ot_omega(ot, inertias, stiffnesses), repeats=reps,
-                               warmup=1 if n <= 100 else 0)
-            err_ot = _rel_error(_ot_omega(ot, inertias, stiffnesses), ref)
-            rows.append(Row(SUITE, "opentorsion modal_analysis (peer)", f"uniform chain n={n}",
-                            err_ot, "max rel", "closed form", t_ot, "bidiagonal dqds (ours)",
-                            t_ot / t_ours, n / t_ot, "masses/s",
-                            note=f"ours is {t_ot / t_ours:.0f}x faster"))
-    cases = [(1e9, 1e6, 50)] + ([] if quick else [(1e12, 1e8, 60)])
-    for k_ratio, j_ratio, dps in cases:
-        n = 24
-        inertias, stiffnesses = _hard_chain(n, k_ratio, j_ratio, seed=7)
-        ref = _mp_reference(inertias, stiffnesses, dps)
-        sys_ = chain(inertias, stiffnesses)
-        setting = f"hard chain n={n}, k ratio {k_ratio:.0e}, J ratio {j_ratio:.0e}"
-        t_ours = median_time(lambda: chain(inertias, stiffnesses).natural_frequencies(),
-                             repeats=7, min_time=0.02)
-        t_base = median_time(lambda: _eigh_omega(sys_), repeats=7, min_time=0.02)
-        rows.append(Row(SUITE, "bidiagonal dqds (ours)", setting,
-                        _rel_error(sys_.natural_frequencies("rad/s"), ref), "max rel",
-                        f"mpmath {dps} digits", t_ours, "scipy.linalg.eigh dense",
-                        t_ours / t_base, bound=1e-12))
-        rows.append(Row(SUITE, "scipy.linalg.eigh dense (baseline)", setting,
-                        _rel_error(_eigh_omega(sys_), ref), "max rel", f"mpmath {dps} digits",
-                        t_base))
-        if ot is not None:
-            t_ot = median_time(lambda: _ot_omega(ot, inertias, stiffnesses), repeats=3)
-            rows.append(Row(SUITE, "opentorsion modal_analysis (peer)", setting,
-                            _rel_error(_ot_omega(ot, inertias, stiffnesses), ref), "max rel",
-                            f"mpmath {dps} digits", t_ot, "bidiagonal dqds (ours)",
-                            t_ot / t_ours))
+def _certified_rows(quick: bool) -> list[Row]:
+    from scipy.linalg import lapack
+
+    from ._sturm import EXTENDED, chain_reference
+
+    if not EXTENDED:
+        return []
+    cases = []
+    for n in ((100,) if quick else (100, 1000)):
+        rng = np.random.default_rng(n)
+        cases.append((f"random free chain n={n}", rng.uniform(1, 5, n),
+                      rng.uniform(1e5, 1e6, n - 1), False))
+    n = 300 if quick else 1000
+    rng = np.random.default_rng(7)
+    cases.append((f"hard grounded chain n={n}, k ratio 1e12, J ratio 1e8",
+                  10 ** rng.uniform(0, 8, n), 10 ** rng.uniform(0, 12, n), True))
+    rows = []
+    for setting, j, k, grounded in cases:
+        d, e = _tridiagonal(j, k, grounded)
+        ref = chain_reference(j, k, grounded=grounded, start=_omega(lapack.dsterf(d, e)[0]))
+        rows += _frequency_case(setting, j, k, grounded, ref,
+                                "bisection on extended-precision Sturm counts",
+                                rounds=5 if quick else 9, min_time=0.02 if quick else 0.05,
+                                dense=False)
+    return rows
+
+
+def _subset_rows(quick: bool) -> list[Row]:
+    import scipy.linalg as sl
+    from scipy.linalg import lapack
+
+    from crankbench.predict.torsion import chain
+
+    rows = []
+    kmodes = 10
+    for n in ((10_000,) if quick else (10_000, 100_000)):
+        jj, kk = 1.5, 4.0e5
+        j, k = np.full(n, jj), np.full(n - 1, kk)
+        idx = np.arange(kmodes)
+        ref = 2 * np.sqrt(kk / jj) * np.sin(idx * np.pi / (2 * n))
+        # closed-form shapes of the uniform free chain: cos((i + 1/2) m π / n), J-normalised
+        nodes = np.arange(n) + 0.5
+        shape_ref = np.cos(np.outer(nodes, idx) * np.pi / n)
+        shape_ref /= np.sqrt(np.sum(shape_ref ** 2 * jj, axis=0))
+        d, e = _tridiagonal(j, k, False)
+        rj = 1 / np.sqrt(j)
+        setting = f"uniform free chain n={n}, lowest {kmodes}"
+        cands = {"ours": lambda: chain(j, k).natural_frequencies("rad/s", n_modes=kmodes),
+                 "stebz": lambda: _omega(sl.eigh_tridiagonal(
+                     d, e, eigvals_only=True, select="i", select_range=(0, kmodes - 1)))}
+        if n <= 10_000:
+            cands["dsterf"] = lambda: _omega(lapack.dsterf(d, e)[0])[:kmodes]
+        t = compare(cands, rounds=3 if quick else 5, min_time=0.05)
+        label = "natural_frequencies(n_modes=10) (ours, bisection)"
+        err = _rel_error(cands["ours"](), ref)
+        bound = chain(j, k).mode_shapes(n_modes=1).relative_error_bound  # 8 n eps, stated
+        rows.append(t.row(SUITE, label, "ours", ("stebz", "eigh_tridiagonal select='i'"),
+                          setting, err, "max rel", "closed form", bound=bound))
+        rows.append(t.row(SUITE, "eigh_tridiagonal select='i' (baseline)", "stebz", None,
+                          setting, _rel_error(cands["stebz"](), ref), "max rel",
+                          "closed form"))
+        if "dsterf" in cands:
+            rows.append(t.row(SUITE, label, "ours", ("dsterf", "LAPACK dsterf, all modes"),
+                              setting, err, "max rel", "closed form", bound=bound))
+
+        def ours_shapes():
+            return chain(j, k).mode_shapes(n_modes=kmodes).shapes
+
+        def base_shapes():
+            _, y = sl.eigh_tridiagonal(d, e, select="i", select_range=(0, kmodes - 1))
+            return y * rj[:, None]
+
+        def shape_error(x):
+            sign = np.sign(np.sum(x * shape_ref * jj, axis=0))
+            return float(np.max(np.sqrt(np.sum((x * sign - shape_ref) ** 2 * jj, axis=0))))
+
+        ts = compare({"ours": ours_shapes, "stein": base_shapes}, rounds=3 if quick else 5,
+                     min_time=0.05)
+        rows.append(ts.row(SUITE, "mode_shapes(n_modes=10) (ours, inverse iteration)", "ours",
+                           ("stein", "eigh_tridiagonal select='i' vectors"), setting,
+                           shape_error(ours_shapes()), "max J-norm", "closed-form shapes",
+                           bound=1e-9))
+        rows.append(ts.row(SUITE, "eigh_tridiagonal select='i' vectors (baseline)", "stein",
+                           None, setting, shape_error(base_shapes()), "max J-norm",
+                           "closed-form shapes"))
     return rows
 
 
@@ -180,26 +258,34 @@ def _tree_rows(quick: bool) -> list[Row]:
     edges = [(parent[i], i) for i in range(1, n)]
     j = 10 ** rng.uniform(0, 6, n)
     k = 10 ** rng.uniform(0, 9, n - 1)
-    mpmath.mp.dps = 50
-    h = mpmath.zeros(n, n)
-    r = [1 / mpmath.sqrt(mpmath.mpf(float(v))) for v in j]
-    for (a, b), kk in zip(edges, k):
-        kk = mpmath.mpf(float(kk))
-        h[a, a] += kk * r[a] ** 2
-        h[b, b] += kk * r[b] ** 2
-        h[a, b] -= kk * r[a] * r[b]
-        h[b, a] -= kk * r[a] * r[b]
-    ref = np.array([float(mpmath.sqrt(max(e, 0)))
-                    for e in sorted(mpmath.eigsy(h, eigvals_only=True))])
+    with mpmath.workdps(50):
+        h = mpmath.zeros(n, n)
+        r = [1 / mpmath.sqrt(mpmath.mpf(float(v))) for v in j]
+        for (a, b), kk in zip(edges, k):
+            kk = mpmath.mpf(float(kk))
+            h[a, a] += kk * r[a] ** 2
+            h[b, b] += kk * r[b] ** 2
+            h[a, b] -= kk * r[a] * r[b]
+            h[b, a] -= kk * r[a] * r[b]
+        ref = np.array([float(mpmath.sqrt(max(e, 0)))
+                        for e in sorted(mpmath.eigsy(h, eigvals_only=True))])
     s = TorsionalSystem(j, edges, k)
-    t_ours = median_time(lambda: TorsionalSystem(j, edges, k).natural_frequencies(), repeats=5)
-    t_base = median_time(lambda: _eigh_omega(s), repeats=5, min_time=0.02)
+
+    def dense():
+        import scipy.linalg as sl
+
+        rj = 1 / np.sqrt(j)
+        return _omega(sl.eigh(s.stiffness_matrix() * rj[:, None] * rj[None, :],
+                              eigvals_only=True))
+
+    t = compare({"ours": lambda: TorsionalSystem(j, edges, k).natural_frequencies("rad/s"),
+                 "eigh": dense}, rounds=5, min_time=0.02)
     setting = f"random tree n={n}, k ratio 1e9, J ratio 1e6"
-    return [Row(SUITE, "tree bisection (ours)", setting,
-                _rel_error(s.natural_frequencies("rad/s"), ref), "max rel", "mpmath 50 digits",
-                t_ours, "scipy.linalg.eigh dense", t_ours / t_base, bound=1e-12),
-            Row(SUITE, "scipy.linalg.eigh dense (baseline)", setting,
-                _rel_error(_eigh_omega(s), ref), "max rel", "mpmath 50 digits", t_base)]
+    return [t.row(SUITE, "tree bisection (ours)", "ours", ("eigh", "scipy.linalg.eigh dense"),
+                  setting, _rel_error(s.natural_frequencies("rad/s"), ref), "max rel",
+                  "mpmath 50 digits", bound=1e-12),
+            t.row(SUITE, "scipy.linalg.eigh dense (baseline)", "eigh", None, setting,
+                  _rel_error(dense(), ref), "max rel", "mpmath 50 digits")]
 
 
 def _forced_rows(quick: bool) -> list[Row]:
@@ -228,34 +314,32 @@ def _forced_rows(quick: bool) -> list[Row]:
              - (w * w)[:, None, None] * jj[None])
         return np.linalg.solve(z, f.reshape(-1, n)[..., None])[..., 0]
 
-    def per_order():
-        return s.forced_response(rpm, torque=torque, orders=orders, superpose=False)
-
-    def full():
-        return s.forced_response(rpm, torque=torque, orders=orders)
-
     x_ref = dense().reshape(n_speeds, orders.size, n)
     x = harmonic_solve(s, speed, orders, cylinder_forcing(s, torque, orders, n_speeds))
     err = float(np.max(np.abs(x - x_ref)) / np.max(np.abs(x_ref)))
-    t_dense = median_time(dense, repeats=1 if quick else 3)
-    t_po = median_time(per_order, repeats=3 if quick else 5)
-    t_full = median_time(full, repeats=3)
+    t = compare({"per_order": lambda: s.forced_response(rpm, torque=torque, orders=orders,
+                                                        superpose=False),
+                 "full": lambda: s.forced_response(rpm, torque=torque, orders=orders),
+                 "dense": dense}, rounds=3 if quick else 5, min_time=0.05)
     setting = f"{n} masses, {n_speeds} speeds x {orders.size} orders"
     pairs = n_speeds * orders.size
+    base = ("dense", "numpy batched dense solve")
     return [
-        Row(SUITE, "forced response, tree elimination (ours)", setting, err,
-            "max abs / max |x|", "batched dense complex solve", t_po,
-            "numpy batched dense solve", t_po / t_dense, pairs / t_po, "(speed, order)/s",
-            bound=1e-10, note="per-order amplitudes, stresses; totals = sum of amplitudes"),
-        Row(SUITE, "forced response + cycle superposition (ours)", setting, err,
-            "max abs / max |x|", "batched dense complex solve", t_full,
-            "numpy batched dense solve", t_full / t_dense, pairs / t_full, "(speed, order)/s",
-            bound=1e-10, note="peak over the cycle, 8 samples/period + parabolic refinement"),
-        Row(SUITE, "numpy batched dense solve (baseline)", setting, 0.0, "max abs / max |x|",
-            "itself", t_dense, "", np.nan, pairs / t_dense, "(speed, order)/s"),
+        t.row(SUITE, "forced response, tree elimination (ours)", "per_order", base, setting,
+              err, "max abs / max |x|", "batched dense complex solve", throughput_items=pairs,
+              throughput_unit="(speed, order)/s", bound=1e-10,
+              note="per-order amplitudes, stresses; totals = sum of amplitudes"),
+        t.row(SUITE, "forced response + cycle superposition (ours)", "full", base, setting,
+              err, "max abs / max |x|", "batched dense complex solve", throughput_items=pairs,
+              throughput_unit="(speed, order)/s", bound=1e-10,
+              note="peak over the cycle, 8 samples/period + parabolic refinement"),
+        t.row(SUITE, "numpy batched dense solve (baseline)", "dense", None, setting, 0.0,
+              "max abs / max |x|", "itself", throughput_items=pairs,
+              throughput_unit="(speed, order)/s"),
     ]
 
 
 def run(quick: bool) -> list[Row]:
     """All torsion rows (see module docstring)."""
-    return _frequency_rows(quick) + _tree_rows(quick) + _forced_rows(quick)
+    return (_uniform_rows(quick) + _certified_rows(quick) + _subset_rows(quick)
+            + _tree_rows(quick) + _forced_rows(quick))

@@ -1,10 +1,12 @@
 """``crankbench bench``: run the speed-against-error suites and write one table.
 
 Each suite (``analysis/bench/suite_<topic>.py``) returns rows of method, setting, error against
-an independent reference, median time and the ratio to a baseline timed in the same run. The
-command prints the table, optionally writes it (CSV, JSON and a speed-against-error plot per
-suite) into ``-o DIR``, and exits with status 1 if any method's error exceeds its documented
-bound.
+an independent reference, median CPU time and the paired ratio (with its spread) to a baseline
+timed in interleaved rounds in the same run (:mod:`analysis.bench`). The command states the
+machine, its load and the BLAS thread setting both sides ran with, prints the table (the
+``versus`` column says "slower" where we are), optionally writes it (CSV, JSON with the
+machine description, and a speed-against-error plot per suite) into ``-o DIR``, and exits with
+status 1 if any method's error exceeds its documented bound.
 """
 
 from __future__ import annotations
@@ -27,13 +29,16 @@ def configure(parser) -> None:
     parser.add_argument("--overwrite", action="store_true",
                         help="replace existing files in DIR")
     parser.add_argument("--json", action="store_true", help="print the table as JSON")
+    parser.add_argument("--threads", default="1", metavar="N|default",
+                        help="BLAS threads for every method and baseline alike (default 1; "
+                             "'default' keeps the BLAS library's own setting)")
 
 
 def run(args) -> int:
     import time
 
     from crankbench.analysis._output import print_json, print_table
-    from crankbench.analysis.bench import run_suites, suites
+    from crankbench.analysis.bench import BENCH_THREADS, machine, run_suites, suites
     from crankbench.predict._validate import check_option
     from crankbench.predict.errors import ConfigError
 
@@ -45,22 +50,35 @@ def run(args) -> int:
     names = args.suite or available
     for name in names:
         check_option(name, "--suite", available, error=ConfigError)
+    threads = _threads(args.threads)
+    before = machine()
     t0 = time.perf_counter()
+    extra = {} if threads == BENCH_THREADS else {"threads": threads}
     rows = run_suites(names, quick=args.quick,
-                      progress=lambda n: log.info("bench: suite %s ...", n))
+                      progress=lambda n: log.info("bench: suite %s ...", n), **extra)
     elapsed = time.perf_counter() - t0
+    after = machine()
+    settings = {"threads": "BLAS default" if threads is None else threads,
+                "clock": "process CPU time (time.process_time), wall time in bench.json",
+                "timing": "interleaved rounds after a warm-up; paired ratio = median of "
+                          "per-round ratios, spread = interquartile range",
+                "load_average_after": after["load_average_1_5_15min"],
+                "elapsed_s": elapsed, "quick": bool(args.quick)}
     frame = rows_to_frame(rows)
     failed = frame[~frame["passed"]]
     if args.json:
-        print_json({"elapsed_s": elapsed, "quick": args.quick, "rows": frame,
-                    "failed": int(len(failed))})
+        print_json({"elapsed_s": elapsed, "quick": args.quick, "machine": before,
+                    "settings": settings, "rows": frame, "failed": int(len(failed))})
     else:
+        for line in describe(before, settings):
+            print(line)
         shown = frame[["suite", "method", "setting", "error", "error_kind", "bound", "time_s",
-                       "baseline", "ratio", "throughput", "passed"]]
+                       "versus", "throughput", "passed"]]
         print_table(shown, title=f"speed against error ({'quick' if args.quick else 'full'}, "
                                  f"{elapsed:.1f} s)")
     if args.output:
-        write_outputs(frame, args.output, overwrite=args.overwrite)
+        write_outputs(frame, args.output, overwrite=args.overwrite,
+                      meta={"machine": before, "settings": settings})
         log.info("bench: results written to %s", args.output)
     if len(failed):
         log.error("bench: %d row(s) exceed their documented error bound: %s", len(failed),
@@ -68,6 +86,35 @@ def run(args) -> int:
                             for r in failed.itertuples()))
         return 1
     return 0
+
+
+def _threads(value):
+    from crankbench.predict.errors import ConfigError
+
+    if str(value).lower() == "default":
+        return None
+    try:
+        threads = int(value)
+    except ValueError:
+        threads = 0
+    if threads < 1:
+        raise ConfigError(f"--threads={value!r} is not a positive integer or 'default'")
+    return threads
+
+
+def describe(info: dict, settings: dict) -> list[str]:
+    """Header lines: machine, load, BLAS builds and the thread setting of the run."""
+    blas = "; ".join(f"{b['internal_api']} {b['version']} ({b['architecture']}, "
+                     f"{b['num_threads']} threads by default)" for b in info["blas"]) or "?"
+    mem = info["memory_bytes"]
+    return [f"machine: {info['cpu']}, {info['cpus_available']} of {info['cpus_logical']} "
+            f"logical CPUs, {mem / 2**30:.0f} GiB" if mem else f"machine: {info['cpu']}",
+            f"load average (1/5/15 min): before {info['load_average_1_5_15min']}, after "
+            f"{settings['load_average_after']}",
+            f"python {info['python']}, numpy {info['numpy']}, scipy {info['scipy']}; BLAS: {blas}",
+            f"threads: {settings['threads']} BLAS thread(s) for every method and baseline; "
+            f"clock: {settings['clock']}",
+            f"timing: {settings['timing']}"]
 
 
 def rows_to_frame(rows):
@@ -78,12 +125,15 @@ def rows_to_frame(rows):
     if frame.empty:
         frame = pd.DataFrame(columns=["suite", "method", "setting", "error", "error_kind",
                                       "reference", "time_s", "baseline", "ratio", "throughput",
-                                      "throughput_unit", "bound", "note", "extra", "passed"])
+                                      "throughput_unit", "bound", "note", "extra", "ratio_lo",
+                                      "ratio_hi", "paired", "clock", "rounds", "passed",
+                                      "versus"])
     return frame.drop(columns=["extra"], errors="ignore")
 
 
-def write_outputs(frame, directory, *, overwrite: bool = False) -> None:
-    """Write ``bench.csv``, ``bench.json`` and ``<suite>.png`` (error against time) atomically."""
+def write_outputs(frame, directory, *, overwrite: bool = False, meta=None) -> None:
+    """Write ``bench.csv``, ``bench.json`` (``meta`` -- machine, settings -- and the rows) and
+    ``<suite>.png`` (error against time) atomically."""
     import json
     from pathlib import Path
 
@@ -106,7 +156,7 @@ def write_outputs(frame, directory, *, overwrite: bool = False) -> None:
     with atomic_path(out / "bench.csv", overwrite=overwrite, option="--overwrite") as tmp:
         frame.to_csv(tmp, index=False)
     with atomic_path(out / "bench.json", overwrite=overwrite, option="--overwrite") as tmp:
-        tmp.write_text(json.dumps(to_jsonable(frame), indent=1))
+        tmp.write_text(json.dumps(to_jsonable({**(meta or {}), "rows": frame}), indent=1))
     for suite, part in frame.groupby("suite"):
         fig = plot_suite(part, suite)
         with atomic_path(out / f"{suite}.png", overwrite=overwrite, option="--overwrite") as tmp:

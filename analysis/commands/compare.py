@@ -84,7 +84,9 @@ def run(args) -> int:
                     "verdict": result.verdict.as_dict(),
                     "checks": [v.as_dict() for v in result.verdicts],
                     "flags": list(comp.flags), "settings": result.settings,
-                    "vibrograph": None if vib is None else vibrograph_json(vib)})
+                    "vibrograph": None if vib is None else vibrograph_json(vib),
+                    "measured_excitation": None if result.pressure is None
+                    else result.pressure.summary()})
     else:
         print(f"record   {result.source}  channel {result.channel} at {result.node}")
         print(f"model    {result.model_path}")
@@ -107,6 +109,11 @@ def run(args) -> int:
             print()
             print_table(comp.unmatched_measured, title="measured resonances without a critical")
         print()
+        if result.pressure is not None:
+            print_table(result.pressure.table, title="measured response against the model's "
+                        "prediction and the prediction from measured cylinder pressure")
+            print(f"  ({result.pressure.note})")
+            print()
         if comp.flags:
             print("disagreements:")
             for f in comp.flags:

@@ -229,6 +229,10 @@ def build_report(result, *, title=None, parameters=None, record_path=None, model
 
         add_vibrograph(rep, result.vibrograph, figures=figures)
     rep.add_limit_checks(result.limits, figures=figures)
+    if getattr(result, "pressure", None) is not None:
+        from crankbench.analysis.excitation_compare import add_pressure_section
+
+        add_pressure_section(rep, result.pressure, result=result, figures=figures)
     return rep
 
 

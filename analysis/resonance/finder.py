@@ -7,6 +7,7 @@ from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
+from crankbench.predict._threads import single_threaded_blas
 from crankbench.predict._validate import check_int, check_option, check_positive, check_range
 from crankbench.predict.errors import AnalysisError
 
@@ -306,6 +307,7 @@ def _track_arrays(track, order):
             None if comp is None else comp[ok])
 
 
+@single_threaded_blas  # many tiny least-squares fits: BLAS threads only cost (issue 21)
 def find_resonances(track, *, orders=None, response=None, min_snr=5.0, min_prominence=0.05,
                     min_amplitude_fraction=1e-3,
                     max_damping=0.2, min_damping=0.004, min_confidence=0.5, baseline_degree=3,

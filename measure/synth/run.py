@@ -8,7 +8,8 @@ of the scene:
   sweep shows its transient - lower, later, broader peaks);
 * vibrograph channels at mount points from the balance residuals and the torque reaction
   through the mount model (:mod:`.vibrograph`, quasi-steady);
-* cylinder pressure from the synthetic Wiebe trace of :mod:`predict.pressure`;
+* cylinder pressure from the synthetic Wiebe trace of :mod:`predict.pressure` with the
+  transducer errors of :mod:`.pressure` (offset, drift, thermal shock, noise, TDC error);
 * the bench speed channel (mean speed of the profile);
 
 then adds the scene's imperfections (:mod:`.imperfections`). The ground truth carries, per
@@ -173,6 +174,7 @@ def synthesize(scene, *, method="split", integration_rate=None):
     t_truth = np.arange(0.0, duration + 1e-9, 1.0 / scene.truth_rate)
     rpm_truth = prof.speed(t_truth) / RPM
     load_truth = scene.load.scale(rpm_truth)
+    crank_vibration = {}
     fidelity = {"method": method, "max_order": float(scene.max_order),
                 "orders": int(orders.size), "truth_rate_hz": float(scene.truth_rate),
                 "max_sweep_rate_rpm_per_s": prof.max_sweep_rate()}
@@ -194,7 +196,11 @@ def synthesize(scene, *, method="split", integration_rate=None):
         modal = ModalModel.from_system(system, omega=float(np.mean(spd)),
                                        max_frequency_hz=2.0 * f_max)
         gas, inertia = order_forcing(system, excitation, orders)
-        node_names = sorted({s.params["node"] for s in tors}, key=system.node_names.index)
+        from .pressure import cylinder_nodes
+
+        crank_nodes = cylinder_nodes(scene)          # pressure follows its cylinder's angle
+        node_names = sorted({s.params["node"] for s in tors} | set(crank_nodes.values()),
+                            key=system.node_names.index)
         nodes = [modal.node_index(nm) for nm in node_names]
         ratio = modal.node_ratio[nodes]
         x_tot = np.zeros((len(nodes), n_t))
@@ -215,6 +221,8 @@ def synthesize(scene, *, method="split", integration_rate=None):
             ph_x[:, k] = np.angle(x[:, it] * back)
             amp_v[:, k] = np.abs(v[:, it]) * ratio[:, None]
             ph_v[:, k] = np.angle(v[:, it] * back)
+        crank_vibration = {name: (tg, x_tot[node_names.index(node)])
+                           for name, node in crank_nodes.items()}
         steady_x, steady_v = _steady_state(system, excitation, orders, rpm_truth, load_truth,
                                            nodes)
         fidelity.update(integration_rate_hz=rate, modal_condition=modal.condition,
@@ -283,9 +291,13 @@ def synthesize(scene, *, method="split", integration_rate=None):
         fidelity["mount_response"] = "quasi-steady (no mount-mode transient)"
 
     # ---------------------------------------------------------------- others -------------
+    pressure_truth = {}
     for s in scene.sensors:
         if s.kind == "pressure":
-            channels[s.name] = _pressure_channel(scene, s, psi0, rng)
+            from .pressure import pressure_channel
+
+            channels[s.name], pressure_truth[s.name] = pressure_channel(
+                scene, s, psi0, rng, vibration=crank_vibration.get(s.name))
         elif s.kind == "speed":
             fs = float(s.sample_rate)
             ts = np.arange(int(np.floor(duration * fs)) + 1) / fs
@@ -303,6 +315,8 @@ def synthesize(scene, *, method="split", integration_rate=None):
         "engine_id": engine.name, "test_id": scene.name, "synthetic": 1,
         "seed": int(scene.seed)})
     truth = _truth_dataset(scene, orders, t_truth, rpm_truth, truth_rows, modal, fidelity)
+    if pressure_truth:                           # measure.synth.pressure.pressure_truth reads it
+        truth.attrs["pressure"] = json.dumps(pressure_truth)
     elapsed = _time.perf_counter() - t_start
     log.debug("synthesized %r: %d channels, %.1f s of record in %.2f s", scene.name,
              len(channels), duration, elapsed)
@@ -477,30 +491,6 @@ def _instrument_attrs(spec):
         return {}
     return {"instrument_natural_frequency": float(spec.params["instrument_frequency"]),
             "instrument_damping_ratio": float(spec.params["instrument_damping"])}
-
-
-def _pressure_channel(scene, s, psi0, rng):
-    from crankbench.predict.pressure import synthetic_pressure
-
-    engine = scene.engine
-    c = s.params["cylinder"]
-    if c > engine.n_cylinders:
-        raise ConfigError(f"sensor {s.name!r}: cylinder={c} but the engine has "
-                          f"{engine.n_cylinders} cylinders")
-    trace = (synthetic_pressure(engine, imep=scene.load.imep) if scene.load.imep
-             else synthetic_pressure(engine))
-    fs = float(s.sample_rate)
-    prof = scene.profile
-    ts = np.arange(int(np.floor(prof.duration * fs)) + 1) / fs
-    psi = psi0 + prof.angle(ts)
-    fire = np.radians(engine.firing_angles_deg()[c - 1])
-    p = trace.at(psi - fire)
-    base = float(np.min(trace.pressure))
-    load = scene.load.scale(prof.speed(ts) / RPM)
-    p = base + load * (p - base)
-    p = _read_out(p, ts, s.imperfections, rng)
-    return dict(data=p, sample_rate=fs, units="Pa", quantity="pressure",
-                location=s.params.get("location", f"cylinder {c}"))
 
 
 def _truth_dataset(scene, orders, t_truth, rpm_truth, rows, modal, fidelity):

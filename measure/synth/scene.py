@@ -50,7 +50,8 @@ once-per-revolution mark ``mark_width_deg``, e.g. a TDC mark one or two samples 
 *vibrograph* ``point = [x, y, z]`` or ``mount = "name"``, ``direction`` (x/y/z),
 ``quantity`` (acceleration/velocity/displacement), ``sample_rate`` (the channel carries its
 ``position`` and ``direction`` attrs, docs/DESIGN.md "Vibrograph sensors"); *pressure* ``cylinder``,
-``sample_rate``; *speed* ``sample_rate``. Torsiograph and vibrograph sensors may give a
+``sample_rate`` and the transducer errors of :mod:`.pressure` (``thermal_shock``,
+``thermal_shock_deg``, ``tdc_error_deg``, ``cycle_variation``); *speed* ``sample_rate``. Torsiograph and vibrograph sensors may give a
 seismic instrument, ``instrument_frequency`` (Hz) and ``instrument_damping`` (fraction of
 critical, default 0.65): the channel is then the instrument's reading
 (:mod:`measure.instruments`: a seismic torsiograph/vibrograph for angles and displacements, a
@@ -85,7 +86,8 @@ SENSOR_KINDS = {
               "ringing_hz", "mark_width_deg"),
     "vibrograph": ("point", "mount", "direction", "quantity", "sample_rate", "location",
                    "instrument_frequency", "instrument_damping"),
-    "pressure": ("cylinder", "sample_rate", "location"),
+    "pressure": ("cylinder", "sample_rate", "location", "thermal_shock", "thermal_shock_deg",
+                 "tdc_error_deg", "cycle_variation"),
     "speed": ("sample_rate", "location"),
 }
 
@@ -460,8 +462,11 @@ def _sensor(t: Table, defaults: Imperfections) -> SensorSpec:
                                  options=["acceleration", "velocity", "displacement"])
         p["sample_rate"] = t.positive("sample_rate", **_FS)
     if kind == "pressure":
+        from .pressure import TransducerErrors
+
         p["cylinder"] = t.integer("cylinder", 1, minimum=1)
         p["sample_rate"] = t.positive("sample_rate", **_FS)
+        p["transducer"] = TransducerErrors.from_table(t)
     if kind == "speed":
         p["sample_rate"] = t.positive("sample_rate", **_FS)
     if kind in ("torsiograph", "vibrograph") and "instrument_frequency" in t:

@@ -37,7 +37,6 @@ References
 
 from __future__ import annotations
 
-import contextlib
 import logging
 import math
 from dataclasses import dataclass, field, replace
@@ -60,26 +59,16 @@ THEORIES = ("timoshenko", "euler-bernoulli")
 _TOL = 1e-9  # m: positions closer than this are the same node
 
 
-_CONTROLLER: list = []  # lazily created threadpoolctl controller (empty list: not tried yet)
-
-
 def _small_blas(n_dof: int):
-    """Single-threaded BLAS for small dense problems when threadpoolctl is available.
+    """Single-threaded BLAS for small dense problems (:func:`predict._threads.limit_blas`).
 
     Threaded BLAS on matrices of a few hundred rows costs more in synchronisation than it
     gains, badly so on a loaded machine (measured 5-20x slower); large models keep the
-    default threading. Without threadpoolctl this is a no-op.
+    default threading.
     """
-    if n_dof > 400:
-        return contextlib.nullcontext()
-    if not _CONTROLLER:
-        try:
-            from threadpoolctl import ThreadpoolController
-            _CONTROLLER.append(ThreadpoolController())
-        except ImportError:  # optional
-            _CONTROLLER.append(None)
-    ctl = _CONTROLLER[0]
-    return contextlib.nullcontext() if ctl is None else ctl.limit(limits=1, user_api="blas")
+    from .._threads import limit_blas
+
+    return limit_blas(size=n_dof)
 
 
 def _hermitian_eigh(h_re, h_im, s, top=None):

@@ -22,12 +22,15 @@ import numpy as np
 
 from ..errors import AnalysisError
 
-__all__ = ["bidiagonal_singular_values", "bidiagonal_svd"]
+__all__ = ["bidiagonal_singular_values", "qd_singular_values", "bidiagonal_svd"]
 
 log = logging.getLogger("crankbench")
 
 _IP = ctypes.POINTER(ctypes.c_int)
 _DP = ctypes.POINTER(ctypes.c_double)
+
+#: squared bidiagonal entries outside this range go through dlasq1, which scales first
+_SAFE_SQUARES = (1e-290, 1e290)
 
 
 @functools.lru_cache(maxsize=None)
@@ -51,7 +54,12 @@ def _function(name: str, argtypes: tuple):
 
 
 def _ptr(a: np.ndarray, kind=_DP):
-    return a.ctypes.data_as(kind)
+    """Pointer to the first element of a writable array (kept alive by the caller);
+    ``from_buffer`` + ``byref`` costs a fraction of ``ndarray.ctypes`` (C-contiguous only)."""
+    if not a.flags.c_contiguous:  # Fortran-ordered matrices
+        return a.ctypes.data_as(kind)
+    base = ctypes.c_int if kind is _IP else ctypes.c_double
+    return ctypes.byref(base.from_buffer(a))
 
 
 def _stebz_fallback(d: np.ndarray, e: np.ndarray) -> np.ndarray:
@@ -100,6 +108,44 @@ def bidiagonal_singular_values(d, e) -> np.ndarray:
     if info.value != 0:
         raise AnalysisError(f"dlasq1 (dqds) did not converge, info={info.value}")
     return d
+
+
+def qd_singular_values(q, e2) -> np.ndarray:
+    """Singular values (descending) of the upper bidiagonal whose squared diagonal is ``q`` and
+    squared superdiagonal ``e2``, to high relative accuracy (LAPACK ``dlasq2``, dqds).
+
+    Callers that know the squares exactly (a product of the data) skip the square roots of
+    :func:`bidiagonal_singular_values` and dlasq1's scaling pass; squares outside
+    ``[1e-290, 1e290]`` take that scaled route instead.
+
+    Parameters
+    ----------
+    q : ndarray, shape (n,)
+        Squared diagonal, > 0.
+    e2 : ndarray, shape (n-1,)
+        Squared superdiagonal, >= 0.
+
+    Returns
+    -------
+    ndarray, shape (n,)
+        Singular values, descending.
+    """
+    n = q.size
+    if n == 0:
+        return np.zeros(0)
+    lo, hi = _SAFE_SQUARES
+    f = _function("dlasq2", (_IP, _DP, _IP))
+    if (f is None or not (q.min() > lo and q.max() < hi)
+            or (n > 1 and not (e2.min() >= 0 and e2.max() < hi))):
+        return bidiagonal_singular_values(np.sqrt(q), np.sqrt(e2))
+    z = np.zeros(4 * n)
+    z[0:2 * n:2] = q
+    z[1:2 * n - 2:2] = e2
+    ints = np.array([n, 0], dtype=np.intc)
+    f(_ptr(ints, _IP), _ptr(z), ctypes.byref(ctypes.c_int.from_buffer(ints, ints.itemsize)))
+    if ints[1] != 0:
+        raise AnalysisError(f"dlasq2 (dqds) did not converge, info={int(ints[1])}")
+    return np.sqrt(z[:n])
 
 
 def bidiagonal_svd(d, e):

@@ -33,7 +33,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._lapack import bidiagonal_singular_values, bidiagonal_svd
+from ._lapack import bidiagonal_svd, qd_singular_values
 
 __all__ = ["chain_frequencies", "chain_modes", "tree_frequencies", "dense_modes", "EPS"]
 
@@ -43,10 +43,20 @@ EPS = np.finfo(float).eps
 def _free_chain_factor(inertias: np.ndarray, stiffnesses: np.ndarray):
     """Diagonal and off-diagonal of the square (n−1) upper bidiagonal whose singular values are
     the elastic ω of a free-free chain (transpose of ``diag(√k) L``, see module docstring)."""
+    q, e2 = _free_chain_squares(inertias, stiffnesses)
+    return np.sqrt(q), np.sqrt(e2)
+
+
+def _free_chain_squares(inertias: np.ndarray, stiffnesses: np.ndarray):
+    """Squares of :func:`_free_chain_factor`'s entries (the qd array dqds works on), formed
+    from the data by products and quotients only: ``k_i S_{i+1} / (S_i J_{i+1})`` and
+    ``k_{i+1} S_i / (S_{i+1} J_{i+1})``."""
     s = np.cumsum(inertias)
-    diag = np.sqrt(stiffnesses * s[1:] / (s[:-1] * inertias[1:]))
-    off = np.sqrt(stiffnesses[1:] * s[:-2] / (s[1:-1] * inertias[1:-1]))
-    return diag, off
+    q = stiffnesses * s[1:]
+    q /= s[:-1] * inertias[1:]
+    e2 = stiffnesses[1:] * s[:-2]
+    e2 /= s[1:-1] * inertias[1:-1]
+    return q, e2
 
 
 def _grounded_chain_factor(inertias: np.ndarray, stiffnesses: np.ndarray):
@@ -74,16 +84,22 @@ def chain_frequencies(inertias, stiffnesses, *, grounded: bool) -> np.ndarray:
     -------
     ndarray
         ω, rad/s, ascending; for a free chain the first value is exactly 0.0.
+
+    Notes
+    -----
+    dqds (LAPACK ``dlasq2``) runs on the squared bidiagonal entries formed straight from the
+    data, so no square root is taken before the solve.
     """
     inertias = np.asarray(inertias, float)
     stiffnesses = np.asarray(stiffnesses, float)
     if grounded:
-        d, e = _grounded_chain_factor(inertias, stiffnesses)
-        return np.sort(bidiagonal_singular_values(d, e))
-    if inertias.size == 1:
-        return np.zeros(1)
-    d, e = _free_chain_factor(inertias, stiffnesses)
-    return np.concatenate([[0.0], np.sort(bidiagonal_singular_values(d, e))])
+        return qd_singular_values(stiffnesses / inertias, stiffnesses[1:] / inertias[:-1])[::-1]
+    n = inertias.size
+    out = np.empty(n)
+    out[0] = 0.0
+    if n > 1:
+        out[1:] = qd_singular_values(*_free_chain_squares(inertias, stiffnesses))[::-1]
+    return out
 
 
 #: chains up to this many masses get relatively accurate (dbdsqr) mode shapes; O(n³) above
@@ -108,7 +124,7 @@ def _chain_singular_vectors(rj: np.ndarray, sk: np.ndarray, grounded: bool) -> n
     return y[:, np.argsort(s, kind="stable")]
 
 
-def chain_modes(inertias, stiffnesses, *, grounded: bool):
+def chain_modes(inertias, stiffnesses, *, grounded: bool, omega=None):
     """Mode shapes of a chain, columns ordered like :func:`chain_frequencies`.
 
     Up to :data:`SVD_MODES_MAX` masses the shapes are the singular vectors of the bidiagonal
@@ -117,36 +133,34 @@ def chain_modes(inertias, stiffnesses, *, grounded: bool):
     *relative* gaps: at stiffness ratio 1e12 and inertia ratio 1e8 every shape is within ~1e-14
     (J-norm) of a 60-digit reference, where MRRR on the scaled tridiagonal is off by 3e-5 (free)
     or entirely wrong (grounded). It costs O(n³) (0.2 s at 500 masses), so longer chains use
-    MRRR (LAPACK ``dstemr``) on the scaled tridiagonal: absolute accuracy ~ n·eps·‖A‖/gap, fine
-    for well-scaled chains. Shapes are mapped back by ``x = J^{-1/2} y`` (``xᵀ J x = 1``); the
-    rigid-body mode of a free chain is set exactly to the constant vector.
+    inverse iteration on the Golub-Kahan form of the same factor at the dqds frequencies
+    (:func:`predict.torsion.subset.chain_shapes`, O(n²)): within ~5e-14 of ``dbdsqr`` at 1000
+    to 1500 masses and ratios up to 1e12 / 1e8, where MRRR (``dstemr``) on the scaled
+    tridiagonal is off by 1e-6 to 1.4 (tests/hard_cases/test_hard_torsion.py); about twice
+    MRRR's time. Shapes are mapped back by ``x = J^{-1/2} y`` (``xᵀ J x = 1``); the rigid-body
+    mode of a free chain is set exactly to the constant vector.
+
+    Parameters
+    ----------
+    omega : ndarray, optional
+        The chain's frequencies (rad/s, :func:`chain_frequencies`) when already known.
 
     Returns
     -------
     ndarray, shape (n, n)
     """
-    from scipy.linalg import eigh_tridiagonal
-
     inertias = np.asarray(inertias, float)
     stiffnesses = np.asarray(stiffnesses, float)
     n = inertias.size
-    kd = np.zeros(n)
-    if grounded:
-        kd += stiffnesses
-        kd[:-1] += stiffnesses[1:]
-        koff = stiffnesses[1:]
-    else:
-        kd[:-1] += stiffnesses
-        kd[1:] += stiffnesses
-        koff = stiffnesses
+    if n > SVD_MODES_MAX:
+        from .subset import chain_shapes
+
+        if omega is None:
+            omega = chain_frequencies(inertias, stiffnesses, grounded=grounded)
+        return chain_shapes(inertias, stiffnesses, omega, grounded=grounded)
     rj = 1.0 / np.sqrt(inertias)
-    if n == 1:
-        vectors = np.ones((1, 1))
-    elif n <= SVD_MODES_MAX:
-        vectors = _chain_singular_vectors(rj, np.sqrt(stiffnesses), grounded)
-    else:
-        _, vectors = eigh_tridiagonal(kd * rj * rj, -koff * rj[:-1] * rj[1:],
-                                      lapack_driver="stemr")
+    vectors = (np.ones((1, 1)) if n == 1
+               else _chain_singular_vectors(rj, np.sqrt(stiffnesses), grounded))
     x = vectors * rj[:, None]
     if not grounded:
         x[:, 0] = 1.0 / np.sqrt(inertias.sum())

@@ -149,8 +149,9 @@ class Excitation:
     orders : ndarray (n_o,)
     gas : ndarray (n_o,) or (n_o, z), complex
         Gas-torque harmonics G_q, N·m; one column per cylinder when the cylinders' kinematics
-        differ (articulated rods of a radial row, rotary engines), each cylinder's own
-        harmonics about its own firing TDC.
+        differ (articulated rods of a radial row, rotary engines) or each cylinder's pressure
+        was measured (:func:`predict.gas_torque.excitation_from_pressure`), each cylinder's
+        own harmonics about its own firing TDC.
     inertia : ndarray (n_o,) or (n_o, z), complex
         Inertia-torque harmonics per unit ω², N·m·s² (``T_q = G_q + Ω² I_q``).
     n_cylinders : int
@@ -193,7 +194,8 @@ class Excitation:
                                  f"{self.orders.min():g}..{self.orders.max():g})")
             idx.append(hit[0])
         g, i = self.gas[idx], self.inertia[idx]
-        if g.ndim == 2:      # per-cylinder harmonics (articulated rods, rotary engines)
+        if g.ndim == 2:      # per cylinder (articulated rods, rotary engines, measured pressure)
+            i = i if i.ndim == 2 else np.repeat(i[:, None], self.n_cylinders, axis=1)
             out = g[None] + (omega ** 2)[:, None, None] * i[None]
         else:
             out = g[None, :, None] + (omega ** 2)[:, None, None] * i[None, :, None]

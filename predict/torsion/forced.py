@@ -28,6 +28,7 @@ import numpy as np
 
 from crankbench.predict._deprecate import renamed
 
+from .._threads import limit_blas
 from .._validate import check_finite_array
 from ..errors import ModelError
 
@@ -140,7 +141,8 @@ def harmonic_solve(system, omega, orders, forcing) -> np.ndarray:
         a[:, np.arange(n), np.arange(n)] = d.T
         a[:, plan["pa"], plan["pb"]] = off.T
         a[:, plan["pb"], plan["pa"]] = off.T
-        x = np.linalg.solve(a, rhs.T[..., None])[..., 0]
+        with limit_blas(size=n):  # a batch of small solves: one BLAS thread
+            x = np.linalg.solve(a, rhs.T[..., None])[..., 0]
         return x.reshape(ns, no, n)
     parent, pp, order = plan["parent"], plan["parent_pair"], plan["order"]
     d0, off0, rhs0 = d.copy(), off.copy(), rhs.copy()

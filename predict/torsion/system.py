@@ -23,12 +23,23 @@ from crankbench.predict._deprecate import renamed
 
 from .._validate import check_finite_array
 from ..errors import ModelError
-from . import eigen
+from . import eigen, subset
+from .layout import classify
 from .modes import Modes
 
 __all__ = ["TorsionalSystem", "Modes", "chain"]
 
 TWO_PI = 2.0 * np.pi
+_UNIT_SCALE = {"hz": 1.0 / TWO_PI, "rad/s": 1.0, "cpm": 60.0 / TWO_PI}
+
+
+@functools.lru_cache(maxsize=64)
+def _constant(size: int, value) -> np.ndarray:
+    """A read-only array of ``size`` copies of ``value`` (float, or bool for True/False),
+    shared between systems: the default per-node and per-spring data."""
+    arr = np.full(size, value, bool if isinstance(value, bool) else float)
+    arr.setflags(write=False)
+    return arr
 
 
 def _as_index_array(values, name, n, *, allow_ground=False):
@@ -117,7 +128,9 @@ class TorsionalSystem:
                  edge_outer_diameter=None, edge_inner_diameter=None, eigen_nodes=None,
                  cylinder_nodes=(), firing_angles_deg=None, cycle=4, engine=None, limits=None,
                  name="", operating=None, friction_dampers=()):
-        j = check_finite_array(inertias, "inertias", ndim=1, min_length=1, error=ModelError)
+        # own copies: the system is immutable and must not freeze or alias the caller's arrays
+        j = np.array(check_finite_array(inertias, "inertias", ndim=1, min_length=1,
+                                        error=ModelError))
         if np.any(j <= 0):
             i = int(np.flatnonzero(j <= 0)[0])
             raise ModelError(f"inertias[{i}]={float(j[i])!r} must be > 0 (kg·m²)")
@@ -129,7 +142,7 @@ class TorsionalSystem:
         if np.any(e[:, 0] == e[:, 1]):
             raise ModelError("edges: a spring must join two different nodes")
         m = e.shape[0]
-        k = check_finite_array(stiffnesses, "stiffnesses", ndim=1, error=ModelError)
+        k = np.array(check_finite_array(stiffnesses, "stiffnesses", ndim=1, error=ModelError))
         if k.size != m:
             raise ModelError(f"stiffnesses has {k.size} values, expected one per edge ({m})")
         if np.any(k < 0):
@@ -138,7 +151,7 @@ class TorsionalSystem:
 
         def per(values, name, size, default, low=0.0, allow_nan=False):
             if values is None:
-                return np.full(size, default, float)
+                return _constant(size, default)
             try:
                 arr = np.array(np.broadcast_to(np.asarray(values, float), (size,))
                                if np.ndim(values) == 0 else values, dtype=float)
@@ -152,6 +165,7 @@ class TorsionalSystem:
                                  f"{int(np.flatnonzero(bad)[0])}")
             if low is not None and np.any(arr[np.isfinite(arr)] < low):
                 raise ModelError(f"{name} must be >= {low:g}, got {arr.tolist()}")
+            arr.setflags(write=False)
             return arr
 
         self._j = j
@@ -167,21 +181,20 @@ class TorsionalSystem:
                           allow_nan=True)
         self._d_in = per(edge_inner_diameter, "edge_inner_diameter", m, np.nan,
                          allow_nan=True)
-        for arr in (self._j, self._edges, self._k, self._node_damping, self._edge_damping,
-                    self._edge_eta, self._k_speed2, self._node_ratio, self._edge_ratio,
-                    self._d_out, self._d_in):
+        for arr in (self._j, self._edges, self._k):
             arr.setflags(write=False)
-        self.node_names = tuple(node_names) if node_names is not None else tuple(
-            f"J{i + 1}" for i in range(n))
-        self.edge_names = tuple(edge_names) if edge_names is not None else tuple(
-            (f"{'ground' if a < 0 else self.node_names[a]}-{self.node_names[b]}")
-            for a, b in e)
-        if len(self.node_names) != n or len(self.edge_names) != m:
+        # default names are generated on first access (a 10 000-mass chain built only for its
+        # frequencies never needs 20 000 strings)
+        self._node_names = None if node_names is None else tuple(node_names)
+        self._edge_names = None if edge_names is None else tuple(edge_names)
+        if ((self._node_names is not None and len(self._node_names) != n)
+                or (self._edge_names is not None and len(self._edge_names) != m)):
             raise ModelError("node_names/edge_names must have one entry per node/edge")
         mask = np.ones(n, bool) if eigen_nodes is None else np.asarray(eigen_nodes, bool)
         if mask.shape != (n,):
             raise ModelError(f"eigen_nodes must have {n} booleans")
         self._eigen_nodes = mask
+        self._layout_cache = None
         self.cylinder_nodes = tuple(int(c) for c in _as_index_array(
             list(cylinder_nodes), "cylinder_nodes", n))
         if firing_angles_deg is None:
@@ -216,6 +229,22 @@ class TorsionalSystem:
         self.friction_dampers = fd
 
     # ----------------------------------------------------------------- properties -------
+    @property
+    def node_names(self) -> tuple:
+        """Name of each node (default ``J1``, ``J2``, ...)."""
+        if self._node_names is None:
+            self._node_names = tuple(f"J{i + 1}" for i in range(self.n_nodes))
+        return self._node_names
+
+    @property
+    def edge_names(self) -> tuple:
+        """Name of each spring (default ``<node a>-<node b>``, ``ground-<node>``)."""
+        if self._edge_names is None:
+            names = self.node_names
+            self._edge_names = tuple(f"{'ground' if a < 0 else names[a]}-{names[b]}"
+                                     for a, b in self._edges.tolist())
+        return self._edge_names
+
     @property
     def n_nodes(self) -> int:
         """Number of lumped inertias."""
@@ -284,7 +313,7 @@ class TorsionalSystem:
     def replace(self, **changes) -> "TorsionalSystem":
         """Copy with some constructor arguments changed (e.g. ``engine=..., limits=...``)."""
         args = dict(inertias=self._j, edges=self._edges, stiffnesses=self._k,
-                    node_names=self.node_names, edge_names=self.edge_names,
+                    node_names=self._node_names, edge_names=self._edge_names,
                     node_damping=self._node_damping, edge_damping=self._edge_damping,
                     edge_loss_factor=self._edge_eta, edge_stiffness_omega2=self._k_speed2,
                     node_ratio=self._node_ratio, edge_ratio=self._edge_ratio,
@@ -298,6 +327,38 @@ class TorsionalSystem:
             raise ModelError(f"replace(): unknown argument(s) {sorted(unknown)}")
         args.update(changes)
         return TorsionalSystem(**args)
+
+    @classmethod
+    def _chain_of(cls, j: np.ndarray, k: np.ndarray, node_names=None) -> "TorsionalSystem":
+        """A chain from float64 arrays :func:`chain` has checked and copied (J > 0, k > 0,
+        ``k.size`` = n−1 or n): what ``__init__`` would build, without re-validating."""
+        self = cls.__new__(cls)
+        n, m = j.size, k.size
+        e = np.empty((m, 2), int)
+        e[:, 0] = np.arange(n - 1 - m, n - 1)
+        e[:, 1] = e[:, 0] + 1
+        for arr in (j, e, k):
+            arr.setflags(write=False)
+        self._j, self._edges, self._k = j, e, k
+        self._node_damping = _constant(n, 0.0)
+        self._node_ratio = _constant(n, 1.0)
+        self._edge_damping = self._edge_eta = self._k_speed2 = _constant(m, 0.0)
+        self._edge_ratio = _constant(m, 1.0)
+        self._d_out = self._d_in = _constant(m, np.nan)
+        self._node_names = None if node_names is None else tuple(node_names)
+        if self._node_names is not None and len(self._node_names) != n:
+            raise ModelError("node_names/edge_names must have one entry per node/edge")
+        self._edge_names = None
+        self._eigen_nodes = _constant(n, True)
+        self._layout_cache = None
+        self.cylinder_nodes = ()
+        self.firing_angles_deg = None
+        self.cycle = 4
+        self.engine = self.limits = None
+        self.name = ""
+        self.operating = {}
+        self.friction_dampers = ()
+        return self
 
     def __repr__(self) -> str:
         kind = "free" if self.is_free else "grounded"
@@ -350,73 +411,11 @@ class TorsionalSystem:
     # ----------------------------------------------------------------- eigen ------------
     def _layout(self):
         """Classify the undamped spring graph: ('chain', order, grounded) | ('tree',) |
-        ('dense',)."""
-        mask = self._eigen_nodes
-        n, e, k = self.n_nodes, self._edges, self._k
-        if mask.all() and np.all(k > 0) and len(k) in (n - 1, n):
-            # fast path: a chain as chain() builds it (free, or grounded at node 0)
-            first = np.arange(n - len(k), n - 1) if len(k) == n - 1 else np.arange(-1, n - 1)
-            if np.array_equal(e[:, 0], first) and np.array_equal(e[:, 1], first + 1):
-                info = dict(nodes=np.arange(n), a=e[:, 0], b=e[:, 1], k=k,
-                            order=np.arange(n), chain_k=k, grounded=len(k) == n)
-                return "chain", info
-        keep_e = (self._k > 0) & mask[self._edges[:, 1]] & (
-            (self._edges[:, 0] < 0) | mask[np.maximum(self._edges[:, 0], 0)])
-        nodes = np.flatnonzero(mask)
-        remap = -np.ones(self.n_nodes, int)
-        remap[nodes] = np.arange(nodes.size)
-        e = self._edges[keep_e]
-        a = np.where(e[:, 0] < 0, -1, remap[np.maximum(e[:, 0], 0)])
-        b = remap[e[:, 1]]
-        k = self._k[keep_e]
-        nn = nodes.size
-        # forest test with ground as an extra vertex (union-find)
-        parent = list(range(nn + 1))
-
-        def find(x):
-            while parent[x] != x:
-                parent[x] = parent[parent[x]]
-                x = parent[x]
-            return x
-
-        forest = True
-        for u, v in zip(a, b):
-            ru, rv = find(nn if u < 0 else u), find(v)
-            if ru == rv:
-                forest = False
-                break
-            parent[ru] = rv
-        info = dict(nodes=nodes, a=a, b=b, k=k)
-        if not forest:
-            return "dense", info
-        n_ground = int(np.sum(a < 0))
-        inner = a >= 0
-        deg = np.bincount(np.concatenate([a[inner], b[inner]]), minlength=nn)
-        connected = (len(k) - n_ground) == nn - 1
-        if connected and deg.max(initial=0) <= 2 and n_ground <= 1:
-            ends = np.flatnonzero(deg <= 1)
-            start = ends[0] if nn > 1 else 0
-            if n_ground == 1:
-                g = int(b[a < 0][0])
-                if deg[g] > 1:
-                    return "tree", info
-                start = g
-            nbr = [[] for _ in range(nn)]
-            for u, v, kk in zip(a[inner], b[inner], k[inner]):
-                nbr[u].append((v, kk))
-                nbr[v].append((u, kk))
-            order, ks, prev, cur = [start], [], -1, start
-            while len(order) < nn:
-                (nxt, kk), = [(v, kk) for v, kk in nbr[cur] if v != prev]
-                order.append(nxt)
-                ks.append(kk)
-                prev, cur = cur, nxt
-            if n_ground == 1:
-                ks = [float(k[a < 0][0])] + ks
-            info.update(order=np.asarray(order), chain_k=np.asarray(ks, float),
-                        grounded=n_ground == 1)
-            return "chain", info
-        return "tree", info
+        ('dense',). Cached: the system is immutable."""
+        if self._layout_cache is None:
+            self._layout_cache = classify(self._j.size, self._edges, self._k,
+                                          self._eigen_nodes)
+        return self._layout_cache
 
     def _check_dense(self, n_values: float, what: str) -> None:
         """ModelError naming the model size when ``n_values`` float64 cannot fit in memory."""
@@ -483,14 +482,16 @@ class TorsionalSystem:
         shapes = np.zeros((self.n_nodes, nodes.size))
         if kind == "chain":
             order = info["order"]
-            vec = eigen.chain_modes(jn[order], info["chain_k"], grounded=info["grounded"])
+            vec = eigen.chain_modes(jn[order], info["chain_k"], grounded=info["grounded"],
+                                    omega=omega)
             shapes[nodes[order]] = vec
         else:
             _, vec = eigen.dense_modes(jn, self._sub_stiffness(info))
             shapes[nodes] = vec
         return omega, shapes, numbers, method, bound
 
-    def natural_frequencies(self, units: str = "hz", *, speed_rpm=None) -> np.ndarray:
+    def natural_frequencies(self, units: str = "hz", *, speed_rpm=None,
+                            n_modes: int | None = None) -> np.ndarray:
         """Undamped natural frequencies, ascending; rigid-body modes exactly 0.
 
         Parameters
@@ -502,6 +503,11 @@ class TorsionalSystem:
             pendulums): their modes are included at that speed
             (:func:`predict.torsion.campbell.system_at_speed`). Without it such springs and
             their pendulum nodes are left out (a pendulum has no stiffness at standstill).
+        n_modes : int, optional
+            Only the lowest ``n_modes`` (the first entries of the full list, rigid-body modes
+            included). A long chain then solves for those alone by bisection, in O(n·k) time
+            and O(n) memory (:mod:`predict.torsion.subset`), with the same relative accuracy;
+            other systems compute every mode and return the lowest.
 
         Returns
         -------
@@ -517,21 +523,35 @@ class TorsionalSystem:
         >>> from crankbench.predict.torsion import chain
         >>> print(chain([1.0, 1.0, 1.0], [1e4, 1e4]).natural_frequencies().round(3))
         [ 0.    15.915 27.566]
+        >>> low = chain([1.0] * 1000, [1e4] * 999).natural_frequencies(n_modes=2)
+        >>> print(low[0], f"{low[1]:.10f}")   # exact: (100/π) sin(π/2000)
+        0.0 0.0499999794
         """
-        from .._validate import check_option
+        scale = _UNIT_SCALE.get(units)
+        if scale is None:
+            from .._validate import check_option
 
-        check_option(units, "units", ("hz", "rad/s", "cpm"), error=ModelError)
+            check_option(units, "units", tuple(_UNIT_SCALE), error=ModelError)
         if speed_rpm is not None:
             from .campbell import system_at_speed
 
-            return system_at_speed(self, speed_rpm).natural_frequencies(units)
-        omega = self._values[0]
-        scale = {"hz": 1 / TWO_PI, "rad/s": 1.0, "cpm": 60 / TWO_PI}[units]
+            return system_at_speed(self, speed_rpm).natural_frequencies(units, n_modes=n_modes)
+        if n_modes is None:
+            omega = self._values[0]
+        else:
+            omega = subset.lowest(self, self._n_modes(n_modes))[0]
         return omega * scale if scale != 1.0 else omega.copy()
 
-    def mode_shapes(self, *, speed_rpm=None) -> Modes:
+    def mode_shapes(self, *, speed_rpm=None, n_modes: int | None = None) -> Modes:
         """Natural frequencies and mass-normalised mode shapes (:class:`Modes`); ``speed_rpm``
         as in :meth:`natural_frequencies`.
+
+        Parameters
+        ----------
+        n_modes : int, optional
+            Only the lowest ``n_modes``: a long chain computes just those shapes (memory
+            linear in its length, :func:`eigen_memory_bytes`), instead of the n×n matrix of
+            all of them.
 
         Examples
         --------
@@ -539,15 +559,45 @@ class TorsionalSystem:
         >>> m = chain([1.0, 1.0], [1e4]).mode_shapes()
         >>> print(m.relative()[:, 1].round(3))
         [ 1. -1.]
+        >>> print(chain([1.0] * 5000, [1e4] * 4999).mode_shapes(n_modes=3).shapes.shape)
+        (5000, 3)
         """
         if speed_rpm is not None:
             from .campbell import system_at_speed
 
-            return system_at_speed(self, speed_rpm).mode_shapes()
-        omega, shapes, numbers, method, bound = self._eigen
+            return system_at_speed(self, speed_rpm).mode_shapes(n_modes=n_modes)
+        if n_modes is None:
+            omega, shapes, numbers, method, bound = self._eigen
+        else:
+            omega, numbers, method, bound, shapes = subset.lowest(
+                self, self._n_modes(n_modes), shapes=True)
         return Modes(frequencies_hz=omega / TWO_PI, shapes=shapes.copy(),
                      mode_numbers=numbers.copy(), node_names=self.node_names, method=method,
                      relative_error_bound=bound)
+
+    def eigen_memory_bytes(self, *, n_modes: int | None = None, shapes: bool = False) -> int:
+        """Estimated working memory (bytes) of :meth:`natural_frequencies` (``shapes=False``)
+        or :meth:`mode_shapes` with the same ``n_modes``.
+
+        Examples
+        --------
+        >>> from crankbench.predict.torsion import chain
+        >>> s = chain([1.0] * 20_000, [1e4] * 19_999)
+        >>> print(s.eigen_memory_bytes(shapes=True) // 2**30, "GiB for all shapes;",
+        ...       s.eigen_memory_bytes(n_modes=10, shapes=True) // 2**20, "MiB for 10")
+        8 GiB for all shapes; 9 MiB for 10
+        """
+        n_modes = None if n_modes is None else self._n_modes(n_modes)
+        return subset.memory_estimate(self, n_modes, shapes=shapes)
+
+    def _n_modes(self, n_modes) -> int:
+        from .._validate import check_int
+
+        k = check_int(n_modes, "n_modes", minimum=1, error=ModelError)
+        total = int(np.count_nonzero(self._eigen_nodes))
+        if k > total:
+            raise ModelError(f"n_modes={k} exceeds the {total} modes of the system")
+        return k
 
     # ----------------------------------------------------------------- orders -----------
     def default_orders(self, max_order: float = 12.0) -> np.ndarray:
@@ -575,8 +625,9 @@ class TorsionalSystem:
         -------
         ndarray (n_modes, n_orders)
         """
-        orders = np.atleast_1d(np.asarray(orders, float))
-        shapes = self._eigen[1]
+        return self._vector_sums(np.atleast_1d(np.asarray(orders, float)), self._eigen[1])
+
+    def _vector_sums(self, orders, shapes) -> np.ndarray:
         if self.firing_angles_deg is None or not self.cylinder_nodes:
             return np.full((shapes.shape[1], orders.size), np.nan)
         a = shapes[list(self.cylinder_nodes), :]
@@ -634,9 +685,13 @@ class TorsionalSystem:
             frame = pd.DataFrame(rows, columns=["mode", "order", "speed_rpm", "frequency_hz",
                                                 "vector_sum", "major"])
             return frame.sort_values(["speed_rpm", "mode"], ignore_index=True)
-        omega, numbers = self._values[:2]
+        if np.isfinite(hi):  # only modes that can cross an order below the top speed
+            omega, numbers, shapes = subset.below(self, TWO_PI * float(np.max(orders)) * hi
+                                                  / 60.0 * (1 + 1e-9))
+        else:
+            omega, shapes, numbers = self._eigen[:3]
         f = omega / TWO_PI
-        vs = self.vector_sums(orders)
+        vs = self._vector_sums(orders, shapes)
         major = self.major_orders(orders)
         rows = []
         for i in np.flatnonzero(numbers > 0):
@@ -794,18 +849,27 @@ def chain(inertias, stiffnesses, *, names=None) -> TorsionalSystem:
     >>> print(chain([2.0], [800.0]).natural_frequencies("rad/s"))
     [20.]
     """
-    j = check_finite_array(inertias, "inertias", ndim=1, min_length=1, error=ModelError)
-    k = check_finite_array(stiffnesses, "stiffnesses", ndim=1, error=ModelError)
+    j, k = _checked_copy(inertias, "inertias", 1), _checked_copy(stiffnesses, "stiffnesses", 0)
     n = j.size
-    if k.size == n - 1:
-        edges = np.column_stack([np.arange(n - 1), np.arange(1, n)])
-    elif k.size == n:
-        edges = np.column_stack([np.arange(-1, n - 1), np.arange(n)])
-    else:
+    if k.size not in (n - 1, n):
         raise ModelError(f"stiffnesses has {k.size} values; a chain of {n} inertias needs "
                          f"{n - 1} (free-free) or {n} (first inertia grounded)")
-    if np.any(k <= 0):
+    if not j.min() > 0:
+        i = int(np.flatnonzero(j <= 0)[0])
+        raise ModelError(f"inertias[{i}]={float(j[i])!r} must be > 0 (kg·m²)")
+    if k.size and not k.min() > 0:
         i = int(np.flatnonzero(k <= 0)[0])
         raise ModelError(f"stiffnesses[{i}]={float(k[i])!r} must be > 0 (N·m/rad)")
-    return TorsionalSystem(j, edges, k, node_names=names)
+    return TorsionalSystem._chain_of(j, k, names)
 
+
+def _checked_copy(values, name: str, min_length: int) -> np.ndarray:
+    """A float64 copy of a 1-D finite array; the error (of :func:`check_finite_array`) names
+    ``name`` and what is wrong. One pass over the data when it is clean."""
+    try:
+        arr = np.array(values, dtype=np.float64)
+    except (TypeError, ValueError):
+        arr = None
+    if arr is None or arr.ndim != 1 or arr.size < min_length or not np.isfinite(arr).all():
+        check_finite_array(values, name, ndim=1, min_length=min_length, error=ModelError)
+    return arr

@@ -287,3 +287,132 @@ def test_geared_branch_ratio_10_forced_torque_in_the_fast_shaft():
     pump_shaft = s.edge_names.index("pinion-pump")
     want = abs(100 * 3.0e3 * (x[3] - x[1])) / 10.0
     assert abs(r.torque[0, 0, pump_shaft]) == pytest.approx(want, rel=1e-10)
+
+
+# ----------------------------------------- every mode at N = 1000, the lowest-k subset solve
+def sturm_count_extended(inertias, stiffnesses, sigma, grounded):
+    """:func:`sturm_count` in 80-bit extended precision (numpy ``longdouble``, eps ≈ 1e-19;
+    the bench's reference, :mod:`analysis.bench._sturm`): the recursion's own rounding stays
+    far below a 1e-13 certificate at 20 000 masses."""
+    from crankbench.analysis.bench._sturm import EXTENDED, sturm_count as extended
+
+    assert EXTENDED, "needs 80-bit or wider long double"
+    return extended(inertias, stiffnesses, sigma, grounded=grounded)
+
+
+def certified_within(omega, inertias, stiffnesses, grounded, rel, first_index=0):
+    """True where the extended-precision Sturm counts put exactly ``first_index + i``
+    eigenvalues below ω_i²(1 − rel)² and one more below ω_i²(1 + rel)²: each ω_i is within
+    ``rel`` of the true i-th frequency."""
+    w = np.asarray(omega, np.longdouble)
+    lo = sturm_count_extended(inertias, stiffnesses, (w * (1 - rel)) ** 2, grounded)
+    hi = sturm_count_extended(inertias, stiffnesses, (w * (1 + rel)) ** 2, grounded)
+    idx = first_index + np.arange(w.size)
+    return (lo == idx) & (hi == idx + 1)
+
+
+def test_extended_sturm_count_against_mpmath_on_a_hard_chain():
+    """The certificate checked against mpmath's 50-digit eigenvalues of a 24-mass chain at
+    ratios 1e12 / 1e8: the counts bracket every reference value at ±1e-15."""
+    j, k = _extreme_chain(24, 11, grounded=True)
+    ref = np.array([float(r) for r in mp_frequencies(j, [(i - 1, i) for i in range(24)], k,
+                                                     dps=50)])
+    assert certified_within(ref, j, k, True, 1e-15).all()
+    assert not certified_within(ref * (1 + 1e-12), j, k, True, 1e-15).any()
+
+
+@pytest.mark.parametrize("grounded", [False, True])
+@pytest.mark.parametrize("ratios", [(1e9, 1e6), (1e12, 1e8)])
+def test_every_mode_of_a_hard_1000_mass_chain_within_1e13(grounded, ratios):
+    """All modes of a 1000-mass chain at stiffness/inertia ratios 1e9/1e6 and 1e12/1e8 within
+    1e-13 relative (the fast public call, dqds on the squared factor), certified mode by mode
+    by extended-precision Sturm counts."""
+    k_ratio, j_ratio = ratios
+    rng = np.random.default_rng(1000)
+    n = 1000
+    j = 10 ** rng.uniform(0, np.log10(j_ratio), n)
+    k = 10 ** rng.uniform(0, np.log10(k_ratio), n - (0 if grounded else 1))
+    w = chain(j, k).natural_frequencies("rad/s")
+    first = 0 if grounded else 1
+    if not grounded:
+        assert w[0] == 0.0
+    ok = certified_within(w[first:], j, k, grounded, 1e-13, first_index=first)
+    assert ok.all(), f"modes {np.flatnonzero(~ok)[:5] + first} not within 1e-13"
+
+
+@pytest.mark.parametrize("grounded", [False, True])
+def test_lowest_modes_of_a_20000_mass_chain_by_subset_solve(grounded):
+    """natural_frequencies(n_modes=8) of a 20 000-mass chain (ratios 1e9 / 1e6) takes the
+    bisection path, never the O(n²) full solve, and each value is certified within 1e-13."""
+    rng = np.random.default_rng(20000)
+    n = 20000
+    j = 10 ** rng.uniform(0, 6, n)
+    k = 10 ** rng.uniform(0, 9, n - (0 if grounded else 1))
+    s = chain(j, k)
+    w = s.natural_frequencies("rad/s", n_modes=8)
+    assert w.size == 8 and "_values" not in s.__dict__        # the full solve never ran
+    first = 0 if grounded else 1
+    assert certified_within(w[first:], j, k, grounded, 1e-13, first_index=first).all()
+    m = s.mode_shapes(n_modes=8)
+    assert "bisection" in m.method and m.shapes.shape == (n, 8)
+    np.testing.assert_array_equal(m.frequencies_hz, w / (2 * np.pi))
+    np.testing.assert_allclose(m.shapes.T @ (j[:, None] * m.shapes), np.eye(8), atol=1e-9)
+
+
+@pytest.mark.parametrize("grounded", [False, True])
+def test_subset_shapes_match_relatively_accurate_svd_vectors(grounded):
+    """Inverse-iteration shapes (the path of every chain above 400 masses) against LAPACK
+    dbdsqr's singular vectors of the same factor (relatively accurate, O(n³), the path below
+    400 masses) at 600 masses and ratios 1e12 / 1e8: every one of the 12 lowest, and a few
+    high ones, within 1e-11 in the J-norm. MRRR on the scaled tridiagonal (the previous path)
+    is off by order 1 here."""
+    from crankbench.predict.torsion import eigen
+    from crankbench.predict.torsion.subset import chain_shapes
+
+    j, k = _extreme_chain(600, 8, grounded)
+    w = chain(j, k).natural_frequencies("rad/s")
+    y = eigen._chain_singular_vectors(1 / np.sqrt(j), np.sqrt(k), grounded)
+    ref = y / np.sqrt(j)[:, None]
+    if not grounded:
+        ref[:, 0] = 1 / np.sqrt(j.sum())
+    pick = np.r_[0:12, 300, 598, 599]
+    x = chain_shapes(j, k, w, grounded=grounded)[:, pick]
+    sign = np.sign(np.sum(ref[:, pick] * j[:, None] * x, axis=0))
+    dist = np.sqrt(np.sum((x * sign - ref[:, pick]) ** 2 * j[:, None], axis=0))
+    assert dist.max() <= 1e-11, dist
+
+
+def test_lowest_mode_shapes_use_memory_linear_in_length():
+    """mode_shapes(n_modes=4) of a 100 000-mass chain: traced peak within the stated
+    estimate (about 8·n·(40 + 2k) bytes = 38 MB), where all shapes would need 80 GB."""
+    import tracemalloc
+
+    n = 100_000
+    s = chain(np.linspace(1.0, 3.0, n), np.full(n - 1, 2e6))
+    estimate = s.eigen_memory_bytes(n_modes=4, shapes=True)
+    assert estimate < 50e6 and s.eigen_memory_bytes(shapes=True) > 1e11
+    tracemalloc.start()
+    try:
+        m = s.mode_shapes(n_modes=4)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert m.shapes.shape == (n, 4) and m.frequencies_hz[0] == 0.0
+    assert peak <= estimate, f"peak {peak / 1e6:.1f} MB > estimate {estimate / 1e6:.1f} MB"
+
+
+def test_critical_speeds_of_a_long_chain_solve_only_the_modes_below_the_top_speed():
+    """critical_speeds on a 1500-mass chain with a speed range: the crossings equal those from
+    the full solution, but only the few modes below the top order's frequency were solved."""
+    n = 1500
+    rng = np.random.default_rng(5)
+    j, k = rng.uniform(0.5, 2.0, n), rng.uniform(1e9, 3e9, n - 1)
+    fast = chain(j, k).replace(cylinder_nodes=[0, 1, 2], firing_angles_deg=[0, 240, 480])
+    table = fast.critical_speeds([1, 2, 3], (0, 3000))
+    assert "_eigen" not in fast.__dict__ and len(table) > 3
+    full = chain(j, k).replace(cylinder_nodes=[0, 1, 2], firing_angles_deg=[0, 240, 480])
+    full.mode_shapes()                                   # force the full path
+    ref = full.critical_speeds([1, 2, 3], (0, 3000))
+    np.testing.assert_array_equal(table[["mode", "order"]], ref[["mode", "order"]])
+    np.testing.assert_allclose(table["speed_rpm"], ref["speed_rpm"], rtol=1e-13)
+    np.testing.assert_allclose(table["vector_sum"], ref["vector_sum"], rtol=1e-9, atol=1e-12)

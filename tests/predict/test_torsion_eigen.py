@@ -256,3 +256,27 @@ def test_chain_and_tree_solvers_agree_with_dense_eigh(data, grounded):
     # a chain given with an extra relabelling goes through the general layout detection
     t = TorsionalSystem(jt, edges[::-1], k[::-1])
     np.testing.assert_allclose(t.natural_frequencies("rad/s"), got, rtol=1e-13, atol=1e-13 * scale)
+
+
+def test_n_modes_argument_is_checked():
+    s = chain([1.0, 2.0, 3.0], [1e4, 2e4])
+    for bad, msg in ((0, "n_modes=0 must be >= 1"), (4, "n_modes=4 exceeds the 3 modes"),
+                     (2.5, "n_modes=2.5 must be an integer")):
+        with pytest.raises(ModelError, match=msg):
+            s.natural_frequencies(n_modes=bad)
+        with pytest.raises(ModelError, match=msg):
+            s.mode_shapes(n_modes=bad)
+    np.testing.assert_array_equal(s.natural_frequencies(n_modes=2), s.natural_frequencies()[:2])
+    m = s.mode_shapes(n_modes=2)
+    np.testing.assert_array_equal(m.shapes, s.mode_shapes().shapes[:, :2])
+
+
+def test_chain_copies_its_inputs():
+    """The system is immutable: it keeps its own copies and never freezes the caller's arrays."""
+    j, k = np.array([1.0, 2.0]), np.array([3e4])
+    s = chain(j, k)
+    j[0] = 5.0
+    assert j.flags.writeable and s.inertias[0] == 1.0
+    t = TorsionalSystem(j, [(0, 1)], k)
+    k[0] = 1.0
+    assert k.flags.writeable and t.stiffnesses[0] == 3e4
