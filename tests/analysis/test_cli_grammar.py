@@ -28,7 +28,8 @@ POSITIONALS = {  # enough positionals for each command to parse
     ("report",): ["r.h5", "m.toml", "-o", "o.html"], ("batch",): ["r.h5", "--model", "m.toml"],
     ("balance",): ["a.toml"], ("predict", "balance"): ["e.toml"],
     ("predict", "torsion"): ["m.toml"], ("predict", "lateral"): ["m.toml"],
-    ("predict", "flywheel"): ["e.toml", "--speed-rpm", "1000"],
+    ("predict", "flywheel"): ["e.toml", "--speed-rpm", "1000"], ("pressure",): ["r.h5"],
+    ("import",): ["r.txt"], ("campaign",): ["c.duckdb"],
 }
 
 
