@@ -417,6 +417,14 @@ class TorsionalSystem:
                                           self._eigen_nodes)
         return self._layout_cache
 
+    def _check_dense(self, n_values: float, what: str) -> None:
+        """ModelError naming the model size when ``n_values`` float64 cannot fit in memory."""
+        from .._memory import check_allocation
+
+        check_allocation(8.0 * n_values, error=ModelError,
+                         what=f"{self.name or 'shaft line'}: {self.n_nodes} masses, {what}",
+                         hint="lump the shaft line into fewer masses")
+
     def _sub_stiffness(self, info):
         nodes = info["nodes"]
         sub = np.zeros((nodes.size, nodes.size))
@@ -434,6 +442,8 @@ class TorsionalSystem:
         kind, info = self._layout()
         nodes = info["nodes"]
         jn = self._j[nodes]
+        if kind != "chain":  # dense eigh: the scaled stiffness, its copy and the workspace
+            self._check_dense(3.0 * nodes.size**2, "a dense eigen-solve")
         if kind == "chain":
             omega = eigen.chain_frequencies(jn[info["order"]], info["chain_k"],
                                             grounded=info["grounded"])
@@ -462,6 +472,10 @@ class TorsionalSystem:
     @functools.cached_property
     def _eigen(self):
         """(ω rad/s, mass-normalised shapes (n_nodes, n_modes), numbers, method, bound)."""
+        # every mode shape at every node, twice (solver output and the placed copy): refuse
+        # before the frequencies are even computed when that cannot fit
+        self._check_dense(2.0 * self.n_nodes * self._layout()[1]["nodes"].size,
+                          "dense mode shapes")
         omega, numbers, method, bound, kind, info = self._values
         nodes = info["nodes"]
         jn = self._j[nodes]
