@@ -449,6 +449,11 @@ def _track(x, fs, rpm, orders, *, method, bandwidth_orders, revolutions):
                        overlap=0.9)
 
 
+#: the steps of :func:`analyse`, in order, as its ``progress`` callback names them
+STEPS = ("read", "prediction", "order tracking", "resonances", "comparison", "balance",
+         "limits", "measured excitation")
+
+
 def analyse(record, model, *, channel=None, speed_channel=None, orders=None, max_order=12.0,
             method="vkf", bandwidth_orders=None, revolutions=4, load=None, gate=0.15,
             tolerance=0.03, amplitude_tolerance=0.5, machine_class=None,
