@@ -726,6 +726,9 @@ def _swept_like_with_like(predicted, resonances, track, quantity, gate):
                  "flanks (and the sweep delay); listed, not judged", r["mode"], r["order"],
                  r["speed_rpm"])
     expected.loc[edge, "significant"] = False
+    expected["not_judged"] = ""          # why a critical in range is listed but not judged
+    expected.loc[edge, "not_judged"] = ("not covered by the run with both flanks (and the "
+                                        "sweep delay)")
     measured = correct_sweep_delay(resonances.to_frame(), expected, gate=gate)
     return expected, measured
 
