@@ -137,7 +137,14 @@ def _limit_checks(rec, system, track, grid, pred_stress, response, orders, chann
                            f"{lo:.0f}–{hi:.0f} rpm, run's load law"),
                     required=bool(limits.misfire_operation), covered_rpm=(lo, hi)))
             except (ModelError, AnalysisError) as exc:
-                log.debug("misfire case not computed: %s", exc)
+                # never dropped silently: a stated case that could not be computed is listed
+                # as not assessed (inconclusive; counts only when the model requires it)
+                log.warning("misfire case not computed: %s", exc)
+                checks.append(not_assessed(
+                    "predicted torsional stress, one cylinder misfiring",
+                    f"the misfire case could not be computed ({exc})",
+                    basis=f"model, {lo:.0f}–{hi:.0f} rpm",
+                    required=bool(limits.misfire_operation)))
     checks.extend(_severity_checks(rec, system, machine_class, standard))
     return checks
 

@@ -154,6 +154,31 @@ def find_speed_channel(record, channel: str | None = None) -> str:
                         f"channels: {', '.join(names)}")
 
 
+#: decoded pulse trains (speed, angle) by content: one record's channels all take the same
+#: reference, decoded (and its repairs logged) once
+_DECODED: dict = {}
+
+
+def _decoded(kind, var, name, make):
+    edges = np.ascontiguousarray(np.asarray(var.values, dtype=float))
+    layout = tuple(str(var.attrs.get(k)) for k in ("pulses_per_rev", "missing_teeth",
+                                                   "tdc_offset_deg", "speed_ratio"))
+    key = (kind, name, edges.shape[0], layout, hash(edges.tobytes()))
+    if key not in _DECODED:
+        if len(_DECODED) >= 16:
+            _DECODED.pop(next(iter(_DECODED)))
+        _DECODED[key] = make()
+    return _DECODED[key]
+
+
+class _SameRepairs(logging.Filter):
+    """Drops the tacho's repair report of a second decoding of the same edges (the speed's
+    decoding reported it)."""
+
+    def filter(self, record):
+        return not str(record.msg).startswith("tacho:")
+
+
 def _pulse_speed(var, name):
     """Speed trace (s, rad/s) of the crankshaft from a pulse channel (layout from its attrs)."""
     if var.attrs.get("pulses_per_rev") is None:
@@ -162,8 +187,12 @@ def _pulse_speed(var, name):
         raise AnalysisError(f"pulse channel {name!r} holds no edges (zero-length channel)")
     from crankbench.measure.tacho import pulse_channel_speed  # reads the layout attrs
 
-    t, omega = pulse_channel_speed(var)
-    return np.asarray(t, float), np.asarray(omega, float)
+    def make():
+        t, omega = pulse_channel_speed(var)
+        return np.asarray(t, float), np.asarray(omega, float)
+
+    t, omega = _decoded("speed", var, name, make)
+    return t.copy(), omega.copy()
 
 
 def _pulse_angle(var, name, t_out):
@@ -179,10 +208,19 @@ def _pulse_angle_function(var, name):
 
     missing = var.attrs.get("missing_teeth", 0)
     tdc = float(var.attrs.get("tdc_offset_deg", 0.0))
-    trace = angle_from_pulses(np.asarray(var.values, dtype=float),
-                              pulses_per_rev=int(var.attrs["pulses_per_rev"]),
-                              missing_teeth=0 if missing is None else int(missing),
-                              tdc_offset_deg=tdc)
+
+    def make():
+        quiet = _SameRepairs()
+        log.addFilter(quiet)
+        try:
+            return angle_from_pulses(np.asarray(var.values, dtype=float),
+                                     pulses_per_rev=int(var.attrs["pulses_per_rev"]),
+                                     missing_teeth=0 if missing is None else int(missing),
+                                     tdc_offset_deg=tdc)
+        finally:
+            log.removeFilter(quiet)
+
+    trace = _decoded("angle", var, name, make)
     ratio = _ratio(var, name)
 
     def at(t):
