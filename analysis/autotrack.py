@@ -442,13 +442,19 @@ def _warn_limits(ds, orders, rel, smear_rel, cap_d, bw_d, speed_d, fs, category)
         i = int(np.argmax(np.where(bad, smear_rel[:, j], -np.inf)))
         lo, hi = max(0, i - 50), min(rpm.shape[0], i + 50)
         local = float(np.polyfit(t[lo:hi], rpm[lo:hi], 1)[0]) if hi - lo > 2 else float("nan")
+        own = cap_d[i, j] >= 0.98 * 0.5 * order * rpm[i] / 60.0   # half the order: order 0
+        why = ("half the order's own frequency (its distance to order 0 and its mirror)" if own
+               else "the distance to the nearest tracked order or other line of the signal")
+        advice = ("sweep slower, or accept the leakage of order 0 with method='vkf', "
+                  f"bandwidth_hz={min(4 * cap_d[i, j], 0.25 * fs):.3g}" if own else
+                  f"track order {order:g} alone or with orders further apart (method='vkf', "
+                  f"bandwidth_hz={min(4 * cap_d[i, j], 0.25 * fs):.3g}), or sweep slower")
         warnings.warn(
             f"order {order:g} near {rpm[i]:.0f} rpm (sweep {abs(local):.4g} rpm/s): the envelope "
-            f"changes faster than the widest usable bandwidth ({cap_d[i, j]:.3g} Hz, set by the "
-            f"distance to the nearest tracked order or other line of the signal) passes; expected peak error about "
-            f"{100 * smear_rel[i, j]:.2g} % (total {100 * rel[i, j]:.2g} %). Track order "
-            f"{order:g} alone or with orders further apart (method='vkf', "
-            f"bandwidth_hz={min(4 * cap_d[i, j], 0.25 * fs):.3g}), or sweep slower",
+            f"changes faster than the widest usable bandwidth ({cap_d[i, j]:.3g} Hz, set by "
+            f"{why}) passes; expected peak error up to about {100 * smear_rel[i, j]:.2g} % "
+            f"(total {100 * rel[i, j]:.2g} %; the smearing estimate is conservative). "
+            f"To do better: {advice}",
             category, stacklevel=4)
         log.warning("order %g: expected error %.2g %% near %.0f rpm (bandwidth limited)",
                     order, 100 * rel[i, j], rpm[i])
