@@ -86,7 +86,7 @@ def check_args(args) -> None:
 
     top = max(args.orders)
     spr = args.samples_per_rev        # None: chosen for the orders (64, more above order 16)
-    if spr is not None and (args.method == "cot" or args.plot):
+    if spr is not None and (args.method != "vkf" or args.plot):
         if top > spr / 4:
             need = 1 << int(np.ceil(np.log2(4 * top)))
             raise ConfigError(f"--orders {top:g} exceeds --samples-per-rev/4 = "
@@ -171,6 +171,14 @@ def _steady_table(channel, rpm, args):
     except AnalysisError as exc:
         log.info("no steady-state table: %s", exc)
         return None
+
+
+def _map_spr(args) -> int:
+    """Angle samples per revolution of the order map: as given, else 64 or the power of two
+    that keeps every requested order below a quarter of it (as the trackers choose)."""
+    if args.samples_per_rev:
+        return int(args.samples_per_rev)
+    return max(64, 1 << int(np.ceil(np.log2(4 * max(args.orders)))))
 
 
 def _summary(tracks):
@@ -297,7 +305,7 @@ def run(args) -> int:
             from crankbench.analysis.stream import order_map_stream
 
             omap = order_map_stream(record, args.channel, speed_channel=args.speed_channel,
-                                    samples_per_rev=args.samples_per_rev or 64,
+                                    samples_per_rev=_map_spr(args),
                                     revolutions=args.revolutions or 16, amplitude=args.amplitude)
             # the Campbell map needs the channel in memory: low-passed and decimated, streamed
             from crankbench.analysis.stream import decimate_stream
@@ -309,7 +317,7 @@ def run(args) -> int:
             log.info("Campbell map of the streamed record at %.6g Hz (decimated by %d)", fs,
                      channel.attrs["decimation"])
         else:
-            omap = order_map(channel, speed_rpm=rpm, samples_per_rev=args.samples_per_rev or 64,
+            omap = order_map(channel, speed_rpm=rpm, samples_per_rev=_map_spr(args),
                              revolutions=args.revolutions or 16, amplitude=args.amplitude)
         nperseg = int(2 ** np.clip(np.round(np.log2(fs)), 8, 16))
         top = max(args.orders) * float(np.max(rpm)) / 60.0 * 1.5
