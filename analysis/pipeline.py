@@ -57,12 +57,12 @@ class LoadCase:
         Propeller law: gas load ∝ speed². The factor scales the whole gas torque, the
         compression (motored) part included — a simplification the synthetic bench shares.
         A real cylinder at part load keeps its compression torque, so at low speed on a
-        propeller law the prediction underestimates the gas-torque harmonics (most at the
-        major orders, whose rigid-body response dominates at low speed: on the 6L32 demo run
-        the response predicted from the bench's own pressure channel is up to 27x the
-        law-scaled one at order 3 near 200 rpm, within 6 % at the response peaks near rated
-        speed, orders 0.5, 2.5 and 4.5); the measured-excitation comparison (:mod:`analysis.excitation_compare`) shows
-        it whenever the record has cylinder pressure.
+        propeller law the prediction underestimates the gas-torque harmonics, most at the
+        major orders, whose rigid-body response dominates at low speed (on the 6L32 demo run
+        the response predicted from the bench's own pressure channel is far above the
+        law-scaled one at order 3 near 200 rpm, while the peaks near rated speed agree).
+        The measured-excitation comparison (:mod:`analysis.excitation_compare`) shows it
+        whenever the record has cylinder pressure.
     reference_rpm : float or None
         Speed where ``imep`` applies for the propeller law (default: the engine's rated
         speed).
