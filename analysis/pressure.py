@@ -13,7 +13,11 @@ model (cylinder geometry). It
    reference at all — at the TDC located from the pressure itself (compression fit, stated);
 2. resolves the 4-stroke ambiguity (which of two TDCs fires) from a cam/phase channel (the
    firing TDC of cylinder 1 is the first TDC at or after each phase mark) or from the pressure
-   (the TDC with the higher mean pressure within ±30°), and says which and why;
+   (the TDC with the higher mean pressure within ±30°), and says which and why; a TDC mark
+   that comes once per cycle is placed against it (on the firing or the gas-exchange TDC,
+   stated), and taken as the firing TDC when the pressure cannot tell the two apart (mean
+   pressures within a factor 1.25: warned; with a once-per-revolution mark the phase is then
+   flagged as a guess);
 3. cuts complete cycles (720° for a 4-stroke, 360° for a 2-stroke, from −½ to +½ cycle around
    the firing TDC) and resamples the pressure onto an even crank-angle grid (4-point Lagrange
    interpolation between samples: error O((ω/fs)⁴ p⁗));
@@ -47,7 +51,7 @@ from crankbench.predict._validate import check_option, check_range
 from crankbench.predict.errors import AnalysisError
 
 from . import indicator as thermo
-from .pressure_angle import _angle, _coarse_tdc, _cut, _mark_times, _phase
+from .pressure_angle import _angle, _coarse_tdc, _cut, _cycle_mark_phase, _mark_times, _phase
 
 __all__ = ["indicator_analysis", "indicator_analyses", "IndicatorResult", "pressure_channels",
            "measured_excitation", "measured_speed_excitation", "cycle_gas_harmonics"]
@@ -455,8 +459,10 @@ def indicator_analysis(record, engine, *, channel=None, cylinder=None, angle_cha
     if n_cyl is not None and not 1 <= cyl <= n_cyl:
         raise AnalysisError(f"channel {channel!r} is cylinder {cyl}, but the engine has "
                             f"{n_cyl}")
+    used_marks = {}
     trace, reference, has_tdc = _angle(record, angle_channel=angle_channel,
-                                       tdc_channel=tdc_channel, tdc_offset_deg=tdc_offset_deg)
+                                       tdc_channel=tdc_channel, tdc_offset_deg=tdc_offset_deg,
+                                       marks_out=used_marks)
     p = np.asarray(record[channel].values, float)
     t = channel_time(record, channel)
     good = np.isfinite(p)
@@ -506,6 +512,13 @@ def indicator_analysis(record, engine, *, channel=None, cylinder=None, angle_cha
             tm = _mark_times(record, phase_channel)
             marks = trace.at(tm[(tm >= trace.time[0]) & (tm <= trace.time[-1])])
         base0, phase_text = _phase(theta, p, fire, period, marks, phase_channel)
+        if phase_channel is None:
+            tm = used_marks.get("times")
+            mark_angles = None if tm is None else trace.at(
+                tm[(tm >= trace.time[0]) & (tm <= trace.time[-1])])
+            base0, extra = _cycle_mark_phase(theta, p, base0, fire, period, mark_angles,
+                                             used_marks.get("name"), warnings)
+            phase_text += extra
         search = None
     base = base0
     # thermodynamic TDC passes: without a reference first a wide scan with a window well before
