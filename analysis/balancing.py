@@ -38,9 +38,70 @@ import numpy as np
 from crankbench.predict._validate import check_int, check_range, suggest
 from crankbench.predict.errors import AnalysisError, RecordError
 
-__all__ = ["first_order_phasors", "tacho_channel"]
+__all__ = ["first_order_phasors", "tacho_channel", "check_run_speeds", "RUN_SPEED_TOLERANCE"]
 
 log = logging.getLogger("crankbench")
+
+
+#: largest relative speed difference between balancing runs (the same 2 % as the steady-block
+#: criterion of :func:`first_order_phasors`): influence coefficients belong to one speed
+RUN_SPEED_TOLERANCE = 0.02
+
+
+def check_run_speeds(runs, *, speed_tolerance: float = RUN_SPEED_TOLERANCE) -> float | None:
+    """Refuse balancing runs taken at different speeds.
+
+    Influence coefficients are the rotor's response per unit unbalance at one speed; near a
+    critical speed the response changes fast with speed (for an amplification Q the slope of
+    the response is of order Q per unit speed ratio), so a trial run at another speed mixes
+    the trial mass's effect with the speed change and the corrections come out wrong without
+    any sign of it. Every run with a known speed must lie within ``speed_tolerance`` of the
+    first run with a known speed (the initial run in the usual order).
+
+    Parameters
+    ----------
+    runs : sequence of (name, speed_rpm or None)
+        Runs in the order given; a run without a speed is not checked.
+    speed_tolerance : float
+        Largest relative deviation, default :data:`RUN_SPEED_TOLERANCE` (0.02).
+
+    Returns
+    -------
+    float or None
+        The reference speed, rpm (None if no run has a speed).
+
+    Raises
+    ------
+    AnalysisError
+        Naming every run beyond the tolerance, its speed and deviation.
+
+    Examples
+    --------
+    >>> check_run_speeds([("initial", 2400.0), ("trial 1", 2410.0), ("trial 2", None)])
+    2400.0
+    >>> try:
+    ...     check_run_speeds([("initial", 2400.0), ("trial 1", 2880.0)])
+    ... except AnalysisError as exc:
+    ...     print(exc)
+    balance runs at different speeds: 'trial 1' at 2880 rpm (+20.0 %) against 'initial' at 2400 rpm, beyond speed_tolerance=0.02 (2 %); influence coefficients hold at one speed: repeat the run at 2400 rpm
+    """
+    speed_tolerance = check_range(speed_tolerance, "speed_tolerance", 0.0, 1.0,
+                                  error=AnalysisError)
+    known = [(str(n), float(v)) for n, v in runs if v is not None]
+    if not known:
+        return None
+    for name, v in known:
+        if not np.isfinite(v) or v <= 0:
+            raise AnalysisError(f"balance run {name!r}: speed {v:g} rpm must be finite and > 0")
+    ref_name, ref = known[0]
+    off = [(n, v, v / ref - 1.0) for n, v in known[1:] if abs(v / ref - 1.0) > speed_tolerance]
+    if off:
+        listing = "; ".join(f"{n!r} at {v:.6g} rpm ({100 * d:+.1f} %)" for n, v, d in off)
+        raise AnalysisError(f"balance runs at different speeds: {listing} against {ref_name!r} "
+                            f"at {ref:.6g} rpm, beyond speed_tolerance={speed_tolerance:g} "
+                            f"({100 * speed_tolerance:g} %); influence coefficients hold at "
+                            f"one speed: repeat the run at {ref:.6g} rpm")
+    return ref
 
 
 def tacho_channel(record) -> str | None:

@@ -74,6 +74,8 @@ class LoadCase:
         check_option(self.law, "law", ("constant", "propeller"), error=ConfigError)
         if self.imep is not None:
             check_positive(self.imep, "imep", error=ConfigError)
+        if self.reference_rpm is not None:
+            check_positive(self.reference_rpm, "reference_rpm", error=ConfigError)
 
     def scale(self, speed_rpm):
         """Gas-load factor at each speed."""
@@ -582,6 +584,11 @@ def analyse(record, model, *, channel=None, speed_channel=None, orders=None, max
     all_orders = [float(o) for o in (default_orders(system, max_order) if orders is None
                                      else orders)
                   if o <= max_order + 1e-9 and o * hi / 60.0 < 0.4 * fs]
+    if orders is not None and len(all_orders) < len(orders):  # never drop a requested order
+        lost = [float(o) for o in orders if float(o) not in all_orders]
+        raise AnalysisError(f"orders {', '.join(f'{o:g}' for o in lost)} cannot be tracked: "
+                            f"above max_order {max_order:g} or above 0.4 × the sample rate "
+                            f"({fs:g} Hz) at {hi:.0f} rpm")
     if not all_orders:
         raise AnalysisError(f"no order up to {max_order:g} lies below 0.4 × the sample rate "
                             f"({fs:g} Hz) at {hi:.0f} rpm")
@@ -962,5 +969,10 @@ def load_from_record_file(path):
     load = scene.get("load")
     if not isinstance(load, dict) or not load:
         return None
-    return LoadCase(imep=load.get("imep"), law=load.get("law", "constant"),
-                    reference_rpm=load.get("reference_rpm"))
+    from crankbench.predict._toml import Table
+
+    # the scene as written: values may carry units ("22 bar"), read them like the scene did
+    t = Table(load, source=str(path), prefix="truth.scene.load", error=ConfigError)
+    return LoadCase(imep=t.positive("imep", None, unit="Pa"),
+                    law=t.string("law", "constant", options=("constant", "propeller")),
+                    reference_rpm=t.positive("reference_rpm", None, unit="rpm"))

@@ -11,12 +11,39 @@ import os
 import tempfile
 from pathlib import Path
 
-__all__ = ["atomic_path", "check_overwrite"]
+__all__ = ["atomic_path", "check_overwrite", "same_file"]
+
+
+def same_file(a: str | Path, b: str | Path) -> bool:
+    """True when paths ``a`` and ``b`` name the same file: equal after resolving symbolic
+    links and ``..``, or the same inode (a hard link). Either may not exist yet.
+
+    Examples
+    --------
+    >>> import os, tempfile, pathlib
+    >>> d = pathlib.Path(tempfile.mkdtemp())
+    >>> _ = (d / "rec.csv").write_text("x")
+    >>> os.link(d / "rec.csv", d / "copy.csv"); os.symlink(d / "rec.csv", d / "link.csv")
+    >>> same_file(d / "copy.csv", d / "rec.csv"), same_file(d / "link.csv", d / "rec.csv")
+    (True, True)
+    >>> same_file(d / "sub" / ".." / "rec.csv", d / "rec.csv"), same_file(d / "new.csv", d / "rec.csv")
+    (True, False)
+    """
+    try:
+        if os.path.samefile(a, b):
+            return True
+    except OSError:  # one of them does not exist (yet)
+        pass
+    return os.path.realpath(os.path.abspath(a)) == os.path.realpath(os.path.abspath(b))
 
 
 def check_overwrite(path: str | Path, overwrite: bool, *, option: str = "overwrite=True") -> Path:
     """Raise ``FileExistsError`` naming ``option`` if ``path`` exists and ``overwrite`` is False."""
     path = Path(path)
+    if path.exists() and not path.is_file() and not path.is_dir():
+        # a device, pipe or socket (/dev/null): renaming over it would replace the node itself
+        raise FileExistsError(f"{path} is not a regular file (a device, pipe or socket); "
+                              "choose a file path")
     if path.exists() and not overwrite:
         raise FileExistsError(f"{path} exists; pass {option} to replace it")
     if path.is_dir():

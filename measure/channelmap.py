@@ -218,7 +218,7 @@ def _parse(doc: TomlTable, *, text: str, origin: str) -> ChannelMap:
     src = doc.table("source", None)
     if src is not None:
         if "sample_rate" in src:
-            source["sample_rate"] = src.positive("sample_rate")
+            source["sample_rate"] = src.positive("sample_rate", unit="Hz", plausible=(1e-3, 1e8))
         if "time_column" in src:
             source["time_column"] = _column(src, "time_column")
         if "time_units" in src:
@@ -303,10 +303,10 @@ def _channel(t, name) -> ChannelSpec:
         if kw["quantity"] not in QUANTITIES or kw["quantity"] == "pulse_times":
             t.fail("quantity", f"= {kw['quantity']!r} is not one of "
                                f"{', '.join(q for q in QUANTITIES if q != 'pulse_times')}")
-    kw["scale"] = t.number("scale", 1.0)
+    kw["scale"] = t.number("scale", 1.0, unit=None)      # channel units per raw unit
     if kw["scale"] == 0.0:
         t.fail("scale", "= 0 would make every value the offset; expected a non-zero factor")
-    kw["offset"] = t.number("offset", 0.0)
+    kw["offset"] = t.number("offset", 0.0, unit=None)
     for key in ("location", "direction", "node"):
         kw[key] = t.string(key, None)
     if role is None:
@@ -321,9 +321,9 @@ def _channel(t, name) -> ChannelSpec:
         return ChannelSpec(**kw)
     kw["keep_raw"] = _bool(t, "keep_raw") if "keep_raw" in t else False
     kw["slope"] = t.string("slope", "rising", options=["rising", "falling"])
-    kw["level"] = t.number("level", None)
-    kw["hysteresis"] = t.number("hysteresis", None, low=0.0, high=0.99)
-    kw["tdc_offset_deg"] = t.number("tdc_offset_deg", None, low=-720.0, high=720.0)
+    kw["level"] = t.number("level", None, unit=None)     # in the raw signal's units
+    kw["hysteresis"] = t.number("hysteresis", None, low=0.0, high=0.99, unit="1")
+    kw["tdc_offset_deg"] = t.number("tdc_offset_deg", None, low=-720.0, high=720.0, unit="deg")
     if role == "wheel":
         kw["pulses_per_rev"] = t.integer("pulses_per_rev", minimum=1)
         if "missing_teeth" in t:

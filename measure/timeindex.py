@@ -46,8 +46,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 import xarray as xr
-from xarray.core.coordinate_transform import CoordinateTransform
-from xarray.core.indexes import CoordinateTransformIndex, Index, PandasIndex
+from xarray.indexes import CoordinateTransform, CoordinateTransformIndex, Index, PandasIndex
 from xarray.core.indexing import IndexSelResult
 
 __all__ = ["SampleClock", "SampledTimeIndex", "sampled_time", "regular_clock",

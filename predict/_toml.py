@@ -1,8 +1,15 @@
 """Reading model TOML files with errors that name the file, the key and what was expected.
 
 A :class:`Table` wraps one TOML table and remembers where it came from, so every accessor can
-say ``engines/i4.toml: [engine] crank_radius = -0.04 must be > 0``. Unknown keys are an error
+say ``engines/i4.toml: [engine] crank_radius = -0.04 must be > 0 m``. Unknown keys are an error
 (with a did-you-mean), because a typo silently ignored is a model silently wrong.
+
+Units. The quantity accessors (:meth:`Table.number`, :meth:`Table.positive`,
+:meth:`Table.numbers`) take the key's unit (``unit="Pa"``) and plausible range
+(``plausible=(1e9, 3e11)``): a plain number is in that unit (SI unless the key's name says
+otherwise), a string such as ``"81 GPa"`` or ``"260 mm"`` is converted by pint
+(:mod:`predict._units`), and a value outside the plausible range warns with the likely slip
+(``shear_modulus = 81 Pa: did you mean 81 GPa?``).
 """
 
 from __future__ import annotations
@@ -110,25 +117,86 @@ class Table:
             for i, v in enumerate(value)
         ]
 
-    def number(self, key: str, default: Any = ..., *, low=None, high=None, strict_low=False):
-        """Return a finite float, optionally bounded (``strict_low`` makes ``low`` exclusive)."""
+    def _scalar(self, key: str, value, unit: str | None) -> float:
+        """One value as a float in ``unit``: a number as is, a string through pint."""
+        if isinstance(value, str) and unit is not None:
+            from ._units import UnitError, to_unit
+
+            try:
+                return to_unit(value, unit)
+            except UnitError as exc:
+                self.fail(key, str(exc))
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            self.fail(key, f"= {value!r} must be a number{_in_unit(unit)}")
+        return float(value)
+
+    def _plausible(self, key: str, values, unit: str | None, plausible) -> None:
+        """Warn (PlausibilityWarning) for the first nonzero value outside ``plausible``."""
+        if plausible is None:
+            return
+        lo, hi = plausible
+        for i, v in enumerate(np.atleast_1d(values)):
+            if v != 0 and not lo <= abs(v) <= hi:
+                import warnings
+
+                from ._units import PlausibilityWarning, slip_message
+
+                name = key if np.ndim(values) == 0 else f"{key}[{i}]"
+                warnings.warn(f"{self.where(name)} = {slip_message(float(v), unit or '1', plausible)}",
+                              PlausibilityWarning, stacklevel=4)
+                return
+
+    def number(self, key: str, default: Any = ..., *, unit: str | None = None,
+               plausible: tuple[float, float] | None = None, low=None, high=None,
+               strict_low=False):
+        """Return a finite float in ``unit``, optionally bounded (``strict_low`` makes ``low``
+        exclusive).
+
+        Parameters
+        ----------
+        key : str
+        default
+            Returned when the key is absent (``...``: required).
+        unit : str, optional
+            The key's unit in pint syntax (``"m"``, ``"Pa"``, ``"kg*m^2"``, ``"N*m/rad"``,
+            ``"rpm"``, ``"deg"``, ``"1"`` for a ratio): SI unless the key's name says another
+            (``speed_rpm``). A plain number is in this unit; a string such as ``"260 mm"`` is
+            converted to it (:func:`predict._units.to_unit`). ``None``: numbers only (a value
+            whose unit depends on something else, e.g. noise in channel units).
+        plausible : (float, float), optional
+            Plausible magnitudes in ``unit``; a nonzero value outside warns
+            (:class:`~predict._units.PlausibilityWarning`) with the likely slip.
+        low, high : float, optional
+            Hard bounds in ``unit`` (an error outside).
+        """
         value = self.raw(key, default)
         if value is None:
             return None
-        if isinstance(value, bool) or not isinstance(value, (int, float)):
-            self.fail(key, f"= {value!r} must be a number")
-        value = float(value)
+        given = key in self.data
+        value = self._scalar(key, value, unit)
         if not np.isfinite(value):
             self.fail(key, f"= {value!r} must be finite")
         if low is not None and (value <= low if strict_low else value < low):
-            self.fail(key, f"= {value!r} must be {'>' if strict_low else '>='} {low:g}")
+            self.fail(key, f"= {value!r} must be {'>' if strict_low else '>='} {low:g}"
+                           f"{_paren_unit(unit)}")
         if high is not None and value > high:
-            self.fail(key, f"= {value!r} must be <= {high:g}")
+            self.fail(key, f"= {value!r} must be <= {high:g}{_paren_unit(unit)}")
+        if given:
+            self._plausible(key, value, unit, plausible)
         return value
 
-    def positive(self, key: str, default: Any = ...):
-        """Return a float > 0."""
-        return self.number(key, default, low=0.0, strict_low=True)
+    def positive(self, key: str, default: Any = ..., *, unit: str | None = None,
+                 plausible: tuple[float, float] | None = None):
+        """Return a float > 0 in ``unit`` (see :meth:`number`).
+
+        Examples
+        --------
+        >>> t = Table({"diameter": "260 mm"}, source="line.toml", prefix="shaftline.shaft[0]")
+        >>> t.positive("diameter", unit="m", plausible=(1e-3, 3.0))
+        0.26
+        """
+        return self.number(key, default, unit=unit, plausible=plausible, low=0.0,
+                           strict_low=True)
 
     def integer(self, key: str, default: Any = ..., *, minimum: int | None = None):
         """Return an int, optionally >= ``minimum``."""
@@ -155,17 +223,23 @@ class Table:
                 self.fail(key, f"= {value!r} is not one of {listing}{suggest(value, options)}")
         return value
 
-    def numbers(self, key: str, default: Any = ..., *, length: int | None = None, low=None,
-                strict_low=False) -> np.ndarray | None:
-        """Return a 1-D float array from a TOML array of numbers."""
+    def numbers(self, key: str, default: Any = ..., *, unit: str | None = None,
+                plausible: tuple[float, float] | None = None, length: int | None = None,
+                low=None, strict_low=False) -> np.ndarray | None:
+        """Return a 1-D float array in ``unit`` from a TOML array of numbers or quantity
+        strings (``["200 rpm", "800 rpm"]``); ``unit``, ``plausible`` and ``low`` as in
+        :meth:`number`, per element."""
         value = self.raw(key, default)
         if value is None:
             return None
+        given = key in self.data
         if not isinstance(value, list) or not all(
-            isinstance(v, (int, float)) and not isinstance(v, bool) for v in value
+            (isinstance(v, (int, float)) and not isinstance(v, bool))
+            or (unit is not None and isinstance(v, str)) for v in value
         ):
-            self.fail(key, f"= {value!r} must be an array of numbers")
-        arr = np.asarray(value, dtype=float)
+            self.fail(key, f"= {value!r} must be an array of numbers{_in_unit(unit)}")
+        arr = np.asarray([self._scalar(f"{key}[{i}]", v, unit) for i, v in enumerate(value)],
+                         dtype=float)
         if not np.all(np.isfinite(arr)):
             self.fail(key, "must contain only finite numbers")
         if length is not None and arr.size != length:
@@ -175,8 +249,19 @@ class Table:
             if bad.any():
                 i = int(np.flatnonzero(bad)[0])
                 self.fail(f"{key}[{i}]",
-                          f"= {float(arr[i]):g} must be {'>' if strict_low else '>='} {low:g}")
+                          f"= {float(arr[i]):g} must be {'>' if strict_low else '>='} {low:g}"
+                          f"{_paren_unit(unit)}")
+        if given:
+            self._plausible(key, arr, unit, plausible)
         return arr
+
+    def quantity(self, key: str, value, *, unit: str) -> float:
+        """Convert one value found inside a raw structure (e.g. an element of ``segments``)
+        to ``unit``; ``key`` names it in messages (``"segments[2][1]"``)."""
+        out = self._scalar(key, value, unit)
+        if not np.isfinite(out):
+            self.fail(key, f"= {out!r} must be finite")
+        return out
 
     def check_unknown(self, extra_allowed: Iterable[str] = ()) -> None:
         """Raise if the table has keys never read (typos), suggesting the closest known key."""
@@ -188,3 +273,22 @@ class Table:
 
     def _join(self, key: str) -> str:
         return ".".join(p for p in (self.prefix, key) if p)
+
+
+def _in_unit(unit: str | None) -> str:
+    """`` in Pa (or a quantity string such as '81 GPa')`` for messages."""
+    if unit is None:
+        return ""
+    if unit in ("", "1"):
+        return " (dimensionless, or a string such as '2 %')"
+    from ._units import pretty_unit
+
+    return f" in {pretty_unit(unit)} (or a string with its unit, e.g. '1.5 {pretty_unit(unit)}')"
+
+
+def _paren_unit(unit: str | None) -> str:
+    if unit in (None, "", "1"):
+        return ""
+    from ._units import pretty_unit
+
+    return f" {pretty_unit(unit)}"

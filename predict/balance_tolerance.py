@@ -123,15 +123,21 @@ class BalanceSpec:
         masses = []
         for m in t.tables("mass", None):
             masses.append(Counterweight(
-                mass_radius=m.number("mass", low=0.0) * m.number("radius", low=0.0),
-                angle_deg=m.number("angle_deg"), position=m.number("position", 0.0)))
+                mass_radius=(m.number("mass", low=0.0, unit="kg", plausible=(1e-4, 1e4))
+                             * m.number("radius", low=0.0, unit="m", plausible=(1e-3, 5.0))),
+                angle_deg=m.number("angle_deg", unit="deg", plausible=(1e-3, 360.0)),
+                position=m.number("position", 0.0, unit="m", plausible=(1e-4, 100.0))))
             m.check_unknown(["description", "name"])
         spec = cls(masses=tuple(masses),
                    reciprocating_mass_tolerance=t.number("reciprocating_mass_tolerance", 0.0,
-                                                         low=0.0),
-                   rotating_mass_tolerance=t.number("rotating_mass_tolerance", 0.0, low=0.0),
-                   crankshaft_unbalance=t.number("crankshaft_unbalance", 0.0, low=0.0),
-                   relative_tolerance=t.number("relative_tolerance", 0.1, low=0.0),
+                                                         low=0.0, unit="kg",
+                                                         plausible=(1e-6, 100.0)),
+                   rotating_mass_tolerance=t.number("rotating_mass_tolerance", 0.0, low=0.0,
+                                                    unit="kg", plausible=(1e-6, 100.0)),
+                   crankshaft_unbalance=t.number("crankshaft_unbalance", 0.0, low=0.0,
+                                                 unit="kg*m", plausible=(1e-9, 10.0)),
+                   relative_tolerance=t.number("relative_tolerance", 0.1, low=0.0, unit="1",
+                                               plausible=(1e-4, 1.0)),
                    source=str(path))
         t.check_unknown(["description"])
         return spec

@@ -346,11 +346,12 @@ def bearing_loads_from_toml(path, *, omega, pressure=None, points=720) -> Bearin
     t = doc.table("crankshaft", None)
     if t is None:
         raise ModelError(f"{path}: has no [crankshaft] table (bearing_positions, model)")
-    positions = t.numbers("bearing_positions")
+    positions = t.numbers("bearing_positions", unit="m", plausible=(1e-4, 100.0))
     model = t.string("model", "continuous", options=BEAM_MODELS)
     raw = t.raw("bending_stiffness", 1.0)
-    ei = (t.numbers("bending_stiffness", low=0.0, strict_low=True) if isinstance(raw, list)
-          else t.positive("bending_stiffness", 1.0))
+    # EI, N·m²: only the ratios between spans matter, so no plausible range
+    ei = (t.numbers("bending_stiffness", low=0.0, strict_low=True, unit="N*m^2")
+          if isinstance(raw, list) else t.positive("bending_stiffness", 1.0, unit="N*m^2"))
     t.check_unknown(["description", "fillets"])     # fillets: predict.crankshaft_scf
     engine = Engine.from_toml(path)
     if pressure is None and engine.bore is not None and engine.compression_ratio is not None:

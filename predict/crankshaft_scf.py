@@ -500,18 +500,19 @@ def fillet_geometry_from_toml(path) -> FilletGeometry:
         raise ModelError(f"{path}: has no [crankshaft.fillets] table (pin_diameter, "
                          "journal_diameter, web_thickness, web_width, pin_fillet_radius, "
                          "journal_fillet_radius)")
-    radius = t.positive("crank_radius", None)
+    radius = t.positive("crank_radius", None, unit="m", plausible=(1e-3, 3.0))
     if radius is None:
         if "engine" not in doc:
             t.fail("crank_radius", "is missing and the file has no [engine] table")
         from .engine import Engine
 
         radius = Engine.from_toml(path).crank_radius
-    kw = {k: t.positive(k) for k in ("pin_diameter", "journal_diameter", "web_thickness",
-                                     "web_width", "pin_fillet_radius",
-                                     "journal_fillet_radius")}
-    kw.update({k: t.number(k, 0.0, low=0.0) for k in ("pin_bore", "journal_bore", "pin_recess",
-                                                       "journal_recess", "oil_bore")})
+    kw = {k: t.positive(k, unit="m", plausible=(1e-4, 3.0))
+          for k in ("pin_diameter", "journal_diameter", "web_thickness", "web_width",
+                    "pin_fillet_radius", "journal_fillet_radius")}
+    kw.update({k: t.number(k, 0.0, low=0.0, unit="m", plausible=(1e-5, 3.0))
+               for k in ("pin_bore", "journal_bore", "pin_recess", "journal_recess",
+                         "oil_bore")})
     semi = t.raw("semi_built", False)
     if not isinstance(semi, bool):
         t.fail("semi_built", f"= {semi!r} must be true or false")

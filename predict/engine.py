@@ -698,26 +698,29 @@ class Engine:
         t = doc.table("engine", default=None)
         if t is None:
             raise ModelError(f"{path}: has no [engine] table")
-        angles = t.numbers("crank_angles_deg")
+        angles = t.numbers("crank_angles_deg", unit="deg", plausible=(1e-3, 720.0))
         n = angles.size
         if n == 0:
             t.fail("crank_angles_deg", "must list at least one cylinder")
         if "stroke" in t and "crank_radius" in t:
             t.fail("stroke", "give either stroke or crank_radius, not both")
-        radius = t.positive("stroke") / 2 if "stroke" in t else t.positive("crank_radius")
+        radius = (t.positive("stroke", unit="m", plausible=(2e-3, 6.0)) / 2 if "stroke" in t else
+                  t.positive("crank_radius", unit="m", plausible=(1e-3, 3.0)))
 
-        def masses(key, default, low=0.0):
+        def masses(key, default, low=0.0, unit="kg", plausible=(1e-3, 1e5)):
             value = t.raw(key, default)
             if isinstance(value, list):
-                return t.numbers(key, length=n, low=low)
-            return t.number(key, default, low=low)
+                return t.numbers(key, length=n, low=low, unit=unit, plausible=plausible)
+            return t.number(key, default, low=low, unit=unit, plausible=plausible)
 
         if "cylinder_positions" in t and "cylinder_spacing" in t:
             t.fail("cylinder_spacing", "give either cylinder_positions or cylinder_spacing")
         if "cylinder_spacing" in t:
-            positions = np.arange(n) * t.positive("cylinder_spacing")
+            positions = np.arange(n) * t.positive("cylinder_spacing", unit="m",
+                                                  plausible=(5e-3, 10.0))
         else:
-            positions = t.numbers("cylinder_positions", None, length=n)
+            positions = t.numbers("cylinder_positions", None, length=n, unit="m",
+                                  plausible=(1e-3, 100.0))
         firing = t.raw("firing_order", None)
         if firing is not None and (not isinstance(firing, list) or not all(
                 isinstance(v, int) and not isinstance(v, bool) for v in firing)):
@@ -732,8 +735,10 @@ class Engine:
                 if cyl > n or master > n:
                     a.fail("cylinder" if cyl > n else "master", f"must be <= {n}")
                 arts[cyl - 1] = ArticulatedRod(
-                    master=master - 1, link_radius=a.positive("link_radius"),
-                    link_angle_deg=a.number("link_angle_deg"), rod_length=a.positive("rod_length"))
+                    master=master - 1,
+                    link_radius=a.positive("link_radius", unit="m", plausible=(1e-3, 2.0)),
+                    link_angle_deg=a.number("link_angle_deg", unit="deg", plausible=(1e-3, 360.0)),
+                    rod_length=a.positive("rod_length", unit="m", plausible=(5e-3, 10.0)))
                 a.check_unknown()
         combustion = None
         ct = t.table("combustion", None)
@@ -745,24 +750,29 @@ class Engine:
             name=t.string("name", Path(path).stem),
             crank_angles_deg=angles,
             crank_radius=radius,
-            rod_length=t.positive("rod_length"),
+            rod_length=t.positive("rod_length", unit="m", plausible=(5e-3, 10.0)),
             reciprocating_mass=masses("reciprocating_mass", ...),
             rotating_mass=masses("rotating_mass", 0.0),
             cylinder_positions=positions,
-            bank_angles_deg=t.numbers("bank_angles_deg", None, length=n),
+            bank_angles_deg=t.numbers("bank_angles_deg", None, length=n, unit="deg",
+                                      plausible=(1e-3, 360.0)),
             cycle=t.integer("cycle", 4),
             firing_order=firing,
-            firing_angles_deg=t.numbers("firing_angles_deg", None, length=n),
-            bore=t.positive("bore", None),
-            pin_offset=t.number("pin_offset", 0.0),
-            compression_ratio=t.number("compression_ratio", None, low=1.0, strict_low=True),
-            rated_speed_rpm=t.positive("rated_speed_rpm", None),
+            firing_angles_deg=t.numbers("firing_angles_deg", None, length=n, unit="deg",
+                                        plausible=(1e-3, 720.0)),
+            bore=t.positive("bore", None, unit="m", plausible=(5e-3, 1.5)),
+            pin_offset=t.number("pin_offset", 0.0, unit="m", plausible=(1e-5, 0.1)),
+            compression_ratio=t.number("compression_ratio", None, low=1.0, strict_low=True, unit="1",
+                                       plausible=(1.5, 40.0)),
+            rated_speed_rpm=t.positive("rated_speed_rpm", None, unit="rpm", plausible=(10.0, 5e4)),
             combustion=combustion,
-            rod_inertia_correction=masses("rod_inertia_correction", 0.0, low=None),
+            rod_inertia_correction=masses("rod_inertia_correction", 0.0, low=None, unit="kg*m^2",
+                                          plausible=(1e-9, 1e5)),
             series_order=t.integer("series_order", None, minimum=1),
             rotary=t.raw("rotary", False),
             double_acting=t.raw("double_acting", False),
-            piston_rod_diameter=t.number("piston_rod_diameter", 0.0, low=0.0),
+            piston_rod_diameter=t.number("piston_rod_diameter", 0.0, low=0.0, unit="m",
+                                         plausible=(1e-3, 1.0)),
             lambda_terms=t.integer("lambda_terms", None, minimum=1),
             articulated=arts,
             source=str(path),

@@ -430,10 +430,12 @@ def load_from_toml(path):
     t = doc.table("load", None)
     if t is None:
         return None
-    orders = t.numbers("orders", low=0.0, strict_low=True)
-    amps = t.numbers("amplitudes_nm", length=orders.size, low=0.0)
-    phases = t.numbers("phases_deg", None, length=orders.size)
-    mean = t.number("mean_nm", None)
+    orders = t.numbers("orders", low=0.0, strict_low=True, unit="1", plausible=(1e-2, 100.0))
+    amps = t.numbers("amplitudes_nm", length=orders.size, low=0.0, unit="N*m",
+                     plausible=(1e-3, 1e8))
+    phases = t.numbers("phases_deg", None, length=orders.size, unit="deg",
+                       plausible=(1e-3, 720.0))
+    mean = t.number("mean_nm", None, unit="N*m", plausible=(1e-3, 1e8))
     t.check_unknown(["description"])
 
     def load(angle, mean_nm=None):

@@ -534,20 +534,25 @@ class MountedEngine:
             except (TypeError, ValueError):
                 t.fail("inertia", "must be 3 numbers or a 3x3 array of numbers")
         else:
-            inertia = t.numbers("inertia", length=3, low=0.0, strict_low=True)
+            inertia = t.numbers("inertia", length=3, low=0.0, strict_low=True, unit="kg*m^2",
+                                plausible=(1e-3, 1e7))
         mounts = []
         for mt in t.tables("mount"):
             mounts.append(Mount(
-                position=mt.numbers("position", length=3),
-                stiffness=mt.numbers("stiffness", length=3, low=0.0),
-                damping=mt.numbers("damping", [0.0, 0.0, 0.0], length=3, low=0.0),
-                loss_factor=mt.number("loss_factor", 0.0, low=0.0),
+                position=mt.numbers("position", length=3, unit="m", plausible=(1e-4, 100.0)),
+                stiffness=mt.numbers("stiffness", length=3, low=0.0, unit="N/m",
+                                     plausible=(1e2, 1e11)),
+                damping=mt.numbers("damping", [0.0, 0.0, 0.0], length=3, low=0.0, unit="N*s/m",
+                                   plausible=(1e-2, 1e9)),
+                loss_factor=mt.number("loss_factor", 0.0, low=0.0, unit="1",
+                                      plausible=(1e-5, 2.0)),
                 name=mt.string("name", "")))
             mt.check_unknown()
         if not mounts:
             t.fail("mount", "must list at least one [[mounts.mount]]")
-        kwargs = dict(mass=t.positive("mass"), inertia=inertia,
-                      cg=t.numbers("cg", length=3), name=t.string("name", "engine on mounts"))
+        kwargs = dict(mass=t.positive("mass", unit="kg", plausible=(0.1, 1e7)), inertia=inertia,
+                      cg=t.numbers("cg", length=3, unit="m", plausible=(1e-4, 100.0)),
+                      name=t.string("name", "engine on mounts"))
         t.check_unknown(["description"])
         try:
             return cls(mounts=mounts, source=str(path), **kwargs)

@@ -30,20 +30,21 @@ from .errors import ModelError
 
 __all__ = ["PressureTrace", "synthetic_pressure", "combustion_from_table", "as_trace"]
 
+#: key -> (accessor, unit, plausible range) of ``[engine.combustion]``
 _COMBUSTION_KEYS = {
-    "peak_pressure": "positive",
-    "imep": "positive",
-    "heat_release": "positive",
-    "intake_pressure": "positive",
-    "exhaust_pressure": "positive",
-    "polytropic_exponent": "positive",
-    "combustion_start_deg": "number",
-    "combustion_duration_deg": "positive",
-    "wiebe_a": "positive",
-    "wiebe_m": "number",
-    "exhaust_opening_deg": "positive",
-    "points_per_cycle": "integer",
-    "compression_ratio": "positive",
+    "peak_pressure": ("positive", "Pa", (1e5, 5e7)),
+    "imep": ("positive", "Pa", (1e4, 1e7)),
+    "heat_release": ("positive", "J", (0.1, 1e8)),
+    "intake_pressure": ("positive", "Pa", (1e4, 1e7)),
+    "exhaust_pressure": ("positive", "Pa", (1e4, 1e7)),
+    "polytropic_exponent": ("positive", "1", (1.0, 1.8)),
+    "combustion_start_deg": ("number", "deg", (1e-3, 720.0)),
+    "combustion_duration_deg": ("positive", "deg", (1.0, 360.0)),
+    "wiebe_a": ("positive", "1", (0.1, 50.0)),
+    "wiebe_m": ("number", "1", (1e-2, 10.0)),
+    "exhaust_opening_deg": ("positive", "deg", (1.0, 720.0)),
+    "points_per_cycle": ("integer", None, None),
+    "compression_ratio": ("positive", "1", (1.5, 40.0)),
 }
 
 
@@ -427,14 +428,14 @@ def combustion_from_table(table) -> dict:
     {'imep': 1200000.0, 'wiebe_m': 2.0}
     """
     out = {}
-    for key, kind in _COMBUSTION_KEYS.items():
+    for key, (kind, unit, plausible) in _COMBUSTION_KEYS.items():
         if key not in table:
             continue
         if kind == "positive":
-            out[key] = table.positive(key)
+            out[key] = table.positive(key, unit=unit, plausible=plausible)
         elif kind == "integer":
             out[key] = table.integer(key, minimum=72)
         else:
-            out[key] = table.number(key)
+            out[key] = table.number(key, unit=unit, plausible=plausible)
     table.check_unknown()
     return out

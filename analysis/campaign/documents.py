@@ -2,7 +2,10 @@
 
 :func:`document_from_result` flattens a :class:`~crankbench.analysis.pipeline.PipelineResult`
 into the tidy tables of :mod:`analysis.campaign.store`; :func:`document_from_error` records a
-record that failed, so a campaign lists it with its error instead of losing it.
+record that failed, so a campaign lists it with its error instead of losing it;
+:func:`document_from_tracks` keeps an order analysis without a model (``analyse --store``):
+its order amplitudes and steady-state table, with the verdict 'inconclusive' (nothing was
+compared).
 """
 
 from __future__ import annotations
@@ -14,9 +17,9 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["settings_key", "document_from_result", "document_from_error", "record_identity",
-           "store_result",
-           "reference_speeds"]
+__all__ = ["settings_key", "document_from_result", "document_from_error",
+           "document_from_tracks", "record_identity", "store_result", "store_tracks",
+           "steady_order_rows", "reference_speeds"]
 
 _IDENTITY_ATTRS = ("start_time", "test_id", "engine_id", "build")
 
@@ -89,6 +92,18 @@ def _order_amplitudes(track, speeds_rpm, run_id, units) -> list[dict]:
                 rows.append({"run_id": run_id, "order": float(order), "speed_rpm": float(s),
                              "amplitude": float(np.interp(s, r, a)), "units": units})
     return rows
+
+
+def steady_order_rows(table, run_id: str, units=None) -> list[dict]:
+    """Rows of the ``steady_orders`` table from a steady-state order table
+    (:func:`analysis.steady.steady_orders`; None or empty: no rows)."""
+    if table is None:
+        return []
+    attrs = getattr(table, "attrs", {}) or {}
+    return _frame_rows(table, {c: c for c in (
+        "segment", "order", "speed_rpm", "speed_spread_rpm", "revolutions", "amplitude",
+        "amplitude_uncertainty", "phase_deg", "phase_uncertainty_deg")}, run_id,
+        {"units": attrs.get("units", units), "phase_reference": attrs.get("phase_reference")})
 
 
 def _frame_rows(frame, columns: dict, run_id: str, extra: dict | None = None) -> list[dict]:
@@ -184,9 +199,7 @@ def document_from_result(result, *, record_path, run_id: str, settings: dict,
               else np.asarray(reference_speeds_rpm, float)) if np.isfinite(lo) else []
     steady = getattr(result, "steady_orders", None)   # steady-state order table, if any
     steady_frame = steady.to_frame() if hasattr(steady, "to_frame") else steady
-    steady_rows = _frame_rows(steady_frame, {
-        "order": "order", "speed_rpm": "speed_rpm", "amplitude": "amplitude",
-        "phase_rad": "phase", "amplitude_std": "amplitude_std"}, run_id, {"units": units})
+    steady_rows = steady_order_rows(steady_frame, run_id, units)
     return {"runs": [runs], "criticals": criticals, "resonances": resonances,
             "order_amplitudes": _order_amplitudes(getattr(result, "track", None), speeds,
                                                   run_id, units),
@@ -228,5 +241,80 @@ def store_result(store_path, result, *, record_path, model_path, settings: dict,
                                     settings=settings, model_path=model_path,
                                     model_sha256=model_sha, settings_key_=key,
                                     report_path=report_path, elapsed_s=elapsed_s)
+    with Store(store_path, create=True) as store:
+        return store.put(document)
+
+
+def document_from_tracks(tracks, *, record_path, run_id: str, settings: dict,
+                         record_sha256: str | None = None, settings_key_: str | None = None,
+                         steady_table=None, elapsed_s: float | None = None,
+                         reference_speeds_rpm=None, attrs: dict | None = None) -> dict:
+    """The store document of an order analysis without a model (``crankbench analyse``).
+
+    Parameters
+    ----------
+    tracks : xarray.Dataset
+        Order tracks (``amplitude`` over (order, time) with an ``rpm`` coordinate).
+    record_path : str or Path
+    run_id : str
+    settings : dict
+        The analysis options (JSON-able).
+    record_sha256, settings_key_ : str, optional
+    steady_table : pandas.DataFrame, optional
+        Steady-state order table (:func:`analysis.steady.steady_orders`).
+    elapsed_s : float, optional
+        Analysis time, s.
+    reference_speeds_rpm : array_like, optional
+        Speeds (rpm) of the order-amplitude table (default :func:`reference_speeds` of the
+        tracked speed range).
+    attrs : dict, optional
+        The record's attrs (identity columns).
+
+    Returns
+    -------
+    dict
+        Table -> rows: ``runs`` (verdict 'inconclusive': an order analysis compares nothing),
+        ``order_amplitudes`` and ``steady_orders``.
+    """
+    from crankbench.analysis.report.report import crankbench_version
+
+    units = tracks["amplitude"].attrs.get("units", tracks.attrs.get("units")) \
+        if "amplitude" in tracks else None
+    rpm = np.asarray(tracks["rpm"].values, float) if "rpm" in tracks.coords else np.array([])
+    rpm = rpm[np.isfinite(rpm)]
+    lo, hi = (float(rpm.min()), float(rpm.max())) if rpm.size else (np.nan, np.nan)
+    runs = {"run_id": run_id, **record_identity(record_path, attrs),
+            "record_sha256": record_sha256, "settings_key": settings_key_,
+            "settings": settings, "channel": settings.get("channel"), "status": "ok",
+            "error": None, "verdict": "inconclusive",
+            "verdict_reason": "order analysis only (crankbench analyse): nothing was compared "
+                              "with a prediction or a limit",
+            "speed_min_rpm": lo, "speed_max_rpm": hi,
+            "sweep_rate_rpm_per_s": tracks.attrs.get("sweep_rate_rpm_per_s"),
+            "elapsed_s": elapsed_s, "software_version": crankbench_version(),
+            "analysed_at": _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds")}
+    speeds = (reference_speeds((lo, hi)) if reference_speeds_rpm is None
+              else np.asarray(reference_speeds_rpm, float)) if np.isfinite(lo) else []
+    return {"runs": [runs], "order_amplitudes": _order_amplitudes(tracks, speeds, run_id, units),
+            "steady_orders": steady_order_rows(steady_table, run_id, units)}
+
+
+def store_tracks(store_path, tracks, *, record_path, settings: dict, steady_table=None,
+                 attrs: dict | None = None, elapsed_s: float | None = None) -> str:
+    """Write one order analysis (no model) into a campaign store (created if missing); return
+    its run_id. The same record analysed with the same settings replaces its rows."""
+    from crankbench.analysis._output import to_jsonable
+    from crankbench.analysis.report import file_sha256
+
+    from .store import Store, run_id_for
+
+    settings = {**to_jsonable(settings), "command": "analyse"}
+    key = settings_key(settings, "")
+    record_sha = file_sha256(record_path)
+    run_id = run_id_for(record_sha, key)
+    document = document_from_tracks(tracks, record_path=record_path, run_id=run_id,
+                                    settings=settings, record_sha256=record_sha,
+                                    settings_key_=key, steady_table=steady_table,
+                                    elapsed_s=elapsed_s, attrs=attrs)
     with Store(store_path, create=True) as store:
         return store.put(document)

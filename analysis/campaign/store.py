@@ -27,7 +27,10 @@ Schema (version :data:`SCHEMA_VERSION`; every table keyed by ``run_id``):
 ``order_amplitudes``
     Order amplitudes at reference speeds (rpm) from the order track.
 ``steady_orders``
-    Steady-state order tables (amplitude, phase, uncertainty) of steady runs.
+    Steady-state order tables of steady runs (:func:`analysis.steady.steady_orders`): per
+    steady segment and order the mean speed (rpm) and its spread, the revolutions used, the
+    amplitude and its 1σ uncertainty (``units``), the phase (degrees, ``phase_reference``:
+    TDC of cylinder 1 when the record has a wheel gap or mark) and its 1σ uncertainty.
 ``checks``
     Every verdict: check name, ``verdict``, rule, basis, reason, value, limit, units.
 
@@ -104,9 +107,10 @@ TABLES: dict[str, list[tuple[str, str]]] = {
         ("amplitude", "DOUBLE"), ("units", "VARCHAR"),
     ],
     "steady_orders": [
-        ("run_id", "VARCHAR"), ("order", "DOUBLE"), ("speed_rpm", "DOUBLE"),
-        ("amplitude", "DOUBLE"), ("phase_rad", "DOUBLE"), ("amplitude_std", "DOUBLE"),
-        ("units", "VARCHAR"),
+        ("run_id", "VARCHAR"), ("segment", "INTEGER"), ("order", "DOUBLE"),
+        ("speed_rpm", "DOUBLE"), ("speed_spread_rpm", "DOUBLE"), ("revolutions", "INTEGER"),
+        ("amplitude", "DOUBLE"), ("amplitude_uncertainty", "DOUBLE"), ("phase_deg", "DOUBLE"),
+        ("phase_uncertainty_deg", "DOUBLE"), ("phase_reference", "VARCHAR"), ("units", "VARCHAR"),
     ],
     "checks": [
         ("run_id", "VARCHAR"), ("check", "VARCHAR"), ("verdict", "VARCHAR"), ("rule", "VARCHAR"),

@@ -1,15 +1,21 @@
 """Command-line glue shared by ``compare``, ``report``, ``batch`` and ``demo``: the common
-arguments, their translation into :func:`analysis.pipeline.analyse` options, a progress bar."""
+arguments, their check before any work, their translation into
+:func:`analysis.pipeline.analyse` options, a progress bar."""
 
 from __future__ import annotations
 
 import logging
 
+from crankbench.analysis.commands._args import add_list, number, positive_order
 from crankbench.analysis.pipeline import LoadCase, load_from_record_file
 
-__all__ = ["add_common_arguments", "options_from_args", "vibrograph_options", "progress_bar"]
+__all__ = ["add_common_arguments", "check_common", "options_from_args", "vibrograph_options",
+           "progress_bar"]
 
 log = logging.getLogger("crankbench")
+
+#: highest order the pipeline predicts (analysis.pipeline.analyse max_order)
+MAX_ORDER = 12.0
 
 
 def add_common_arguments(parser) -> None:
@@ -21,23 +27,31 @@ def add_common_arguments(parser) -> None:
                         help="torsional channel (default: the first angle/angular-velocity one)")
     parser.add_argument("--speed-channel", metavar="NAME", default=None,
                         help="speed source (default: found in the record)")
-    parser.add_argument("--orders", type=float, nargs="+", metavar="Q", default=None,
-                        help="orders to track (default: the strongest predicted ones)")
+    add_list(parser, "--orders", item=positive_order, metavar="Q",
+             help="orders to track, e.g. 3,6 (default: the strongest predicted ones)")
     parser.add_argument("--method", choices=("vkf", "cot"), default="vkf",
                         help="order tracker: Vold-Kalman (default) or computed order tracking")
-    parser.add_argument("--bandwidth-orders", type=float, default=None, metavar="B",
-                        help="VKF bandwidth in orders (default: 0.25, wider for fast sweeps)")
-    parser.add_argument("--imep", type=float, metavar="BAR", default=None,
+    parser.add_argument("--bandwidth-orders", type=number(low=0.0, high=2.0, strict_low=True),
+                        default=None, metavar="B",
+                        help="VKF bandwidth in orders, (0, 2] (default: 0.25, wider for fast "
+                             "sweeps)")
+    parser.add_argument("--imep", type=number(low=0.0, high=1000.0, strict_low=True, unit="bar"),
+                        metavar="BAR", default=None,
                         help="load for the predicted excitation, bar (default: the run's load "
                              "stored with a synthetic record, else the model's imep)")
     parser.add_argument("--load-law", choices=("constant", "propeller"), default=None,
                         help="gas load against speed (propeller: ∝ speed²)")
-    parser.add_argument("--reference-rpm", type=float, default=None, metavar="RPM",
-                        help="speed at which --imep applies for the propeller law")
-    parser.add_argument("--gate", type=float, default=0.15,
-                        help="largest relative speed deviation of a match (default 0.15)")
-    parser.add_argument("--tolerance", type=float, default=0.03,
-                        help="relative speed deviation flagged as disagreement (default 0.03)")
+    parser.add_argument("--reference-rpm", type=number(low=0.0, strict_low=True, unit="rpm"),
+                        default=None,
+                        metavar="RPM",
+                        help="speed at which --imep applies for the propeller law, rpm (> 0)")
+    parser.add_argument("--gate", type=number(low=0.0, high=1.0, strict_low=True), default=0.15,
+                        help="largest relative speed deviation of a match, (0, 1] "
+                             "(default 0.15)")
+    parser.add_argument("--tolerance", type=number(low=0.0, high=1.0, strict_low=True),
+                        default=0.03,
+                        help="relative speed deviation flagged as disagreement, (0, --gate] "
+                             "(default 0.03)")
     parser.add_argument("--vibration-standard", choices=("ISO 10816-6", "ISO 10816-1"),
                         default=None,
                         help="vibration-severity zones (default: the model's "
@@ -46,9 +60,91 @@ def add_common_arguments(parser) -> None:
                         help="class of that standard (ISO 10816-6: 1-7, ISO 10816-1: I-IV; "
                              "default: the model's, else chosen from the engine's power and "
                              "mounting)")
-    parser.add_argument("--vibration-tolerance", type=float, default=0.5, metavar="T",
+    parser.add_argument("--vibration-tolerance", type=number(low=0.0, high=100.0, strict_low=True),
+                        default=0.5, metavar="T",
                         help="block/mount vibration against the engine model: measured/"
                              "predicted order amplitude within [1/(1+T), 1+T] (default 0.5)")
+
+
+def check_common(args, *, records=(), model=None) -> None:
+    """Check the common arguments against each other, the model and each record's channels,
+    before any work (reading a record's header only).
+
+    Raises
+    ------
+    ConfigError, ModelError, RecordError
+        Naming the flag (``--reference-rpm``, ``--channel``) or file at fault.
+    """
+    from crankbench.predict.errors import ConfigError, RecordError
+
+    if args.tolerance > args.gate:
+        raise ConfigError(f"--tolerance {args.tolerance:g} must not exceed --gate {args.gate:g} "
+                          "(a deviation beyond the gate is never matched)")
+    if args.reference_rpm is not None and args.load_law != "propeller":
+        raise ConfigError("--reference-rpm applies to --load-law propeller only (the speed at "
+                          "which --imep holds)")
+    if args.bandwidth_orders is not None and args.method != "vkf":
+        raise ConfigError("--bandwidth-orders applies to --method vkf only")
+    if args.machine_class is not None:
+        from crankbench.analysis.limits import zone_boundaries
+        from crankbench.predict.errors import CrankbenchError
+
+        standard = getattr(args, "vibration_standard", None) or "ISO 10816-6"
+        try:
+            zone_boundaries(args.machine_class, standard=standard)
+        except CrankbenchError as exc:
+            raise ConfigError(f"--machine-class {args.machine_class!r} is not a class of "
+                              f"{standard} ({exc})") from None
+    engine = None
+    if model is not None:   # a bad model fails now, not after the record is tracked
+        from crankbench.analysis.vibrograph import model_kind
+
+        if model_kind(model) == "engine":     # vibrograph comparison against the engine
+            from crankbench.predict.engine import Engine
+
+            engine = Engine.from_toml(model)
+        else:
+            from crankbench.predict.torsion import from_toml
+
+            engine = from_toml(model).engine
+        if args.load_law == "propeller" and args.reference_rpm is None and getattr(
+                engine, "rated_speed_rpm", None) is None:
+            raise ConfigError(f"--load-law propeller needs --reference-rpm: the engine of {model} "
+                              "has no rated_speed_rpm")
+    if args.orders and max(args.orders) > MAX_ORDER:
+        raise ConfigError(f"--orders {max(args.orders):g} is above the highest order the "
+                          f"prediction covers ({MAX_ORDER:g})")
+    if args.orders and engine is not None:
+        step = 0.5 if engine.cycle == 4 else 1.0
+        odd = [q for q in args.orders if abs(q / step - round(q / step)) > 1e-9]
+        if odd:
+            raise ConfigError(f"--orders {','.join(f'{q:g}' for q in odd)}: not an order of this "
+                              f"{engine.cycle}-stroke engine (multiples of {step:g})")
+    for path in records:
+        names = _channels(path, getattr(args, "map", None))
+        if names is None:
+            continue
+        from crankbench.predict._validate import suggest
+
+        for flag, name in (("--channel", args.channel), ("--speed-channel", args.speed_channel)):
+            if name is not None and name not in names:
+                raise RecordError(f"{flag} {name!r}: record has no channel {name!r}"
+                                  f"{suggest(name, names)}; channels: {', '.join(names)} "
+                                  f"({path})")
+
+
+def _channels(path, channel_map=None):
+    """Channel names of a record from its header (lazy open, through the channel map when
+    given), None if it cannot be opened here (the analysis then reports the file's own
+    error)."""
+    from crankbench.measure import io as mio
+    from crankbench.predict.errors import CrankbenchError
+
+    try:
+        kwargs = {"map": channel_map} if channel_map else {}
+        return [str(n) for n in mio.open(path, **kwargs).data_vars]
+    except (CrankbenchError, OSError):
+        return None
 
 
 def options_from_args(args, record_path=None) -> dict:

@@ -13,8 +13,9 @@ Records larger than 256 MB are opened lazily (``measure.open``) and tracked segm
 
 from __future__ import annotations
 
-import argparse
 import logging
+
+import numpy as np
 
 HELP = "order analysis of a record channel (order tracks, order map, Campbell diagram)"
 
@@ -26,25 +27,16 @@ PLOTS = ("order_map.png", "campbell.png", "order_tracks.png")
 STREAM_BYTES = 256 * 1024 * 1024
 
 
-def _orders(text: str) -> list[float]:
-    try:
-        values = [float(v) for v in text.replace(" ", "").split(",") if v]
-    except ValueError:
-        raise argparse.ArgumentTypeError(
-            f"--orders {text!r}: expected comma-separated numbers such as 0.5,1,1.5") from None
-    if not values or any(v <= 0 for v in values):
-        raise argparse.ArgumentTypeError(f"--orders {text!r}: expected positive orders")
-    return values
-
-
 def configure(parser) -> None:
+    from crankbench.analysis.commands._args import add_list, integer, number, positive_order
+
     parser.add_argument("record", metavar="RECORD",
                         help="record file (any format measure.read knows)")
     parser.add_argument("--map", metavar="MAP.toml", default=None,
                         help="channel map: columns, units, calibration, raw pulse roles")
     parser.add_argument("--channel", required=True, help="channel to analyse")
-    parser.add_argument("--orders", required=True, type=_orders,
-                        help="orders to track, comma-separated (e.g. 0.5,1,1.5)")
+    add_list(parser, "--orders", item=positive_order, metavar="Q", required=True,
+             help="orders to track, e.g. 0.5,1,1.5")
     parser.add_argument("--method", choices=("cot", "vkf"), default="cot",
                         help="computed order tracking (default) or Vold-Kalman filter")
     parser.add_argument("--amplitude", choices=("peak", "rms", "peak-to-peak"), default="peak",
@@ -52,22 +44,83 @@ def configure(parser) -> None:
     parser.add_argument("--speed-channel", default=None,
                         help="speed source (rotational_speed channel or pulse train); "
                              "default: found in the record")
-    parser.add_argument("--revolutions", type=int, default=16,
-                        help="COT/map block length in revolutions (order resolution 1/N)")
-    parser.add_argument("--samples-per-rev", type=int, default=64,
-                        help="angle samples per revolution (orders up to N/4)")
-    parser.add_argument("--bandwidth-hz", type=float, default=None,
+    parser.add_argument("--revolutions", type=integer(low=1, high=4096), default=16,
+                        help="COT/map block length in revolutions, 1..4096 (order resolution "
+                             "1/N)")
+    parser.add_argument("--samples-per-rev", type=integer(low=8, high=MAX_SAMPLES_PER_REV),
+                        default=64,
+                        help=f"angle samples per revolution, 8..{MAX_SAMPLES_PER_REV} (orders "
+                             "up to N/4)")
+    parser.add_argument("--bandwidth-hz", type=number(low=0.0, strict_low=True), default=None,
                         help="VKF -3 dB bandwidth, Hz")
-    parser.add_argument("--bandwidth-orders", type=float, default=None,
-                        help="VKF bandwidth in orders (follows the speed)")
+    parser.add_argument("--bandwidth-orders", type=number(low=0.0, high=2.0, strict_low=True),
+                        default=None, help="VKF bandwidth in orders, (0, 2] (follows the speed)")
     parser.add_argument("--filter-order", type=int, choices=(1, 2), default=2,
                         help="VKF filter order")
     parser.add_argument("--json", action="store_true", help="print JSON")
-    parser.add_argument("--json-points", type=int, default=500,
+    parser.add_argument("--json-points", type=integer(low=1, high=10**7), default=500,
                         help="largest number of track points per order in the JSON output")
     parser.add_argument("--plot", metavar="DIR", default=None,
                         help="write order_map.png, campbell.png, order_tracks.png to DIR")
     parser.add_argument("--overwrite", action="store_true", help="replace existing plot files")
+
+
+#: largest --samples-per-rev (the angle-domain signal grows with it)
+MAX_SAMPLES_PER_REV = 2**14
+
+
+def check_args(args) -> None:
+    """Cross-checks of the arguments, naming the flags (before the record is read).
+
+    Raises
+    ------
+    ConfigError
+    """
+    from crankbench.predict.errors import ConfigError
+
+    top = max(args.orders)
+    if args.method == "cot" or args.plot:
+        if top > args.samples_per_rev / 4:
+            need = 1 << int(np.ceil(np.log2(4 * top)))
+            raise ConfigError(f"--orders {top:g} exceeds --samples-per-rev/4 = "
+                              f"{args.samples_per_rev / 4:g} (the anti-alias pass band); use "
+                              f"--samples-per-rev {max(need, 8)} or more")
+    if args.method == "cot":
+        used = [f for f, v in (("--bandwidth-hz", args.bandwidth_hz),
+                               ("--bandwidth-orders", args.bandwidth_orders)) if v is not None]
+        if used:
+            raise ConfigError(f"{' and '.join(used)} appl{'y' if len(used) > 1 else 'ies'} to "
+                              "--method vkf only")
+    elif args.bandwidth_hz is not None and args.bandwidth_orders is not None:
+        raise ConfigError("give --bandwidth-hz or --bandwidth-orders, not both")
+    if len(args.orders) > 64:
+        raise ConfigError(f"--orders lists {len(args.orders)} orders; at most 64 are tracked "
+                          "at once")
+
+
+def check_size(args, record, channel) -> None:
+    """Refuse a request whose order tracks cannot fit in memory (naming the flags)."""
+    from crankbench.predict._memory import check_allocation
+    from crankbench.predict.errors import ConfigError
+
+    n = float(record[channel].shape[0])
+    k = len(args.orders)
+    if args.method == "vkf":
+        # the joint Vold-Kalman solve holds a banded system of about 2·filter order + 1
+        # bands per order pair: ~ n (2 k)^2 (2 p + 1) float64
+        nbytes = 8.0 * n * (2 * k) ** 2 * (2 * args.filter_order + 1) + 48.0 * n * k
+        what = f"--method vkf on {n:.3g} samples with {k} orders"
+        hint = "track fewer --orders at once, or use --method cot"
+    else:
+        fs = float(record[channel].attrs.get("sample_rate") or 1.0)
+        # the angle-domain signal: at most as many samples per revolution as asked, over the
+        # record's revolutions; bounded above by the record length times the upsampling
+        revs_bound = n / fs * 2e5 / 60.0              # never above 200 000 rpm
+        angle = min(revs_bound * args.samples_per_rev, max(n, 1.0) * args.samples_per_rev)
+        nbytes = 8.0 * angle * 4 + 48.0 * n
+        what = f"--samples-per-rev {args.samples_per_rev} on {n:.3g} samples"
+        hint = "lower --samples-per-rev"
+    check_allocation(nbytes, what=what, hint=hint, error=ConfigError)
 
 
 def _summary(tracks):
@@ -88,8 +141,6 @@ def _summary(tracks):
 def run(args) -> int:
     from pathlib import Path
 
-    import numpy as np
-
     from crankbench import measure
     from crankbench.analysis._output import print_json, print_table
     from crankbench.analysis.orders import campbell_map, order_map, order_track
@@ -97,14 +148,18 @@ def run(args) -> int:
     from crankbench.predict._validate import suggest
     from crankbench.predict.errors import ConfigError, RecordError
 
+    check_args(args)
     targets = []
     if args.plot:
+        from crankbench.analysis.commands._files import check_outputs, map_inputs, record_inputs
         from crankbench.measure._atomic import check_overwrite
 
         out_dir = Path(args.plot)
         if out_dir.exists() and not out_dir.is_dir():
             raise ConfigError(f"--plot {out_dir}: exists and is not a directory")
         targets = [out_dir / name for name in PLOTS]
+        check_outputs([(p, f"--plot {out_dir} ({p.name})") for p in targets],
+                      record_inputs(args.record) + map_inputs(args))
         for path in targets:           # refuse before any work, never half a set of plots
             check_overwrite(path, args.overwrite, option="--overwrite")
     import os
@@ -119,12 +174,17 @@ def run(args) -> int:
         record = measure.read(args.record, map=args.map)
     names = [str(n) for n in record.data_vars]
     if args.channel not in names:
-        raise RecordError(f"{args.record}: no channel {args.channel!r}"
+        raise RecordError(f"{args.record}: --channel {args.channel!r}: no such channel"
                           f"{suggest(args.channel, names)}; channels: {', '.join(names)}")
     channel = record[args.channel]
     if channel.attrs.get("sample_rate") is None:
         raise RecordError(f"{args.record}: channel {args.channel!r} is not a sampled channel "
                           "(no sample_rate); choose a signal channel")
+    if args.speed_channel is not None and args.speed_channel not in names:
+        raise RecordError(f"{args.record}: --speed-channel {args.speed_channel!r}: no such "
+                          f"channel{suggest(args.speed_channel, names)}; channels: "
+                          f"{', '.join(names)}")
+    check_size(args, record, args.channel)
     kwargs = dict(orders=args.orders, amplitude=args.amplitude, method=args.method,
                   samples_per_rev=args.samples_per_rev, revolutions=args.revolutions)
     if args.method == "vkf":

@@ -9,7 +9,7 @@ TOML::
 
     [run]
     name = "trial plane 1"
-    speed_rpm = 2400.0                      # optional, informative
+    speed_rpm = 2400.0                      # optional; runs must agree (--speed-tolerance)
     [[run.trial]]                           # omit for the initial and check runs
     plane = 1                               # correction plane, 1-based
     mass = 0.010                            # kg at the balancing radius
@@ -20,8 +20,13 @@ TOML::
     phase_deg = 30.0
 
 CSV columns: ``run, measurement_plane, amplitude, phase_deg`` and optionally
-``trial_plane, trial_mass, trial_angle_deg`` (blank for no trial), one row per measurement plane
-(and per trial mass when a run carries several).
+``trial_plane, trial_mass, trial_angle_deg`` (blank for no trial) and ``speed_rpm``, one row per
+measurement plane (and per trial mass when a run carries several).
+
+Speeds. Influence coefficients hold at one speed: runs whose speeds are known (``speed_rpm`` of
+a run file, the measured speed of a record run) must agree within ``--speed-tolerance``
+(default 2 %), checked as soon as each speed is known and before any correction is computed
+(:func:`analysis.balancing.check_run_speeds`).
 
 The first run without trial masses is the initial run; runs with trial masses are the trial
 runs (masses relative to the initial state); ``--check NAME`` marks a run made after fitting
@@ -53,34 +58,46 @@ __all__ = ["HELP", "configure", "parse_trial", "read_record_runs", "read_runs", 
 
 
 def configure(parser) -> None:
+    from crankbench.analysis.balancing import RUN_SPEED_TOLERANCE
+    from crankbench.analysis.commands._args import add_list, integer, number
+
     parser.add_argument("runs", nargs="+",
                         help="run files (.toml one run each, .csv any number) or, with "
                              "--channel, records (.h5 .nc .csv .mf4 .tdms ...; e.g. "
                              "sample_data/balance/records/*.h5)")
-    parser.add_argument("--channel", action="append", default=None, metavar="NAME",
-                        help="record channel of a measurement plane (repeat, in plane order); "
-                             "makes every RUN a record")
+    add_list(parser, "--channel", metavar="NAME",
+             help="record channel of each measurement plane, in plane order; makes every RUN "
+                  "a record")
     parser.add_argument("--trial", action="append", default=[], metavar="RUN:PLANE:KG@DEG",
                         help="trial mass carried by record run RUN (1-based position or name): "
                              "correction plane, mass kg, angle deg from the mark (repeatable)")
     parser.add_argument("--speed-channel", default=None,
                         help="record speed source (rotational_speed channel or pulse train; "
                              "default: found)")
-    parser.add_argument("--steady-fraction", type=float, default=0.8,
-                        help="central fraction of each record averaged (default 0.8)")
-    parser.add_argument("--revolutions", type=int, default=16,
+    parser.add_argument("--steady-fraction", type=number(low=0.0, high=1.0, strict_low=True),
+                        default=0.8, help="central fraction of each record averaged, (0, 1] "
+                                          "(default 0.8)")
+    parser.add_argument("--revolutions", type=integer(low=1, high=4096), default=16,
                         help="order-tracking block length, revolutions (default 16)")
+    parser.add_argument("--speed-tolerance", type=number(low=0.0, high=1.0, strict_low=True),
+                        default=RUN_SPEED_TOLERANCE,
+                        help="largest relative speed difference between runs (default "
+                             f"{RUN_SPEED_TOLERANCE:g}: influence coefficients hold at one "
+                             "speed)")
     parser.add_argument("--json", action="store_true", help="print JSON instead of tables")
     parser.add_argument("--check", default=None,
                         help="name of the check run (made with the corrections fitted)")
-    parser.add_argument("--radius", type=float, default=None,
+    parser.add_argument("--radius", type=number(low=0.0, strict_low=True, unit="m"),
+                        default=None,
                         help="balancing radius, m (converts masses to unbalance for ISO)")
-    parser.add_argument("--rotor-mass", type=float, default=None, help="rotor mass, kg")
-    parser.add_argument("--max-speed", type=float, default=None,
+    parser.add_argument("--rotor-mass", type=number(low=0.0, strict_low=True, unit="kg"),
+                        default=None, help="rotor mass, kg")
+    parser.add_argument("--max-speed", type=number(low=0.0, strict_low=True, unit="rpm"),
+                        default=None,
                         help="maximum service speed, rpm (ISO 21940-11 check)")
-    parser.add_argument("--grade", type=float, default=6.3,
+    parser.add_argument("--grade", type=number(low=0.0, strict_low=True), default=6.3,
                         help="required balance grade G, mm/s (default 6.3)")
-    parser.add_argument("--min-change", type=float, default=0.25,
+    parser.add_argument("--min-change", type=number(low=0.0, high=1.0), default=0.25,
                         help="warn when a trial changed the vibration by less than this "
                              "fraction (default 0.25)")
 
@@ -92,16 +109,17 @@ def _toml_run(path: Path) -> list[dict]:
     doc = load_toml(path, error=RecordError)
     r = doc.table("run", {})
     name = r.string("name", path.stem)
-    speed = r.number("speed_rpm", None, low=0.0)
-    trials = [(t.integer("plane", minimum=1), t.positive("mass"), t.number("angle_deg", 0.0))
+    speed = r.number("speed_rpm", None, low=0.0, unit="rpm", plausible=(1.0, 1e6))
+    trials = [(t.integer("plane", minimum=1), t.positive("mass", unit="kg", plausible=(1e-6, 100.0)),
+               t.number("angle_deg", 0.0, unit="deg", plausible=(1e-3, 360.0)))
               for t in r.tables("trial", [])]
     for t in r.tables("trial", []):
         t.check_unknown(["plane", "mass", "angle_deg"])
     r.check_unknown()
     meas = []
     for m in doc.tables("measurement"):
-        meas.append((m.integer("plane", minimum=1), m.number("amplitude", low=0.0),
-                     m.number("phase_deg")))
+        meas.append((m.integer("plane", minimum=1), m.number("amplitude", low=0.0, unit=None),
+                     m.number("phase_deg", unit="deg", plausible=(1e-3, 720.0))))
         m.check_unknown()
     doc.check_unknown()
     if not meas:
@@ -142,7 +160,14 @@ def _csv_runs(path: Path) -> list[dict]:
             if "trial_mass" in group and pd.notna(row.get("trial_mass")):
                 trials.add((int(row["trial_plane"]), float(row["trial_mass"]),
                             float(row.get("trial_angle_deg", 0.0) or 0.0)))
-        runs.append(dict(name=str(name), source=str(path), speed_rpm=None,
+        speed = None
+        if "speed_rpm" in group:
+            values = pd.to_numeric(group["speed_rpm"], errors="coerce").dropna().unique()
+            if len(values) > 1:
+                raise RecordError(f"{path}: run {name!r} has several speed_rpm values "
+                                  f"{sorted(values.tolist())}; one speed per run")
+            speed = float(values[0]) if len(values) else None
+        runs.append(dict(name=str(name), source=str(path), speed_rpm=speed,
                          trials=sorted(trials), meas=sorted(meas.values())))
     return runs
 
@@ -199,11 +224,15 @@ def _finite(*values) -> bool:
 
 
 def read_record_runs(paths, channels, trials=(), *, speed_channel=None, steady_fraction=0.8,
-                     revolutions=16):
+                     revolutions=16, speed_tolerance=None):
     """Read records into run dicts (like :func:`read_runs`) plus the table of phasors.
 
-    ``trials`` are :func:`parse_trial` tuples. Returns (runs, phasors DataFrame).
+    ``trials`` are :func:`parse_trial` tuples. ``speed_tolerance`` (relative) refuses a run
+    whose speed differs from the first run's as soon as it is read. Returns
+    (runs, phasors DataFrame).
     """
+    from ..balancing import check_run_speeds
+
     import pandas as pd
 
     from crankbench.measure import read
@@ -242,6 +271,9 @@ def read_record_runs(paths, channels, trials=(), *, speed_channel=None, steady_f
                          trials=sorted(carried[name]),
                          meas=[(k, a, d) for k, a, d in zip(ph.measurement_plane, ph.amplitude,
                                                            ph.phase_deg)]))
+        if speed_tolerance is not None:   # refuse now, before the other records are read
+            check_run_speeds([(r["name"], r["speed_rpm"]) for r in runs],
+                             speed_tolerance=speed_tolerance)
     phasors = pd.concat(frames, ignore_index=True)
     refs = {r.split(" ")[0] for r in phasors.phase_reference}
     if len(refs) > 1:
@@ -265,17 +297,34 @@ def run(args) -> int:
     from crankbench.predict.errors import ConfigError, RecordError
     from crankbench.predict.rotor_balance import BalanceWarning, grade_check, influence_balance, phasor
 
+    from crankbench.analysis.balancing import check_run_speeds
+
+    iso = (args.radius, args.rotor_mass, args.max_speed)
+    if any(v is not None for v in iso) and None in iso:
+        raise ConfigError("the ISO check needs all of --radius, --rotor-mass, --max-speed")
+    if any(v is not None for v in iso) and args.check is None:
+        raise ConfigError("--radius, --rotor-mass and --max-speed grade the check run: give "
+                          "--check NAME")
     phasors = None
     if getattr(args, "channel", None):
+        trials = [parse_trial(t) for t in args.trial]   # all arguments checked first
+        for p in args.runs:
+            if not Path(p).exists():
+                raise FileNotFoundError(f"{p}: no such record file")
+        stems = [Path(p).stem for p in args.runs]
+        if args.check is not None and args.check not in stems:
+            raise ConfigError(f"--check {args.check!r} names no run; runs: {stems}")
         runs, phasors = read_record_runs(
-            args.runs, args.channel, [parse_trial(t) for t in args.trial],
+            args.runs, args.channel, trials,
             speed_channel=args.speed_channel, steady_fraction=args.steady_fraction,
-            revolutions=args.revolutions)
+            revolutions=args.revolutions, speed_tolerance=args.speed_tolerance)
     else:
         if getattr(args, "trial", None):
             raise ConfigError("--trial applies to record runs (with --channel); run files "
                               "carry their trial masses")
         runs = read_runs(args.runs)
+        check_run_speeds([(r["name"], r["speed_rpm"]) for r in runs],
+                         speed_tolerance=args.speed_tolerance)
     planes = sorted({m[0] for r in runs for m in r["meas"]})
     for r in runs:
         got = [m[0] for m in r["meas"]]
@@ -330,8 +379,6 @@ def run(args) -> int:
             out["iso_21940_11"] = dict(grade=args.grade, passed=g.passed,
                                        achieved_e_omega_mm_s=g.achieved_grade,
                                        smallest_grade_met=g.smallest_grade, planes=g.to_frame())
-        elif any(v is not None for v in (args.radius, args.rotor_mass, args.max_speed)):
-            raise ConfigError("the ISO check needs all of --radius, --rotor-mass, --max-speed")
     if phasors is None:
         del out["phasors"]
     if args.json:

@@ -41,15 +41,19 @@ def run(args) -> int:
     from crankbench.analysis._output import print_json, print_table
     from crankbench.analysis.commands._pipeline_cli import options_from_args, progress_bar
     from crankbench.analysis.pipeline import analyse
+    from crankbench.analysis.commands._files import (check_outputs, map_inputs, model_inputs,
+                                                     record_inputs)
+    from crankbench.analysis.commands._pipeline_cli import check_common
     from crankbench.analysis.vibrograph import model_kind
     from crankbench.analysis.vibrograph_report import print_vibrograph, vibrograph_json
     from crankbench.predict.errors import ConfigError
 
     log = logging.getLogger("crankbench")
     quiet = args.json or log.getEffectiveLevel() > logging.INFO
-    if args.store and Path(args.store).resolve() in (Path(args.record).resolve(),
-                                                       Path(args.model).resolve()):
-        raise ConfigError(f"--store {args.store!r} is one of the inputs")
+    if args.store:
+        check_outputs([(Path(args.store), f"--store {args.store}")],
+                      record_inputs(args.record) + model_inputs(args.model) + map_inputs(args))
+    check_common(args, records=[args.record], model=args.model)   # before any work
     if model_kind(args.model) == "engine":
         if args.store:
             raise ConfigError("--store keeps shaft-line runs; an engine model's vibrograph "

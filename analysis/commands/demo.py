@@ -61,7 +61,16 @@ def run(args) -> int:
     out = Path(args.output)
     record_path = out / "marine_6l_runup.h5"
     report_path = out / "report.html"
-    for p in [record_path, report_path] + ([out / "report.pdf"] if args.pdf else []):
+    if out.exists() and not out.is_dir():
+        from crankbench.predict.errors import ConfigError
+
+        raise ConfigError(f"-o {out}: exists and is not a folder")
+    outputs = [record_path, report_path] + ([out / "report.pdf"] if args.pdf else [])
+    from crankbench.analysis.commands._files import check_outputs, model_inputs
+
+    check_outputs([(p, f"-o {out} ({p.name})") for p in outputs],
+                  model_inputs(data / SCENE, "the demo scene") + model_inputs(data / MODEL))
+    for p in outputs:
         check_overwrite(p, args.overwrite, option="--overwrite")
     quiet = args.json or log.getEffectiveLevel() > logging.INFO
     bar, progress = progress_bar(total_steps=9, desc="demo", disable=quiet)

@@ -15,8 +15,9 @@ HELP = "show a record's channels, quantities, units, sample rates, duration and 
 def configure(parser) -> None:
     parser.add_argument("file", metavar="FILE",
                         help="record file (.h5 .hdf5 .nc .csv .mf4 .mdf .tdms .uff .unv .wav)")
-    parser.add_argument("--channels", nargs="+", metavar="NAME", default=None,
-                        help="only these channels")
+    from crankbench.analysis.commands._args import add_list
+
+    add_list(parser, "--channels", metavar="NAME", help="only these channels, e.g. acc,speed")
     parser.add_argument("--map", metavar="MAP.toml", default=None,
                         help="channel map for text/spreadsheet files or raw pulse channels")
     parser.add_argument("--json", action="store_true", help="print JSON instead of a table")

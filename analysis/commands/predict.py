@@ -28,7 +28,9 @@ def configure(parser) -> None:
             raise
         p = sub.add_parser(what, help=module.HELP, description=module.HELP, parents=[common])
         module.configure(p)
-        p.set_defaults(_predict=module.run)
+        from crankbench.analysis.cli import flag_names, list_flags
+
+        p.set_defaults(_predict=module.run, _flags=flag_names(p), _lists=list_flags(p))
 
 
 def run(args) -> int:

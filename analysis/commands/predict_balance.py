@@ -9,18 +9,21 @@ HELP = "balance residuals per order (forces, moments, counterweights, balance sh
 
 
 def configure(parser) -> None:
+    from crankbench.analysis.commands._args import add_list, integer, number
+
     parser.add_argument("model", help="engine TOML ([engine] table, optional [mounts])")
     parser.add_argument("--json", action="store_true", help="print JSON instead of tables")
-    parser.add_argument("--speed-rpm", type=float, default=None,
+    parser.add_argument("--speed-rpm", type=number(low=0.0, strict_low=True, unit="rpm"),
+                        default=None,
                         help="crank speed, rpm (default: the engine's rated_speed_rpm)")
-    parser.add_argument("--orders", type=int, nargs="+", default=[1, 2, 4, 6, 8],
-                        help="engine orders to list (default 1 2 4 6 8)")
-    parser.add_argument("--balance-factor", type=float, default=None,
+    add_list(parser, "--orders", item=integer(low=1, high=100), metavar="N",
+             default=[1, 2, 4, 6, 8], help="engine orders to list (default 1,2,4,6,8)")
+    parser.add_argument("--balance-factor", type=number(low=0.0, high=1.0), default=None,
                         help="fit per-throw counterweights balancing all the rotating mass and "
                              "this fraction (0..1) of the reciprocating mass")
-    parser.add_argument("--shafts", type=int, nargs="*", default=[],
-                        help="orders to cancel with Lanchester balance shafts (e.g. 1 2)")
-    parser.add_argument("--shaft-planes", type=float, nargs=2, default=None,
+    add_list(parser, "--shafts", item=integer(low=1, high=100), metavar="N", default=[],
+             help="orders to cancel with Lanchester balance shafts (e.g. 1,2)")
+    parser.add_argument("--shaft-planes", type=number(unit="m"), nargs=2, default=None,
                         metavar=("Z_A", "Z_B"),
                         help="two axial planes (m) for the shafts, to cancel moments as well")
 

@@ -8,22 +8,28 @@ HELP = "turning moment, energy fluctuation and flywheel sizing at one speed"
 
 
 def configure(parser) -> None:
+    from crankbench.analysis.commands._args import number
+
     parser.add_argument("model", help="engine TOML ([engine] with bore, compression_ratio and "
                                       "[engine.combustion])")
-    parser.add_argument("--speed-rpm", type=float, required=True, help="mean crank speed, rpm")
+    parser.add_argument("--speed-rpm", type=number(low=0.0, strict_low=True, unit="rpm"),
+                        required=True, help="mean crank speed, rpm")
     parser.add_argument("--json", action="store_true", help="print JSON instead of tables")
-    parser.add_argument("--coefficient", type=float, default=0.01,
-                        help="required coefficient of speed fluctuation (default 0.01)")
-    parser.add_argument("--inertia", type=float, default=None,
+    parser.add_argument("--coefficient", type=number(low=0.0, high=1.0, strict_low=True),
+                        default=0.01,
+                        help="required coefficient of speed fluctuation, (0, 1] (default 0.01)")
+    parser.add_argument("--inertia", type=number(low=0.0, strict_low=True, unit="kg*m^2"),
+                        default=None,
                         help="existing total inertia, kg m²: report its speed fluctuation")
-    parser.add_argument("--radius", type=float, default=None,
-                        help="flywheel rim mean radius, m (default: 2.5 × stroke)")
-    parser.add_argument("--density", type=float, default=7200.0,
+    parser.add_argument("--radius", type=number(low=0.0, strict_low=True, unit="m"),
+                        default=None, help="flywheel rim mean radius, m (default: 2.5 × stroke)")
+    parser.add_argument("--density", type=number(low=0.0, strict_low=True, unit="kg/m^3"),
+                        default=7200.0,
                         help="flywheel material density, kg/m³ (default cast iron 7200)")
     parser.add_argument("--shape", choices=["rim", "disc"], default="rim")
-    parser.add_argument("--imep", type=float, default=None,
-                        help="IMEP, Pa, for the synthetic pressure (default: the engine's "
-                             "[engine.combustion])")
+    parser.add_argument("--imep", type=number(low=0.0, strict_low=True, unit="Pa"), default=None,
+                        help="IMEP, Pa (or with its unit: '12 bar'), for the synthetic pressure "
+                             "(default: the engine's [engine.combustion])")
 
 
 def run(args) -> int:

@@ -7,15 +7,18 @@ HELP = "lateral vibration of a rotor: critical speeds, whirl, Campbell diagram, 
 
 
 def configure(parser) -> None:
+    from crankbench.analysis.commands._args import add_list, integer, positive_order
+
     parser.add_argument("model", help="rotor model TOML ([rotor] table, see sample_data/rotors)")
     parser.add_argument("--json", action="store_true", help="print JSON instead of tables")
-    parser.add_argument("--speed-range", nargs=2, type=float, metavar=("LOW", "HIGH"),
-                        help="spin speed range, rpm (default: the model's speed_range_rpm)")
-    parser.add_argument("--orders", nargs="+", type=float, default=None,
-                        help="excitation orders (default: the model's orders)")
-    parser.add_argument("--modes", type=int, default=None,
+    parser.add_argument("--speed-range", nargs="+", metavar=("LOW", "HIGH"),
+                        help="spin speed range, rpm: LOW HIGH or LOW,HIGH (default: the "
+                             "model's speed_range_rpm)")
+    add_list(parser, "--orders", item=positive_order, metavar="Q",
+             help="excitation orders, e.g. 1,2 (default: the model's orders)")
+    parser.add_argument("--modes", type=integer(low=1, high=1000), default=None,
                         help="modes / critical speeds per order (default: the model's n_modes)")
-    parser.add_argument("--speeds", type=int, default=None,
+    parser.add_argument("--speeds", type=integer(low=2, high=10**5), default=None,
                         help="speeds in the Campbell diagram and response (default: n_speeds)")
     parser.add_argument("--campbell", action="store_true",
                         help="also print the Campbell diagram table")
@@ -28,11 +31,12 @@ def run(args) -> int:
     from crankbench.predict.errors import ConfigError
     from crankbench.predict.lateral.toml import load_rotor
 
+    from crankbench.analysis.commands._args import check_pair
+
+    given = check_pair(args.speed_range, "--speed-range", low=0.0, unit="rpm")
     model = load_rotor(args.model)
     rotor = model.rotor
-    lo, hi = args.speed_range or model.speed_range_rpm
-    if not 0 <= lo < hi:
-        raise ConfigError(f"--speed-range {lo:g} {hi:g} must be increasing and >= 0 rpm")
+    lo, hi = given or model.speed_range_rpm
     orders = tuple(args.orders or model.orders)
     n_modes = args.modes or model.n_modes
     n_speeds = args.speeds or model.n_speeds

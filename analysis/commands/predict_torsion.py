@@ -9,19 +9,23 @@ HELP = "torsional vibration of a shaft line: frequencies, critical speeds, stres
 
 
 def configure(parser) -> None:
+    from crankbench.analysis.commands._args import integer, number
+
     parser.add_argument("model", help="shaft-line TOML ([shaftline] table)")
     parser.add_argument("--json", action="store_true", help="print JSON instead of tables")
-    parser.add_argument("--speed-range", nargs=2, type=float, metavar=("LOW", "HIGH"),
-                        help="crankshaft speed range, rpm (default: the model's "
-                             "speed_range_rpm)")
-    parser.add_argument("--max-order", type=float, default=12.0,
-                        help="highest excitation order (default 12)")
-    parser.add_argument("--modes", type=int, default=8, help="elastic modes to list (default 8)")
-    parser.add_argument("--imep", type=float, default=None,
-                        help="mean indicated pressure, Pa, for the excitation")
-    parser.add_argument("--speeds", type=int, default=400,
+    parser.add_argument("--speed-range", nargs="+", metavar=("LOW", "HIGH"),
+                        help="crankshaft speed range, rpm: LOW HIGH or LOW,HIGH (default: the "
+                             "model's speed_range_rpm)")
+    parser.add_argument("--max-order", type=number(low=0.0, high=200.0, strict_low=True),
+                        default=12.0, help="highest excitation order (default 12)")
+    parser.add_argument("--modes", type=integer(low=1, high=10000), default=8,
+                        help="elastic modes to list (default 8)")
+    parser.add_argument("--imep", type=number(low=0.0, strict_low=True, unit="Pa"), default=None,
+                        help="mean indicated pressure, Pa (or with its unit: '22 bar'), for the "
+                             "excitation")
+    parser.add_argument("--speeds", type=integer(low=2, high=10**6), default=400,
                         help="number of speeds for the forced response (default 400)")
-    parser.add_argument("--min-vector-sum", type=float, default=0.2,
+    parser.add_argument("--min-vector-sum", type=number(low=0.0), default=0.2,
                         help="list criticals with relative vector sum >= this (default 0.2)")
     parser.add_argument("--no-forced", action="store_true",
                         help="skip forced response, resonance amplitudes and stresses")
@@ -36,8 +40,11 @@ def run(args) -> int:
     from crankbench.predict.torsion.resonance import resonance_amplitudes
     from crankbench.predict.torsion.stress import check_stress
 
+    from crankbench.analysis.commands._args import check_pair
+
+    given = check_pair(args.speed_range, "--speed-range", low=0.0, unit="rpm")
     system = from_toml(args.model)
-    rng = args.speed_range or system.operating.get("speed_range_rpm")
+    rng = given or system.operating.get("speed_range_rpm")
     if rng is None:
         rated = getattr(system.engine, "rated_speed_rpm", None)
         rng = (0.25 * rated, 1.1 * rated) if rated else None
@@ -47,6 +54,18 @@ def run(args) -> int:
         raise ConfigError(f"{args.model}: no [shaftline] speed_range_rpm and no engine "
                           "rated_speed_rpm; give --speed-range LOW HIGH (rpm)")
     lo, hi = float(rng[0]), float(rng[1])
+    if not args.no_forced:
+        from crankbench.predict._memory import check_allocation
+        from crankbench.predict.errors import ConfigError
+
+        n_orders = len(system.default_orders(args.max_order))
+        # forced response: complex angle and torque per (speed, order, node/section), a few
+        # copies while superposing
+        check_allocation(16.0 * 4 * args.speeds * n_orders * 2 * system.n_nodes,
+                         what=f"--speeds {args.speeds} × {n_orders} orders × {system.n_nodes} "
+                              "masses (forced response)",
+                         hint="lower --speeds or --max-order, or use --no-forced",
+                         error=ConfigError)
     modes = system.mode_shapes()
     freqs = modes.frequencies_hz
     elastic = np.flatnonzero(modes.mode_numbers > 0)[: args.modes]

@@ -23,27 +23,31 @@ log = logging.getLogger("crankbench")
 
 
 def configure(parser) -> None:
+    from crankbench.analysis.commands._args import integer, number
+
     parser.add_argument("record", metavar="REC", help="record with a pressure channel and a "
                         "pulse wheel/encoder (.h5 .nc .csv .mf4 .tdms ...)")
     parser.add_argument("--model", default=None, metavar="TOML",
                         help="engine model (bore, stroke, rod, compression ratio) or a shaft "
                              "line naming one; needed for IMEP, PMEP, pegging and heat release")
     parser.add_argument("--channel", default=None, help="pressure channel (default: all)")
-    parser.add_argument("--cylinder", type=int, default=None,
+    parser.add_argument("--cylinder", type=integer(low=1, high=64), default=None,
                         help="cylinder of --channel (default: from the channel)")
     parser.add_argument("--angle-channel", default=None, help="crank-angle pulses/encoder")
     parser.add_argument("--tdc-channel", default=None, help="TDC mark channel")
     parser.add_argument("--phase-channel", default=None, help="cam/phase mark (one per cycle)")
-    parser.add_argument("--tdc-offset-deg", type=float, default=None,
+    parser.add_argument("--tdc-offset-deg", type=number(low=-720.0, high=720.0, unit="deg"),
+                        default=None,
                         help="TDC of cylinder 1 after the TDC mark (or the wheel gap), deg")
     parser.add_argument("--tdc-correct", action="store_true",
                         help="apply the thermodynamic TDC correction")
     parser.add_argument("--peg", default="auto", choices=["auto", "bdc", "polytropic", "none"],
                         help="absolute level: BDC pressure, polytropic compression, none "
                              "(default auto)")
-    parser.add_argument("--peg-pressure-bar", type=float, default=None,
+    parser.add_argument("--peg-pressure-bar", type=number(low=0.0, high=1000.0, strict_low=True,
+                                                          unit="bar"), default=None,
                         help="absolute pressure at intake BDC, bar (selects --peg bdc)")
-    parser.add_argument("--gamma", type=float, default=1.32,
+    parser.add_argument("--gamma", type=number(low=1.0, high=2.0, strict_low=True), default=1.32,
                         help="ratio of specific heats for the heat release (default 1.32)")
     parser.add_argument("--cycle", type=int, default=4, choices=[2, 4],
                         help="strokes, without --model (default 4)")
@@ -118,16 +122,18 @@ def run(args) -> int:
                    peg_pressure=None if args.peg_pressure_bar is None
                    else args.peg_pressure_bar * 1e5,
                    gamma=args.gamma, cycle=args.cycle)
-    if args.report:
-        from crankbench.measure._atomic import check_overwrite
+    from crankbench.analysis.commands._files import (check_outputs, map_inputs, model_inputs,
+                                                     record_inputs)
+    from crankbench.measure._atomic import check_overwrite
 
-        check_overwrite(args.report, args.overwrite, option="--overwrite")
+    outputs = [(Path(args.report), f"--report {args.report}")] if args.report else []
     if args.plot:
-        from crankbench.measure._atomic import check_overwrite
-
-        for c in channels:
-            check_overwrite(Path(args.plot) / f"pressure_{c}.png", args.overwrite,
-                            option="--overwrite")
+        outputs += [(Path(args.plot) / f"pressure_{c}.png", f"--plot {args.plot} "
+                     f"(pressure_{c}.png)") for c in channels]
+    check_outputs(outputs, record_inputs(args.record) + map_inputs(args)
+                  + (model_inputs(args.model) if args.model else []))
+    for path, _ in outputs:
+        check_overwrite(path, args.overwrite, option="--overwrite")
     results = {c: indicator_analysis(record, args.model, channel=c, **options)
                for c in channels}
     if args.json:

@@ -88,15 +88,24 @@ def run(args) -> int:
     from crankbench.analysis.pipeline import analyse
     from crankbench.measure._atomic import check_overwrite
 
+    from crankbench.analysis.commands._files import (check_outputs, map_inputs, model_inputs,
+                                                     record_inputs)
+    from crankbench.analysis.commands._pipeline_cli import check_common
+
     log = logging.getLogger("crankbench")
     out = Path(args.output)
     if out.suffix.lower() not in (".html", ".htm", ".pdf"):
         from crankbench.predict.errors import ConfigError
 
         raise ConfigError(f"-o {args.output!r} must end in .html or .pdf")
-    check_overwrite(out, args.overwrite, option="--overwrite")
+    outputs = [(out, f"-o {out}")]
     if args.pdf and out.suffix.lower() != ".pdf":
-        check_overwrite(out.with_suffix(".pdf"), args.overwrite, option="--overwrite")
+        outputs.append((out.with_suffix(".pdf"), f"the PDF beside it ({out.with_suffix('.pdf')})"))
+    check_outputs(outputs, record_inputs(args.record) + model_inputs(args.model)
+                  + map_inputs(args))
+    for path, _ in outputs:
+        check_overwrite(path, args.overwrite, option="--overwrite")
+    check_common(args, records=[args.record], model=args.model)   # before any work
     options = options_from_args(args, args.record)
     from crankbench.analysis.vibrograph import model_kind
 

@@ -23,12 +23,28 @@ def configure(parser) -> None:
     parser.add_argument("--json", action="store_true", help="print JSON instead of tables")
 
 
+def _written_sidecars(out):
+    """Files written beside the record (the WAV sidecar)."""
+    from crankbench.measure.readers import module_for
+    from pathlib import Path
+
+    try:
+        return [Path(str(out) + s) for s in getattr(module_for(out), "SIDECARS", ())]
+    except Exception:  # noqa: BLE001 - an unknown extension is reported by the writer
+        return []
+
+
 def run(args) -> int:
     from pathlib import Path
 
     from crankbench.measure._atomic import check_overwrite
 
+    from crankbench.analysis.commands._files import check_outputs, model_inputs
+
     out = Path(args.output)
+    check_outputs([(out, f"-o {out}")] + [(p, f"the sidecar of -o {out} ({p})")
+                                            for p in _written_sidecars(out)],
+                  model_inputs(args.scene, "the scene"))
     check_overwrite(out, args.overwrite, option="--overwrite")   # before any heavy work
 
     import json

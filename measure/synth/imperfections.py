@@ -25,6 +25,19 @@ _KEYS = ("noise_rms", "drift_rate", "offset", "gain_error", "tooth_error_deg",
          "butt_joint_deg", "jitter_s", "timer_resolution_s", "dropout_rate", "spurious_rate")
 
 
+#: unit and plausible range per key (noise and drift are in the channel's units: numbers only)
+_UNITS = {
+    "noise_rms": dict(unit=None), "drift_rate": dict(unit=None), "offset": dict(unit=None),
+    "gain_error": dict(unit="1", plausible=(1e-6, 0.5)),
+    "tooth_error_deg": dict(unit="deg", plausible=(1e-6, 10.0)),
+    "butt_joint_deg": dict(unit="deg", plausible=(1e-6, 90.0)),
+    "jitter_s": dict(unit="s", plausible=(1e-12, 1e-2)),
+    "timer_resolution_s": dict(unit="s", plausible=(1e-12, 1e-2)),
+    "dropout_rate": dict(unit="1", plausible=(1e-9, 0.5)),
+    "spurious_rate": dict(unit="1", plausible=(1e-9, 0.5)),
+}
+
+
 @dataclass(frozen=True)
 class Imperfections:
     """Imperfections of one sensor (or the scene's defaults).
@@ -86,7 +99,7 @@ class Imperfections:
         values = {}
         for key in _KEYS:
             if key in table:
-                values[key] = table.number(key)
+                values[key] = table.number(key, **_UNITS.get(key, {"unit": None}))
         try:
             return replace(base, **values)
         except ConfigError as exc:

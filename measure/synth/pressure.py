@@ -56,6 +56,12 @@ __all__ = ["TransducerErrors", "pressure_channel", "pressure_truth", "cylinder_n
 #: scene keys of a pressure sensor besides cylinder, sample_rate and location
 PRESSURE_KEYS = ("thermal_shock", "thermal_shock_deg", "tdc_error_deg", "cycle_variation")
 
+#: unit and plausible range of each key (a plain number is in this unit; "0.5 bar" converts)
+_UNITS = {"thermal_shock": dict(unit="Pa", plausible=(1.0, 1e7)),
+          "thermal_shock_deg": dict(unit="deg", plausible=(1.0, 180.0)),
+          "tdc_error_deg": dict(unit="deg", plausible=(1e-4, 30.0)),
+          "cycle_variation": dict(unit="1", plausible=(1e-5, 1.0))}
+
 TWO_PI = 2.0 * np.pi
 RPM = TWO_PI / 60.0
 #: crankcase pressure of the gas torque (predict.torsion.excitation.tangential_torque), Pa
@@ -92,7 +98,7 @@ class TransducerErrors:
     @classmethod
     def from_table(cls, table):
         """Read the keys of :data:`PRESSURE_KEYS` present in a TOML table."""
-        values = {k: table.number(k) for k in PRESSURE_KEYS if k in table}
+        values = {k: table.number(k, **_UNITS[k]) for k in PRESSURE_KEYS if k in table}
         try:
             return cls(**values)
         except ConfigError as exc:

@@ -224,6 +224,45 @@ class Scene:
                     raise ConfigError(f"scene {self.name!r}: sensor {s.name!r} node={node!r} is "
                                       f"not a shaft-line node{suggest(node, nodes)}; nodes: "
                                       f"{', '.join(nodes)}")
+        self._check_size()
+
+    def _check_size(self):
+        """Refuse a scene whose arrays cannot fit in memory, naming the key that sets the
+        largest of them (before anything is synthesized)."""
+        from crankbench.predict._memory import check_allocation
+
+        duration = self.profile.duration
+        revolutions = float(self.profile.angle(duration)) / (2.0 * np.pi)
+        parts = []   # (bytes, what)
+        for s in self.sensors:
+            fs = s.params.get("sample_rate")
+            if fs:
+                # time axis, signal, noise and the written copy: 4 float64 per sample
+                n = duration * float(fs)
+                parts.append((32.0 * n, f"sensor {s.name!r} sample_rate = {float(fs):g} Hz over "
+                                        f"{duration:g} s ({n:.3g} samples)"))
+            ppr = s.params.get("pulses_per_rev")
+            if ppr:
+                n = revolutions * int(ppr)
+                parts.append((24.0 * n, f"sensor {s.name!r} pulses_per_rev = {int(ppr)} over "
+                                        f"{revolutions:.4g} revolutions ({n:.3g} edges)"))
+        n_truth = duration * self.truth_rate
+        parts.append((16.0 * n_truth * len(self.sensors) * 2 * self.max_order,
+                      f"truth_rate = {self.truth_rate:g} Hz × max_order = {self.max_order:g}"))
+        f_max = self.max_order * float(self.profile.speed_rpm.max()) / 60.0
+        rates = [float(s.sample_rate) for s in self.sensors
+                 if s.kind == "torsiograph" and s.sample_rate]
+        if any(s.kind in ("torsiograph", "encoder", "tacho") for s in self.sensors):
+            n_t = duration * max(rates + [8.0 * f_max, 1000.0])
+            n_nodes = self.shaftline.n_nodes if self.shaftline is not None else 1
+            parts.append((8.0 * n_t * (2 * n_nodes + 8),
+                          f"torsional integration at {max(rates + [8.0 * f_max, 1000.0]):g} Hz "
+                          f"over {duration:g} s"))
+        total = sum(b for b, _ in parts)
+        _, biggest = max(parts)
+        check_allocation(total, error=ConfigError,
+                         what=f"scene {self.name!r}: {biggest}",
+                         hint="lower the sample rate or the duration ([profile] duration)")
 
     # ------------------------------------------------------------------------------ TOML
     @classmethod
@@ -270,9 +309,9 @@ class Scene:
             mounts = MountedEngine.from_toml(mounts_path)
         name = st.string("name", path.stem)
         seed = st.integer("seed", 0, minimum=0)
-        max_order = st.positive("max_order", 12.0)
-        start_angle = st.number("start_angle_deg", 0.0)
-        truth_rate = st.positive("truth_rate", 20.0)
+        max_order = st.positive("max_order", 12.0, unit="1", plausible=(0.5, 200.0))
+        start_angle = st.number("start_angle_deg", 0.0, unit="deg", plausible=(1e-3, 720.0))
+        truth_rate = st.positive("truth_rate", 20.0, unit="Hz", plausible=(0.1, 1e4))
         st.check_unknown(["description"])
         profile = _profile(doc.table("profile", None), path)
         load = _load(doc.table("load", None), engine)
@@ -288,8 +327,10 @@ class Scene:
         imbalance = []
         for t in doc.tables("imbalance", []):
             imbalance.append(Counterweight(
-                mass_radius=t.number("mass", low=0.0) * t.number("radius", low=0.0),
-                angle_deg=t.number("angle_deg"), position=t.number("position", 0.0)))
+                mass_radius=(t.number("mass", low=0.0, unit="kg", plausible=(1e-6, 1e4))
+                             * t.number("radius", low=0.0, unit="m", plausible=(1e-3, 5.0))),
+                angle_deg=t.number("angle_deg", unit="deg", plausible=(1e-3, 360.0)),
+                position=t.number("position", 0.0, unit="m", plausible=(1e-4, 100.0))))
             t.check_unknown(["description"])
         balance_masses = BalanceSpec.from_toml(engine_path).masses
         doc.check_unknown(["description"])
@@ -302,6 +343,12 @@ class Scene:
                        source=str(path), settings=settings)
         except ConfigError as exc:  # whole-scene checks: say which file to fix
             raise ConfigError(f"{path}: {exc}") from None
+
+
+# unit and plausible range of scene keys (plain numbers are in these units)
+_RPM = dict(unit="rpm", plausible=(1.0, 1e5))
+_S = dict(unit="s", plausible=(1e-3, 1e5))
+_FS = dict(unit="Hz", plausible=(1.0, 1e7))
 
 
 def _model_path(scene_path, table, key, *, required):
@@ -321,22 +368,25 @@ def _profile(t: Table | None, path) -> SpeedProfile:
     kind = t.string("kind", options=["steady", "runup", "coastdown", "exponential", "table"])
     try:
         if kind == "steady":
-            prof = steady(t.positive("speed_rpm"), duration=t.positive("duration"))
+            prof = steady(t.positive("speed_rpm", **_RPM), duration=t.positive("duration", **_S))
         elif kind in ("runup", "coastdown"):
-            start, end = t.positive("start_rpm"), t.positive("end_rpm")
+            start, end = t.positive("start_rpm", **_RPM), t.positive("end_rpm", **_RPM)
             if (kind == "runup") != (end > start):
                 t.fail("end_rpm", f"= {end:g} must be {'above' if kind == 'runup' else 'below'} "
                                   f"start_rpm = {start:g} for kind = {kind!r}")
-            prof = ramp(start, end, duration=t.positive("duration"),
-                        hold_start=t.number("hold_start", 0.0, low=0.0),
-                        hold_end=t.number("hold_end", 0.0, low=0.0))
+            prof = ramp(start, end, duration=t.positive("duration", **_S),
+                        hold_start=t.number("hold_start", 0.0, low=0.0, **_S),
+                        hold_end=t.number("hold_end", 0.0, low=0.0, **_S))
         elif kind == "exponential":
-            prof = exponential_coastdown(t.positive("start_rpm"), t.positive("end_rpm"),
-                                         time_constant=t.positive("time_constant"),
-                                         tolerance_rpm=t.positive("tolerance_rpm", 0.5))
+            prof = exponential_coastdown(t.positive("start_rpm", **_RPM),
+                                         t.positive("end_rpm", **_RPM),
+                                         time_constant=t.positive("time_constant", **_S),
+                                         tolerance_rpm=t.positive("tolerance_rpm", 0.5,
+                                                                  unit="rpm",
+                                                                  plausible=(1e-3, 1e3)))
         else:
-            prof = from_table(t.numbers("time", low=0.0), t.numbers("speed_rpm", low=0.0,
-                                                                    strict_low=True))
+            prof = from_table(t.numbers("time", low=0.0, **_S),
+                              t.numbers("speed_rpm", low=0.0, strict_low=True, **_RPM))
     except ConfigError as exc:
         if str(exc).startswith(str(path)):
             raise
@@ -348,9 +398,9 @@ def _profile(t: Table | None, path) -> SpeedProfile:
 def _load(t: Table | None, engine) -> LoadSpec:
     if t is None:
         return LoadSpec()
-    imep = t.positive("imep", None)
+    imep = t.positive("imep", None, unit="Pa", plausible=(1e4, 1e7))
     law = t.string("law", "constant", options=["constant", "propeller"])
-    ref = t.positive("reference_rpm", None)
+    ref = t.positive("reference_rpm", None, **_RPM)
     if law == "propeller":
         ref = ref or engine.rated_speed_rpm
         if ref is None:
@@ -370,54 +420,60 @@ def _sensor(t: Table, defaults: Imperfections) -> SensorSpec:
         p["node"] = t.string("node")
     if kind == "torsiograph":
         p["quantity"] = t.string("quantity", "angle", options=["angle", "angular_velocity"])
-        p["sample_rate"] = t.positive("sample_rate")
+        p["sample_rate"] = t.positive("sample_rate", **_FS)
     if kind in ("encoder", "tacho"):
         p["pulses_per_rev"] = t.integer("pulses_per_rev", minimum=1)
         p["missing_teeth"] = t.integer("missing_teeth", 0, minimum=0)
         if p["missing_teeth"] and p["missing_teeth"] >= p["pulses_per_rev"] - 1:
             t.fail("missing_teeth", f"= {p['missing_teeth']} must be less than "
                                     f"pulses_per_rev - 1 = {p['pulses_per_rev'] - 1}")
-        p["tdc_offset_deg"] = t.number("tdc_offset_deg", 0.0)
+        p["tdc_offset_deg"] = t.number("tdc_offset_deg", 0.0, unit="deg", plausible=(1e-3, 720.0))
     if kind == "tacho":
         p["output"] = t.string("output", "pulses", options=["pulses", "analogue"])
         if p["output"] == "analogue":
-            p["sample_rate"] = t.positive("sample_rate")
+            p["sample_rate"] = t.positive("sample_rate", **_FS)
             p["shape"] = t.string("shape", "sine", options=["sine", "square"])
-            p["runt_teeth"] = [int(k) for k in t.numbers("runt_teeth", [])]
+            p["runt_teeth"] = [int(k) for k in t.numbers("runt_teeth", [], unit="1")]
             for k in p["runt_teeth"]:
                 if not 0 <= k < p["pulses_per_rev"] - p["missing_teeth"]:
                     t.fail("runt_teeth", f"tooth {k} is not on the wheel (teeth 0 .. "
                                          f"{p['pulses_per_rev'] - p['missing_teeth'] - 1}, 0 "
                                          "the first after the gap)")
-            p["runt_level"] = t.number("runt_level", 0.11, low=0.0, high=1.0)
-            p["ringing"] = t.number("ringing", 0.0, low=0.0, high=1.0)
-            p["ringing_hz"] = t.positive("ringing_hz", p["sample_rate"] / 8.0)
+            p["runt_level"] = t.number("runt_level", 0.11, low=0.0, high=1.0, unit="1",
+                                         plausible=(1e-3, 1.0))
+            p["ringing"] = t.number("ringing", 0.0, low=0.0, high=1.0, unit="1",
+                                      plausible=(1e-4, 1.0))
+            p["ringing_hz"] = t.positive("ringing_hz", p["sample_rate"] / 8.0, unit="Hz",
+                                           plausible=(0.1, 1e7))
             if p["ringing"] and p["ringing_hz"] >= p["sample_rate"] / 2:
                 t.fail("ringing_hz", f"= {p['ringing_hz']:g} must be below half the sample "
                                      "rate")
-            p["mark_width_deg"] = t.positive("mark_width_deg", None)
+            p["mark_width_deg"] = t.positive("mark_width_deg", None, unit="deg",
+                                               plausible=(1e-3, 90.0))
     if kind == "vibrograph":
         if ("point" in t) == ("mount" in t):
             t.fail("point", "give exactly one of point = [x, y, z] (m) or mount = 'name'")
         if "point" in t:
-            p["point"] = t.numbers("point", length=3).tolist()
+            p["point"] = t.numbers("point", length=3, unit="m", plausible=(1e-4, 100.0)).tolist()
         else:
             p["mount"] = t.string("mount")
         p["direction"] = t.string("direction", "z", options=["x", "y", "z"])
         p["quantity"] = t.string("quantity", "acceleration",
                                  options=["acceleration", "velocity", "displacement"])
-        p["sample_rate"] = t.positive("sample_rate")
+        p["sample_rate"] = t.positive("sample_rate", **_FS)
     if kind == "pressure":
         from .pressure import TransducerErrors
 
         p["cylinder"] = t.integer("cylinder", 1, minimum=1)
-        p["sample_rate"] = t.positive("sample_rate")
+        p["sample_rate"] = t.positive("sample_rate", **_FS)
         p["transducer"] = TransducerErrors.from_table(t)
     if kind == "speed":
-        p["sample_rate"] = t.positive("sample_rate")
+        p["sample_rate"] = t.positive("sample_rate", **_FS)
     if kind in ("torsiograph", "vibrograph") and "instrument_frequency" in t:
-        p["instrument_frequency"] = t.positive("instrument_frequency")
-        p["instrument_damping"] = t.number("instrument_damping", 0.65, low=0.0)
+        p["instrument_frequency"] = t.positive("instrument_frequency", unit="Hz",
+                                               plausible=(0.1, 1e6))
+        p["instrument_damping"] = t.number("instrument_damping", 0.65, low=0.0, unit="1",
+                                           plausible=(1e-3, 10.0))
     location = t.string("location", None)
     if location is not None:
         p["location"] = location

@@ -185,6 +185,21 @@ class Rotor:
                 if item.position > total + _TOL:
                     raise ModelError(f"{name}[{i}].position={item.position!r} m lies beyond the "
                                      f"shaft end at {total:g} m")
+        self._check_size()
+
+    def _check_size(self):
+        """Refuse a mesh whose dense matrices cannot fit in memory (before any is allocated)."""
+        from .._memory import check_allocation
+
+        count = sum(n for *_, n in self._intervals(1))
+        n_dof = 4.0 * (count + 1)
+        # assembly holds K, M, C, G and their constrained copies: 8 dense n_dof² float64
+        what = (f"shaft mesh of {count} elements ({n_dof:.0f} degrees of freedom; "
+                + (f"max_element_length={self.max_element_length:g} m" if self.max_element_length
+                   else "n_elements of the sections") + ")")
+        check_allocation(8 * 8 * n_dof**2, what=what,
+                         hint="use longer elements (max_element_length, n_elements)",
+                         error=ModelError)
 
     @property
     def length(self) -> float:
@@ -198,10 +213,10 @@ class Rotor:
                      + sum(d.mass for d in self.disks))
 
     # -- assembly --------------------------------------------------------------------------
-    def _mesh(self, coarsen: int):
+    def _intervals(self, coarsen: int):
+        """(section index, start m, end m, number of elements) of every meshed interval."""
         h_default = self.max_element_length or self.length / 20
         marks = sorted({d.position for d in self.disks} | {b.position for b in self.bearings})
-        nodes, owner = [0.0], []
         z0 = 0.0
         for si, sec in enumerate(self.shaft):
             z1 = z0 + sec.length
@@ -209,10 +224,14 @@ class Rotor:
             h = sec.length / sec.n_elements if sec.n_elements else h_default
             for a, b in zip(cuts[:-1], cuts[1:]):
                 n = max(1, math.ceil((b - a) / h - 1e-9))
-                n = max(1, math.ceil(n / coarsen))
-                nodes.extend(a + (b - a) * np.arange(1, n + 1) / n)
-                owner.extend([si] * n)
+                yield si, a, b, max(1, math.ceil(n / coarsen))
             z0 = z1
+
+    def _mesh(self, coarsen: int):
+        nodes, owner = [0.0], []
+        for si, a, b, n in self._intervals(coarsen):
+            nodes.extend(a + (b - a) * np.arange(1, n + 1) / n)
+            owner.extend([si] * n)
         return np.asarray(nodes), owner
 
     def _assemble(self, coarsen: int = 1) -> _Model:

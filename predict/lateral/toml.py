@@ -43,6 +43,10 @@ File layout (SI units; rpm only in keys that say so)::
     position = 0.5                 # m (a disk or node position)
     magnitude = 1.0e-4             # kg·m
     angle_deg = 0.0
+
+Any number may be written with its unit as a string, converted by pint
+(``outer_diameter = "50 mm"``, ``kxx = "1 kN/mm"``, ``magnitude = "100 g*mm"``); a value far
+outside the key's plausible range warns with the likely slip.
 """
 
 from __future__ import annotations
@@ -90,6 +94,16 @@ class RotorModel:
         return np.linspace(lo, hi, self.n_speeds) * math.pi / 30
 
 
+# unit and plausible range of the rotor keys (plain numbers are in these units)
+_LENGTH = dict(unit="m", plausible=(1e-3, 100.0))
+_POSITION = dict(unit="m", plausible=(1e-4, 100.0))
+_DIAMETER = dict(unit="m", plausible=(1e-3, 5.0))
+_DENSITY = dict(unit="kg/m^3", plausible=(300.0, 25000.0))
+_INERTIA = dict(unit="kg*m^2", plausible=(1e-8, 1e7))
+_BEARING_K = dict(unit="N/m", plausible=(1e2, 1e13))
+_BEARING_C = dict(unit="N*s/m", plausible=(1e-2, 1e10))
+
+
 def _bool(t: Table, key: str, default: bool) -> bool:
     value = t.raw(key, default)
     if not isinstance(value, bool):
@@ -100,10 +114,11 @@ def _bool(t: Table, key: str, default: bool) -> bool:
 def _material(t: Table | None, default: Material) -> Material:
     if t is None or not t.data:
         return default
-    e = t.positive("youngs_modulus", default.youngs_modulus)
-    rho = t.positive("density", default.density)
-    g = t.positive("shear_modulus", None)
-    nu = t.number("poisson_ratio", None, low=-0.999, high=0.499)
+    e = t.positive("youngs_modulus", default.youngs_modulus, unit="Pa", plausible=(1e9, 1e12))
+    rho = t.positive("density", default.density, **_DENSITY)
+    g = t.positive("shear_modulus", None, unit="Pa", plausible=(1e9, 5e11))
+    nu = t.number("poisson_ratio", None, low=-0.999, high=0.499, unit="1",
+                  plausible=(0.05, 0.499))
     t.check_unknown()
     try:
         if g is not None:
@@ -145,8 +160,10 @@ def load_rotor(path: str | Path) -> RotorModel:
     sections = []
     for s in r.tables("shaft"):
         mat = _material(s.table("material", None), material)
-        values = dict(length=s.positive("length"), outer_diameter=s.positive("outer_diameter"),
-                      inner_diameter=s.number("inner_diameter", 0.0, low=0.0), material=mat,
+        values = dict(length=s.positive("length", **_LENGTH),
+                      outer_diameter=s.positive("outer_diameter", **_DIAMETER),
+                      inner_diameter=s.number("inner_diameter", 0.0, low=0.0, **_DIAMETER),
+                      material=mat,
                       n_elements=s.integer("n_elements", None, minimum=1))
         s.check_unknown()
         try:
@@ -157,17 +174,22 @@ def load_rotor(path: str | Path) -> RotorModel:
         r.fail("shaft", "needs at least one [[rotor.shaft]] section")
     disks = []
     for d in r.tables("disks", []):
-        position = d.number("position", low=0.0)
+        position = d.number("position", low=0.0, **_POSITION)
         if "mass" in d:
-            values = dict(position=position, mass=d.positive("mass"),
-                          diametral_inertia=d.number("diametral_inertia", 0.0, low=0.0),
-                          polar_inertia=d.number("polar_inertia", 0.0, low=0.0))
+            values = dict(position=position,
+                          mass=d.positive("mass", unit="kg", plausible=(1e-3, 1e6)),
+                          diametral_inertia=d.number("diametral_inertia", 0.0, low=0.0,
+                                                     **_INERTIA),
+                          polar_inertia=d.number("polar_inertia", 0.0, low=0.0, **_INERTIA))
             build = Disk
         else:
-            values = dict(position=position, outer_diameter=d.positive("outer_diameter"),
-                          width=d.positive("width"),
-                          inner_diameter=d.number("inner_diameter", 0.0, low=0.0),
-                          density=d.positive("density", material.density))
+            values = dict(position=position,
+                          outer_diameter=d.positive("outer_diameter", unit="m",
+                                                    plausible=(1e-3, 20.0)),
+                          width=d.positive("width", unit="m", plausible=(1e-4, 10.0)),
+                          inner_diameter=d.number("inner_diameter", 0.0, low=0.0, unit="m",
+                                                  plausible=(1e-4, 20.0)),
+                          density=d.positive("density", material.density, **_DENSITY))
             build = Disk.from_geometry
         d.check_unknown()
         try:
@@ -182,20 +204,22 @@ def load_rotor(path: str | Path) -> RotorModel:
             continue
         rigid = _bool(b, "rigid", False)
         inf = math.inf
-        kxx = inf if rigid else b.number("kxx", low=0.0)
-        kw = dict(kyy=inf if rigid else b.number("kyy", None, low=0.0),
-                  kxy=b.number("kxy", 0.0), kyx=b.number("kyx", 0.0),
-                  cxx=b.number("cxx", 0.0, low=0.0), cyy=b.number("cyy", None, low=0.0),
-                  cxy=b.number("cxy", 0.0), cyx=b.number("cyx", 0.0),
+        kxx = inf if rigid else b.number("kxx", low=0.0, **_BEARING_K)
+        kw = dict(kyy=inf if rigid else b.number("kyy", None, low=0.0, **_BEARING_K),
+                  kxy=b.number("kxy", 0.0, **_BEARING_K), kyx=b.number("kyx", 0.0, **_BEARING_K),
+                  cxx=b.number("cxx", 0.0, low=0.0, **_BEARING_C),
+                  cyy=b.number("cyy", None, low=0.0, **_BEARING_C),
+                  cxy=b.number("cxy", 0.0, **_BEARING_C), cyx=b.number("cyx", 0.0, **_BEARING_C),
                   clamp=_bool(b, "clamp", False))
-        position = b.number("position", low=0.0)
+        position = b.number("position", low=0.0, **_POSITION)
         b.check_unknown()
         try:
             bearings.append(Bearing(position, kxx, **kw))
         except ModelError as exc:  # cross-field checks (rigid with cross-coupling)
             b.fail(None, str(exc))
     values = dict(theory=r.string("theory", "timoshenko", options=THEORIES),
-                  max_element_length=r.positive("max_element_length", None),
+                  max_element_length=r.positive("max_element_length", None, unit="m",
+                                                plausible=(1e-4, 100.0)),
                   rotary_inertia=_bool(r, "rotary_inertia", True),
                   name=r.string("name", Path(path).stem))
     r.check_unknown()
@@ -205,17 +229,21 @@ def load_rotor(path: str | Path) -> RotorModel:
         r.fail(None, str(exc))
 
     a = doc.table("analysis", {})
-    rng = a.numbers("speed_range_rpm", [0.0, 10000.0], length=2, low=0.0)
+    rng = a.numbers("speed_range_rpm", [0.0, 10000.0], length=2, low=0.0, unit="rpm",
+                    plausible=(1.0, 1e6))
     if rng[1] <= rng[0]:
         a.fail("speed_range_rpm", f"= {rng.tolist()} must be increasing")
-    orders = a.numbers("orders", [1.0], low=0.0, strict_low=True)
+    orders = a.numbers("orders", [1.0], low=0.0, strict_low=True, unit="1",
+                       plausible=(1e-2, 100.0))
     n_speeds = a.integer("n_speeds", 41, minimum=2)
     n_modes = a.integer("n_modes", 4, minimum=1)
     a.check_unknown()
     unbalances = []
     for u in doc.tables("unbalance", []):
-        unbalances.append((u.number("position", low=0.0), u.positive("magnitude"),
-                           math.radians(u.number("angle_deg", 0.0))))
+        unbalances.append((u.number("position", low=0.0, **_POSITION),
+                           u.positive("magnitude", unit="kg*m", plausible=(1e-9, 10.0)),
+                           math.radians(u.number("angle_deg", 0.0, unit="deg",
+                                                 plausible=(1e-3, 360.0)))))
         u.check_unknown()
     doc.check_unknown()
     return RotorModel(rotor=rotor, speed_range_rpm=(float(rng[0]), float(rng[1])),
@@ -227,14 +255,16 @@ def _journal_bearing(b: Table, jt: Table):
     """A ``[rotor.bearings.journal]`` entry: coefficients of the film at its design point."""
     from .journal import BEARING_MODELS, JournalBearing
 
-    position = b.number("position", low=0.0)
+    position = b.number("position", low=0.0, **_POSITION)
     b.check_unknown(["journal"])
-    kw = dict(diameter=jt.positive("diameter"), length=jt.positive("length"),
-              radial_clearance=jt.positive("radial_clearance"),
-              viscosity=jt.positive("viscosity"),
+    kw = dict(diameter=jt.positive("diameter", **_DIAMETER),
+              length=jt.positive("length", unit="m", plausible=(1e-3, 5.0)),
+              radial_clearance=jt.positive("radial_clearance", unit="m",
+                                           plausible=(1e-7, 1e-2)),
+              viscosity=jt.positive("viscosity", unit="Pa*s", plausible=(1e-5, 10.0)),
               model=jt.string("model", "finite", options=BEARING_MODELS))
-    load = jt.positive("load")
-    speed = jt.positive("speed_rpm")
+    load = jt.positive("load", unit="N", plausible=(1e-2, 1e8))
+    speed = jt.positive("speed_rpm", unit="rpm", plausible=(1.0, 1e6))
     jt.check_unknown()
     try:
         co = JournalBearing(**kw).coefficients(load=(0.0, -load), omega=speed * math.pi / 30)

@@ -24,7 +24,7 @@ import numpy as np
 from .._validate import check_finite_array
 from ..errors import ModelError
 
-__all__ = ["system_at_speed", "has_speed_dependence", "campbell_frequencies",
+__all__ = ["system_at_speed", "has_speed_dependence", "campbell_frequencies", "plot_campbell",
            "speed_dependent_criticals"]
 
 TWO_PI = 2.0 * np.pi
@@ -143,3 +143,60 @@ def _draw_branches(system, ax, lo: float, hi: float, points: int = 60):
     for m, grp in camp.groupby("mode"):
         ax.plot(grp.speed_rpm, grp.frequency_hz, color="0.5", lw=0.8)
     return ax.figure
+
+
+def plot_campbell(system, orders=None, speed_range_rpm=None, *, ax=None, modes=None):
+    """Campbell diagram of a torsional system: natural frequencies (Hz, horizontal lines, or
+    curves where pendulum modes move with speed) and order rays against speed (rpm), with the
+    critical speeds marked (size ∝ relative vector sum).
+
+    Parameters
+    ----------
+    system : TorsionalSystem
+    orders : array_like, optional
+        Orders drawn (default the system's default orders).
+    speed_range_rpm : (float, float), optional
+        Speed axis, rpm (default 0 to 1.1 × the highest critical speed).
+    ax : matplotlib.axes.Axes, optional
+    modes : iterable of int, optional
+        Mode numbers shown (default all elastic modes).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    import matplotlib.pyplot as plt
+
+    orders = system.default_orders() if orders is None else np.asarray(orders, float)
+    crit = system.critical_speeds(orders, speed_range_rpm)
+    if ax is None:
+        fig, ax = plt.subplots(figsize=(7, 5))
+    else:
+        fig = ax.figure
+    lo, hi = (0.0, float(crit.speed_rpm.max()) * 1.1 if len(crit) else 1000.0) \
+        if speed_range_rpm is None else map(float, speed_range_rpm)
+    omega, numbers = system._values[:2]
+    f = omega / TWO_PI
+    shown = [i for i in np.flatnonzero(numbers > 0) if modes is None or numbers[i] in modes]
+
+    if has_speed_dependence(system):      # pendulum modes move with speed: draw the curves
+        _draw_branches(system, ax, max(lo, 1e-3), hi)
+    else:
+        for i in shown:
+            ax.axhline(f[i], color="0.5", lw=0.8)
+    rpm = np.array([lo, hi])
+    for q in orders:
+        ax.plot(rpm, rpm * q / 60.0, color="C0" if system.major_orders([q])[0] else "C1",
+                lw=0.6)
+    sel = crit[crit["mode"].isin(numbers[shown])]
+    size = 10 + 30 * np.nan_to_num(sel.vector_sum.to_numpy(), nan=1.0)
+    ax.scatter(sel.speed_rpm, sel.frequency_hz, s=size, color="k", zorder=3)
+    ax.set_xlim(lo, hi)
+    top = f[shown].max() * 1.15 if shown else 1.0
+    ax.set_ylim(0, top)
+    ax.set_xlabel("speed [rpm]")
+    ax.set_ylabel("frequency [Hz]")
+    ax.set_title("Campbell diagram (blue: major orders)")
+    fig.tight_layout()
+    return fig
+

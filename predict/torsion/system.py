@@ -417,6 +417,14 @@ class TorsionalSystem:
                                           self._eigen_nodes)
         return self._layout_cache
 
+    def _check_dense(self, n_values: float, what: str) -> None:
+        """ModelError naming the model size when ``n_values`` float64 cannot fit in memory."""
+        from .._memory import check_allocation
+
+        check_allocation(8.0 * n_values, error=ModelError,
+                         what=f"{self.name or 'shaft line'}: {self.n_nodes} masses, {what}",
+                         hint="lump the shaft line into fewer masses")
+
     def _sub_stiffness(self, info):
         nodes = info["nodes"]
         sub = np.zeros((nodes.size, nodes.size))
@@ -434,6 +442,8 @@ class TorsionalSystem:
         kind, info = self._layout()
         nodes = info["nodes"]
         jn = self._j[nodes]
+        if kind != "chain":  # dense eigh: the scaled stiffness, its copy and the workspace
+            self._check_dense(3.0 * nodes.size**2, "a dense eigen-solve")
         if kind == "chain":
             omega = eigen.chain_frequencies(jn[info["order"]], info["chain_k"],
                                             grounded=info["grounded"])
@@ -462,6 +472,10 @@ class TorsionalSystem:
     @functools.cached_property
     def _eigen(self):
         """(ω rad/s, mass-normalised shapes (n_nodes, n_modes), numbers, method, bound)."""
+        # every mode shape at every node, twice (solver output and the placed copy): refuse
+        # before the frequencies are even computed when that cannot fit
+        self._check_dense(2.0 * self.n_nodes * self._layout()[1]["nodes"].size,
+                          "dense mode shapes")
         omega, numbers, method, bound, kind, info = self._values
         nodes = info["nodes"]
         jn = self._j[nodes]
@@ -690,119 +704,19 @@ class TorsionalSystem:
         return frame.sort_values(["speed_rpm", "mode"], ignore_index=True)
 
     def plot_campbell(self, orders=None, speed_range_rpm=None, *, ax=None, modes=None):
-        """Campbell diagram: natural frequencies (horizontal) and order lines vs speed, with
-        the critical speeds marked (size ∝ relative vector sum). Returns the figure."""
-        import matplotlib.pyplot as plt
+        """Campbell diagram (speed in rpm on x, frequency in Hz on y); see
+        :func:`predict.torsion.campbell.plot_campbell`. Returns the figure."""
+        from .campbell import plot_campbell
 
-        orders = self.default_orders() if orders is None else np.asarray(orders, float)
-        crit = self.critical_speeds(orders, speed_range_rpm)
-        if ax is None:
-            fig, ax = plt.subplots(figsize=(7, 5))
-        else:
-            fig = ax.figure
-        lo, hi = (0.0, float(crit.speed_rpm.max()) * 1.1 if len(crit) else 1000.0) \
-            if speed_range_rpm is None else map(float, speed_range_rpm)
-        omega, numbers = self._values[:2]
-        f = omega / TWO_PI
-        shown = [i for i in np.flatnonzero(numbers > 0) if modes is None or numbers[i] in modes]
-        from .campbell import has_speed_dependence, _draw_branches
-
-        if has_speed_dependence(self):      # pendulum modes move with speed: draw the curves
-            _draw_branches(self, ax, max(lo, 1e-3), hi)
-        else:
-            for i in shown:
-                ax.axhline(f[i], color="0.5", lw=0.8)
-        rpm = np.array([lo, hi])
-        for q in orders:
-            ax.plot(rpm, rpm * q / 60.0, color="C0" if self.major_orders([q])[0] else "C1",
-                    lw=0.6)
-        sel = crit[crit["mode"].isin(numbers[shown])]
-        size = 10 + 30 * np.nan_to_num(sel.vector_sum.to_numpy(), nan=1.0)
-        ax.scatter(sel.speed_rpm, sel.frequency_hz, s=size, color="k", zorder=3)
-        ax.set_xlim(lo, hi)
-        top = f[shown].max() * 1.15 if shown else 1.0
-        ax.set_ylim(0, top)
-        ax.set_xlabel("speed [rpm]")
-        ax.set_ylabel("frequency [Hz]")
-        ax.set_title("Campbell diagram (blue: major orders)")
-        fig.tight_layout()
-        return fig
+        return plot_campbell(self, orders, speed_range_rpm, ax=ax, modes=modes)
 
     # ----------------------------------------------------------------- Holzer -----------
     def holzer_table(self, frequency_hz: float):
-        """Classical Holzer table at a trial frequency (chains only).
+        """Classical Holzer table at a trial frequency, Hz (chains only); see
+        :func:`predict.torsion.holzer.holzer_table` (columns, residual, references)."""
+        from .holzer import holzer_table
 
-        Starting with unit amplitude at the first mass (the free end of a grounded chain),
-        each row gives the inertia torque J ω² θ, the cumulative torque in the following shaft
-        and the twist ΣT/k. The residual torque (last row's ``torque_sum``) is zero at a
-        natural frequency.
-
-        Parameters
-        ----------
-        frequency_hz : float
-            Trial frequency, Hz.
-
-        Returns
-        -------
-        pandas.DataFrame
-            Columns ``node``, ``inertia``, ``amplitude`` (rad), ``inertia_torque`` (N·m/rad of
-            reference amplitude), ``torque_sum`` (N·m), ``stiffness`` (N·m/rad), ``twist`` (rad);
-            ``attrs['residual']`` is the residual: the torque past the last mass (free chain,
-            ``attrs['residual_torque']``, N·m per rad at the first mass) or the angle at the
-            ground (grounded chain, marched from the free end, ``attrs['residual_amplitude']``).
-
-        References
-        ----------
-        H. Holzer, *Die Berechnung der Drehschwingungen*, Springer, 1921; 内燃机动力学 (1958),
-        第二篇 第二章 §2 多质量振动系统.
-
-        Examples
-        --------
-        >>> from crankbench.predict.torsion import chain
-        >>> s = chain([1.0, 1.0], [1e4])
-        >>> t = s.holzer_table(s.natural_frequencies()[1])
-        >>> print(abs(t.attrs["residual_torque"]) < 1e-9)
-        True
-        """
-        import pandas as pd
-
-        from .._validate import check_nonnegative
-
-        fr = check_nonnegative(frequency_hz, "frequency_hz", error=ModelError)
-        kind, info = self._layout()
-        if kind != "chain":
-            raise ModelError("holzer_table: the system is branched; the Holzer table applies "
-                             "to chains (use natural_frequencies() for trees)")
-        order = info["nodes"][info["order"]]
-        ks = np.asarray(info["chain_k"], float)
-        grounded = info["grounded"]
-        if grounded:
-            # march from the free end towards the ground; the residual is the ground's angle
-            order = order[::-1]
-            ks = ks[::-1]
-        w2 = (TWO_PI * fr) ** 2
-        rows = []
-        theta, tsum = 1.0, 0.0
-        for idx, node in enumerate(order):
-            jt = self._j[node] * w2 * theta
-            tsum += jt
-            k = ks[idx] if idx < len(ks) else np.nan
-            twist = tsum / k if np.isfinite(k) else np.nan
-            rows.append((self.node_names[node], self._j[node], theta, jt, tsum, k, twist))
-            if np.isfinite(k):
-                theta -= twist
-        if grounded:
-            rows.append(("ground", np.inf, theta, np.nan, np.nan, np.nan, np.nan))
-        frame = pd.DataFrame(rows, columns=["node", "inertia", "amplitude", "inertia_torque",
-                                            "torque_sum", "stiffness", "twist"])
-        frame.attrs["frequency_hz"] = fr
-        if grounded:
-            frame.attrs["residual_amplitude"] = float(theta)
-            frame.attrs["residual"] = float(theta)
-        else:
-            frame.attrs["residual_torque"] = float(tsum)
-            frame.attrs["residual"] = float(tsum)
-        return frame
+        return holzer_table(self, frequency_hz)
 
     # ----------------------------------------------------------------- forced -----------
     def forced_response(self, speed_rpm, **kwargs):

@@ -53,6 +53,10 @@ Layout (SI unless the key names another unit; values at each part's own speed)::
     operating_range_rpm = [500, 750]
     [[limits.shafting]]  section, tensile_strength_mpa, design, kind, material  (IACS UR M68)
     [limits.crankshaft]  sections, continuous_mpa, transient_mpa, source  (engine maker)
+
+Any number may be written with its unit as a string, converted by pint
+(``diameter = "300 mm"``, ``shear_modulus = "81 GPa"``, ``stiffness = "60 MN*m/rad"``); a
+value far outside the key's plausible range warns with the likely slip.
 """
 
 from __future__ import annotations
@@ -72,6 +76,27 @@ _DAMPER_KEYS = {
     "tuned": ("ring_inertia", "stiffness", "damping", "loss_factor"),
     "pendulum": ("mass", "pivot_radius", "length", "damping"),
     "friction": ("ring_inertia", "slip_torque"),
+}
+
+
+# unit and plausible range of the shaft-line keys (plain numbers are in these units)
+_SPEED = (1.0, 1e5)
+_SHEAR = dict(unit="Pa", plausible=(1e9, 3e11))          # shafts: composites to steel
+_INERTIA = dict(unit="kg*m^2", plausible=(1e-7, 1e7))    # model engine throw to ship propeller
+_STIFFNESS = dict(unit="N*m/rad", plausible=(10.0, 1e12))
+_DAMPING = dict(unit="N*m*s/rad", plausible=(1e-6, 1e9))
+_DIAMETER = dict(unit="m", plausible=(1e-3, 3.0))
+_RATIO = dict(unit="1", plausible=(1e-3, 1e3))
+_LOSS = dict(unit="1", plausible=(1e-5, 1.0))
+_STRESS_MPA = dict(unit="MPa", plausible=(0.1, 3000.0))
+_DAMPER_UNITS = {
+    "ring_inertia": _INERTIA, "damping": _DAMPING, "stiffness": _STIFFNESS, "loss_factor": _LOSS,
+    "mass": dict(unit="kg", plausible=(1e-3, 1e4)),
+    "pivot_radius": dict(unit="m", plausible=(1e-3, 3.0)),
+    "length": dict(unit="m", plausible=(1e-4, 3.0)),
+    "slip_torque": dict(unit="N*m", plausible=(1e-2, 1e7)),
+    "design_frequency": dict(unit="rad/s", plausible=(0.1, 1e5)),   # "50 Hz" = 314 rad/s
+    "design_amplitude": dict(unit="rad", plausible=(1e-7, 0.5)),
 }
 
 
@@ -122,9 +147,11 @@ def load_limits(table, *, engine=None):
 
     curves = None
     if "speed_rpm" in table or "continuous_mpa" in table or "transient_mpa" in table:
-        speeds = table.numbers("speed_rpm", low=0.0)
-        cont = table.numbers("continuous_mpa", length=speeds.size, low=0.0, strict_low=True)
-        trans = table.numbers("transient_mpa", length=speeds.size, low=0.0, strict_low=True)
+        speeds = table.numbers("speed_rpm", low=0.0, unit="rpm", plausible=_SPEED)
+        cont = table.numbers("continuous_mpa", length=speeds.size, low=0.0, strict_low=True,
+                             **_STRESS_MPA)
+        trans = table.numbers("transient_mpa", length=speeds.size, low=0.0, strict_low=True,
+                              **_STRESS_MPA)
         sections = table.raw("sections", [])
         if not isinstance(sections, list) or not all(isinstance(s, str) for s in sections):
             table.fail("sections", "must be an array of section names")
@@ -134,27 +161,30 @@ def load_limits(table, *, engine=None):
         except ModelError as exc:
             raise ModelError(f"{table.where()} {exc}") from None
     application = table.string("application", "propulsion", options=("propulsion", "auxiliary"))
-    rated = table.positive("rated_speed_rpm", None)
+    rated = table.positive("rated_speed_rpm", None, unit="rpm", plausible=_SPEED)
     if rated is None and engine is not None:
         rated = getattr(engine, "rated_speed_rpm", None)
-    op = table.numbers("operating_range_rpm", None, length=2, low=0.0)
+    op = table.numbers("operating_range_rpm", None, length=2, low=0.0, unit="rpm",
+                       plausible=_SPEED)
     if op is not None and not op[0] < op[1]:
         table.fail("operating_range_rpm", f"= {op.tolist()!r} must be [low, high] with low < high")
     misfire = table.raw("misfire_operation", False)
     if not isinstance(misfire, bool):
         table.fail("misfire_operation", f"= {misfire!r} must be true or false")
-    tol = table.number("tachometer_tolerance_rpm", 0.0, low=0.0)
+    tol = table.number("tachometer_tolerance_rpm", 0.0, low=0.0, unit="rpm",
+                       plausible=(1e-3, 1e3))
     source = table.string("source", None) if curves is None else None
     shafting = []
     for t in table.tables("shafting", []):
         kw = dict(section=t.string("section"),
-                  tensile_strength=t.positive("tensile_strength_mpa") * 1e6,
+                  tensile_strength=t.positive("tensile_strength_mpa", unit="MPa",
+                                              plausible=(100.0, 3000.0)) * 1e6,
                   design=t.string("design", "integral flange",
                                   options=list(_m68_ck())),
                   material=t.string("material", "carbon", options=("carbon", "alloy")),
                   kind=t.string("kind", "intermediate",
                                 options=("intermediate", "propeller", "thrust")),
-                  diameter=t.positive("diameter", None))
+                  diameter=t.positive("diameter", None, **_DIAMETER))
         t.check_unknown()
         shafting.append(SectionRule(**kw))
     crank = None
@@ -163,8 +193,8 @@ def load_limits(table, *, engine=None):
         secs = ct.raw("sections")
         if not isinstance(secs, list) or not secs or not all(isinstance(s, str) for s in secs):
             ct.fail("sections", "must be a non-empty array of section names")
-        c = ct.positive("continuous_mpa")
-        tr = ct.positive("transient_mpa")
+        c = ct.positive("continuous_mpa", **_STRESS_MPA)
+        tr = ct.positive("transient_mpa", **_STRESS_MPA)
         if tr < c:
             ct.fail("transient_mpa", f"= {tr:g} must be >= continuous_mpa = {c:g}")
         crank = MakerLimit(tuple(secs), c * 1e6, tr * 1e6,
@@ -177,7 +207,8 @@ def load_limits(table, *, engine=None):
                                            options=("ISO 10816-6", "ISO 10816-1")),
                      "machine_class": vt.raw("machine_class", None),
                      "boundaries_mm_s": vt.numbers("boundaries_mm_s", None, length=3, low=0.0,
-                                                   strict_low=True),
+                                                   strict_low=True, unit="mm/s",
+                                                   plausible=(0.01, 1000.0)),
                      "source": vt.string("source", "model [limits.vibration]")}
         mc = vibration["machine_class"]
         if mc is not None and not isinstance(mc, (int, str)):
@@ -270,9 +301,10 @@ def from_toml(path):
         engine = Engine.from_toml(path)
     doc.raw("engine", None)
     line = ShaftLine(sl.string("name", path.stem), engine=engine,
-                     shear_modulus=sl.positive("shear_modulus", 80.0e9))
-    speed_range = sl.numbers("speed_range_rpm", None, length=2, low=0.0)
-    imep = sl.positive("imep", None)
+                     shear_modulus=sl.positive("shear_modulus", 80.0e9, **_SHEAR))
+    speed_range = sl.numbers("speed_range_rpm", None, length=2, low=0.0, unit="rpm",
+                             plausible=_SPEED)
+    imep = sl.positive("imep", None, unit="Pa", plausible=(1e4, 1e7))
 
     def wrap(table, func, *args, **kwargs):
         try:
@@ -288,18 +320,19 @@ def from_toml(path):
                 t.fail("cylinder", f"= {cyl!r} must be a cylinder number or an array of them")
         else:
             cyl = t.integer("cylinder", None, minimum=1)
-        kw = dict(ratio=t.number("ratio", 1.0), damping=t.number("damping", 0.0, low=0.0),
-                  cylinder=cyl)
+        kw = dict(ratio=t.number("ratio", 1.0, **_RATIO),
+                  damping=t.number("damping", 0.0, low=0.0, **_DAMPING), cylinder=cyl)
         if "throw_inertia" in t:
-            kw["throw_inertia"] = t.number("throw_inertia", low=0.0)
+            kw["throw_inertia"] = t.number("throw_inertia", low=0.0, **_INERTIA)
             inertia = None
         else:
-            inertia = t.positive("inertia")
+            inertia = t.positive("inertia", **_INERTIA)
         name = t.string("name")
         t.check_unknown()
         wrap(t, line.add_mass, name, inertia, **kw)
     for t in sl.tables("gear", []):
-        kw = dict(ratio=t.positive("ratio"), mesh_stiffness=t.positive("mesh_stiffness", None))
+        kw = dict(ratio=t.positive("ratio", **_RATIO),
+                  mesh_stiffness=t.positive("mesh_stiffness", None, **_STIFFNESS))
         a, b = t.string("driver"), t.string("driven")
         t.check_unknown(["name"])
         wrap(t, line.add_gear, a, b, name=t.data.get("name"), **kw)
@@ -309,37 +342,46 @@ def from_toml(path):
                 isinstance(s, list) and 2 <= len(s) <= 3 for s in segs)):
             t.fail("segments", "must be an array of [length, diameter] or "
                                "[length, diameter, bore] arrays (m)")
-        kw = dict(stiffness=t.positive("stiffness", None), length=t.positive("length", None),
-                  diameter=t.positive("diameter", None), bore=t.number("bore", 0.0, low=0.0),
-                  segments=segs, shear_modulus=t.positive("shear_modulus", None),
-                  damping=t.number("damping", 0.0, low=0.0),
-                  loss_factor=t.number("loss_factor", 0.0, low=0.0),
-                  name=t.string("name", None), density=t.positive("density", None),
-                  inertia=t.positive("inertia", None),
+        if segs is not None:
+            segs = [[t.quantity(f"segments[{i}][{j}]", v, unit="m") for j, v in enumerate(seg)]
+                    for i, seg in enumerate(segs)]
+        kw = dict(stiffness=t.positive("stiffness", None, **_STIFFNESS),
+                  length=t.positive("length", None, unit="m", plausible=(1e-3, 100.0)),
+                  diameter=t.positive("diameter", None, **_DIAMETER),
+                  bore=t.number("bore", 0.0, low=0.0, **_DIAMETER),
+                  segments=segs, shear_modulus=t.positive("shear_modulus", None, **_SHEAR),
+                  damping=t.number("damping", 0.0, low=0.0, **_DAMPING),
+                  loss_factor=t.number("loss_factor", 0.0, low=0.0, **_LOSS),
+                  name=t.string("name", None),
+                  density=t.positive("density", None, unit="kg/m^3", plausible=(300.0, 25000.0)),
+                  inertia=t.positive("inertia", None, **_INERTIA),
                   elements=t.integer("elements", None, minimum=1))
         tt = t.table("throw", None)
         if tt is not None:
             from .throws import THROW_METHODS, CrankThrow
 
             kw["throw_method"] = tt.string("method", "wilson", options=THROW_METHODS)
-            dims = {key: tt.positive(key) for key in (
+            dims = {key: tt.positive(key, **_DIAMETER) for key in (
                 "journal_diameter", "journal_length", "pin_diameter", "pin_length",
                 "web_thickness", "web_width", "crank_radius")}
-            dims.update(journal_bore=tt.number("journal_bore", 0.0, low=0.0),
-                        pin_bore=tt.number("pin_bore", 0.0, low=0.0))
+            dims.update(journal_bore=tt.number("journal_bore", 0.0, low=0.0, **_DIAMETER),
+                        pin_bore=tt.number("pin_bore", 0.0, low=0.0, **_DIAMETER))
             tt.check_unknown()
             kw["throw"] = wrap(tt, CrankThrow, **dims)
         a, b = t.string("from"), t.string("to")
         t.check_unknown()
         wrap(t, line.add_shaft, a, b, **kw)
     for t in sl.tables("coupling", []):
-        kw = dict(stiffness=t.positive("stiffness"), damping=t.number("damping", 0.0, low=0.0),
-                  loss_factor=t.number("loss_factor", 0.0, low=0.0), name=t.string("name", None))
+        kw = dict(stiffness=t.positive("stiffness", **_STIFFNESS),
+                  damping=t.number("damping", 0.0, low=0.0, **_DAMPING),
+                  loss_factor=t.number("loss_factor", 0.0, low=0.0, **_LOSS),
+                  name=t.string("name", None))
         a, b = t.string("from"), t.string("to")
         t.check_unknown()
         wrap(t, line.add_coupling, a, b, **kw)
     for t in sl.tables("ground", []):
-        kw = dict(stiffness=t.positive("stiffness"), damping=t.number("damping", 0.0, low=0.0),
+        kw = dict(stiffness=t.positive("stiffness", **_STIFFNESS),
+                  damping=t.number("damping", 0.0, low=0.0, **_DAMPING),
                   name=t.string("name", None))
         node = t.string("node")
         t.check_unknown()
@@ -352,12 +394,14 @@ def from_toml(path):
         for key in _DAMPER_KEYS[kind]:
             optional = key in ("damping", "loss_factor") and kind != "viscous"
             if optional:
-                kw[key] = t.number(key, 0.0, low=0.0)
+                kw[key] = t.number(key, 0.0, low=0.0, **_DAMPER_UNITS[key])
             else:
-                kw[key] = t.positive(key)
+                kw[key] = t.positive(key, **_DAMPER_UNITS[key])
         if kind == "friction":
-            kw["design_frequency"] = t.positive("design_frequency", None)
-            kw["design_amplitude"] = t.positive("design_amplitude", None)
+            kw["design_frequency"] = t.positive("design_frequency", None,
+                                                  **_DAMPER_UNITS["design_frequency"])
+            kw["design_amplitude"] = t.positive("design_amplitude", None,
+                                                  **_DAMPER_UNITS["design_amplitude"])
             lin = kw["design_frequency"] is not None or kw["design_amplitude"] is not None
             kw["model"] = t.string("model", "linearised" if lin else "harmonic-balance",
                                    options=("harmonic-balance", "linearised"))
@@ -395,11 +439,13 @@ def _excitation(t, line):
         return None
     nodes = list(getattr(line, "_alias", {})) or None
     node = t.string("node", None, options=nodes) if nodes else t.string("node", None)
-    orders = t.numbers("orders", low=0.0, strict_low=True)
-    torque = t.numbers("torque", None, length=orders.size, low=0.0)
-    phase = t.numbers("phase_deg", None, length=orders.size)
+    orders = t.numbers("orders", low=0.0, strict_low=True, unit="1", plausible=(1e-2, 100.0))
+    torque = t.numbers("torque", None, length=orders.size, low=0.0, unit="N*m",
+                       plausible=(1e-4, 1e8))
+    phase = t.numbers("phase_deg", None, length=orders.size, unit="deg",
+                      plausible=(1e-3, 720.0))
     law = t.string("law", "constant", options=["constant", "speed_squared"])
-    ref = t.positive("reference_rpm", None)
+    ref = t.positive("reference_rpm", None, unit="rpm", plausible=_SPEED)
     if law == "speed_squared" and ref is None:
         t.fail("reference_rpm", "is needed for law = 'speed_squared' (the speed at which the "
                                 "torques apply)")

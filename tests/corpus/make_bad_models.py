@@ -201,13 +201,17 @@ class Case:
         Regular expressions the error message must all contain (the file name is checked
         separately for every case).
     error : str
-        Expected exception class name (``"ModelError"`` unless stated).
+        Expected exception class name (``"ModelError"`` unless stated); empty for a file that
+        loads but must warn (``warning``).
     fault : str
         Empty for a case the loader handles; else the fault found (the test is a strict xfail
         until the loader is fixed).
     file : str
         File name the message must contain when it is not the case's own file (an error in a
         referenced engine file names that file).
+    warning : str
+        Expected warning class name (``"PlausibilityWarning"``: a likely unit slip); ``match``
+        then applies to the warning's message.
     """
 
     name: str
@@ -217,6 +221,7 @@ class Case:
     error: str = "ModelError"
     fault: str = ""
     file: str = ""
+    warning: str = ""
 
 
 def _set(base: str, key: str, value: str | None, *, nth: int = 0) -> str:
@@ -277,13 +282,23 @@ def _engine_cases() -> list[Case]:
         Case("engine_unknown_key_typo_of_required", "engine",
              _set(e, "rod_length", None) + "rod_lenght = 0.145\n",
              (r"engine\.rod_length", r"missing", r"rod_lenght"),),
-        Case("engine_wrong_type_string_number", "engine", _set(e, "crank_radius", '"43 mm"'),
-             (r"engine\.crank_radius", r"'43 mm'", r"must be a number")),
+        # issue 19: a quantity string with its unit is read ("43 mm"); one without a unit, of
+        # the wrong dimension or with an unknown unit is refused naming the expected unit
+        Case("engine_wrong_type_string_number", "engine", _set(e, "crank_radius", '"43"'),
+             (r"engine\.crank_radius", r"'43' has no unit", r"plain number \(in m\)")),
+        Case("engine_unit_wrong_dimension", "engine", _set(e, "crank_radius", '"43 kg"'),
+             (r"engine\.crank_radius", r"'43 kg' has the wrong dimension",
+              r"expected a quantity in m")),
+        Case("engine_unit_unknown", "engine", _set(e, "crank_radius", '"43 mmm"'),
+             (r"engine\.crank_radius", r"'43 mmm': unknown unit", r"expected a quantity in m")),
+        Case("engine_bore_in_mm_slip", "engine", _set(e, "bore", "86"),
+             (r"engine\.bore = 86 m: did you mean 86 mm\?",), error="",
+             warning="PlausibilityWarning"),
         Case("engine_wrong_type_bool_number", "engine", _set(e, "bore", "true"),
              (r"engine\.bore", r"True", r"must be a number")),
         Case("engine_wrong_type_angles_strings", "engine",
              _set(e, "crank_angles_deg", '["0", "180", "180", "0"]'),
-             (r"engine\.crank_angles_deg", r"must be an array of numbers")),
+             (r"engine\.crank_angles_deg\[0\]", r"'0' has no unit", r"in deg")),
         Case("engine_wrong_type_cycle_float", "engine", e + "cycle = 4.0\n",
              (r"engine\.cycle", r"4\.0", r"must be an integer")),
         Case("engine_wrong_type_name_number", "engine", _set(e, "name", "4"),
@@ -407,6 +422,17 @@ def _shaftline_cases() -> list[Case]:
              (r"limits\.continuous_mpa", r"has 1 values, expected 2")),
         Case("shaftline_no_shaftline_table", "shaftline", ENGINE,
              (r"no \[shaftline\] table",)),
+        # issue 19: unit slips load but warn with the likely unit
+        Case("shaftline_shear_modulus_in_gpa_slip", "shaftline",
+             _add_after(s, "speed_range_rpm = [800, 6000]", "shear_modulus = 81"),
+             (r"shaftline\.shear_modulus = 81 Pa: did you mean 81 GPa\?",
+              r"plain numbers are in Pa"), error="", warning="PlausibilityWarning"),
+        Case("shaftline_diameter_in_mm_slip", "shaftline", _set(s, "diameter", "55"),
+             (r"shaftline\.shaft\[4\]\.diameter = 55 m: did you mean 55 mm\?",), error="",
+             warning="PlausibilityWarning"),
+        Case("shaftline_stiffness_wrong_unit", "shaftline",
+             _set(s, "stiffness", '"2.5e5 N*m"'),
+             (r"shaftline\.shaft\[0\]\.stiffness", r"wrong dimension", r"N·m/rad")),
     ]
 
 
@@ -428,6 +454,13 @@ def _rotor_cases() -> list[Case]:
              (r"rotor\.shaft", r"missing|at least one")),
         Case("rotor_negative_bearing_stiffness", "rotor", _set(r, "kxx", "-1.0e6"),
              (r"rotor\.bearings\[0\]\.kxx", r"-1000000|-1e\+?0?6", r">= 0")),
+        # issue 19: a mesh of 15 million elements is refused before any allocation
+        Case("rotor_max_element_length_tiny", "rotor", _set(r, "max_element_length", "1e-7"),
+             (r"rotor", r"max_element_length=1e-07 m", r"15000000 elements \(60000004 degrees of freedom",
+              r"would need 205 PiB", r"use longer elements")),
+        Case("rotor_youngs_modulus_slip", "rotor", _set(r, "youngs_modulus", "211"),
+             (r"rotor\.material\.youngs_modulus = 211 Pa: did you mean 211 GPa\?",), error="",
+             warning="PlausibilityWarning"),
     ]
 
 
@@ -478,6 +511,12 @@ def _scene_cases() -> list[Case]:
              (r"sensor\[1\]\.sample_rate", r"must be > 0"), error="ConfigError"),
         Case("scene_negative_seed", "scene", _set(c, "seed", "-1"),
              (r"scene\.seed", r"= -1 must be >= 0"), error="ConfigError"),
+        # issue 19: a scene at 1e12 Hz is refused before anything is synthesized
+        Case("scene_sample_rate_1e12", "scene", _set(c, "sample_rate", "1e12"),
+             (r"sensor 'speed' sample_rate = 1e\+12 Hz over 1 s", r"would need 29\.1 TiB",
+              r"lower the sample rate"), error="ConfigError"),
+        Case("scene_speed_unit_string", "scene", _set(c, "speed_rpm", '"1500 m/s"'),
+             (r"profile\.speed_rpm", r"wrong dimension", r"in rpm"), error="ConfigError"),
     ]
 
 
