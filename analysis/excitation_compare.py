@@ -10,8 +10,11 @@ does not, the pressure model is at fault; if both predictions miss alike, the dy
 
 On a sweep (cycle speeds spanning more than 5 % of their mean) the gas torque is taken per
 speed bin as measured (:func:`analysis.pressure.measured_speed_excitation`, no load law); on a
-steady run the cycles are averaged into one operating point, scaled over the model's speed
-grid by the same load law as the parametric excitation — stated in the result.
+steady run the cycles are averaged into one operating point whose gas torque is divided by the
+load law's factor at the measured speed and then scaled over the model's speed grid by the
+same law as the parametric excitation (:func:`excitation_from_indicator`) — stated in the
+result. The same measured excitation drives the block on its mounts in the vibrograph
+comparison (:func:`analysis.vibrograph.compare_vibrograph`, ``indicator``).
 """
 
 from __future__ import annotations
