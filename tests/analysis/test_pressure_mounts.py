@@ -16,58 +16,16 @@ import pytest
 
 from crankbench.analysis.vibrograph import compare_vibrograph
 from crankbench.predict.errors import ConfigError
+from pressure_scenes import ENGINE, MODEL, bench_scene
 
-ROOT = Path(__file__).resolve().parents[2]
-ENGINE = ROOT / "sample_data/engines/i4.toml"
-MODEL = ROOT / "sample_data/shaftlines/i4.toml"
-
-SCENE = f"""
-[scene]
-name = "I4 run-up, pressure and mounts"
-engine = "{ENGINE}"
-shaftline = "{MODEL}"
-seed = 11
-max_order = 6.0
-
-[profile]
-kind = "runup"
+RUNUP = """kind = "runup"
 start_rpm = 1500.0
 end_rpm = 3600.0
 duration = 4.0
 hold_start = 0.3
-hold_end = 0.3
+hold_end = 0.3"""
 
-[load]
-imep = 1.0e6
-
-[[sensor]]
-kind = "torsiograph"
-name = "tv_pulley"
-node = "pulley hub"
-quantity = "angle"
-sample_rate = 3000.0
-
-[[sensor]]
-kind = "tacho"
-name = "wheel"
-node = "cyl 1"
-pulses_per_rev = 60
-missing_teeth = 2
-tdc_offset_deg = 84.0
-
-[[sensor]]
-kind = "tacho"
-name = "tdc"
-node = "cyl 1"
-pulses_per_rev = 1
-
-[[sensor]]
-kind = "pressure"
-name = "p_cyl1"
-cylinder = 1
-sample_rate = 20000.0
-noise_rms = 2.0e3
-
+MOUNTS = """
 [[sensor]]
 kind = "vibrograph"
 name = "acc_engine_z"
@@ -86,6 +44,8 @@ quantity = "acceleration"
 sample_rate = 4000.0
 noise_rms = 0.02
 """
+SCENE = bench_scene(name="I4 run-up, pressure and mounts", seed=11, profile=RUNUP,
+                    extra=MOUNTS)
 
 
 @pytest.fixture(scope="module")
@@ -178,15 +138,10 @@ def test_steady_part_load_measured_excitation_is_referred_to_the_load_law(tmp_pa
     from crankbench.analysis.pipeline import LoadCase, analyse
     from crankbench.measure.synth import synthesize
 
-    text = SCENE.replace('''kind = "runup"
-start_rpm = 1500.0
-end_rpm = 3600.0
-duration = 4.0
-hold_start = 0.3
-hold_end = 0.3''', '''kind = "steady"
-speed_rpm = 1600.0
-duration = 1.5''').replace("imep = 1.0e6", 'imep = 1.0e6\nlaw = "propeller"\n'
-                                           "reference_rpm = 2000.0")
+    text = bench_scene(name="I4 steady part load", seed=11,
+                       profile='kind = "steady"\nspeed_rpm = 1600.0\nduration = 1.5',
+                       load='imep = 1.0e6\nlaw = "propeller"\nreference_rpm = 2000.0',
+                       extra=MOUNTS)
     path = tmp_path / "steady.toml"
     path.write_text(text)
     run = synthesize(path)
