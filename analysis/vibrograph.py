@@ -350,7 +350,8 @@ class VibrographResult:
 
     def plot(self, ax=None, *, sensor=None):
         """Measured (solid) and predicted (dashed) order amplitudes of one sensor against
-        speed, the judged orders; returns the figure."""
+        speed, the judged orders, and (dotted) the prediction from the measured excitation
+        when there is one; returns the figure."""
         import matplotlib.pyplot as plt
 
         if ax is None:
@@ -363,10 +364,15 @@ class VibrographResult:
             rpm, meas, pred = self.curves[(name, float(r["order"]))]
             line, = ax.semilogy(rpm, meas, lw=1.0, label=f"order {r['order']:g}")
             ax.semilogy(rpm, pred, "--", color=line.get_color(), lw=1.2)
+            px = self.curves_measured_excitation.get((name, float(r["order"])))
+            if px is not None:
+                ax.semilogy(rpm, px, ":", color=line.get_color(), lw=1.5)
         units = rows["units"].iloc[0] if len(rows) else ""
         ax.set_xlabel("speed (rpm)")
         ax.set_ylabel(f"order amplitude, peak ({units})")
-        ax.set_title(f"{name}: measured (solid) and predicted (dashed)", fontsize=9)
+        ax.set_title(f"{name}: measured (solid) and predicted (dashed" + (
+            "; dotted: from the measured pressure)" if self.curves_measured_excitation
+            else ")"), fontsize=9)
         if len(rows):
             ax.legend(fontsize=7, ncol=2)
         ax.grid(alpha=0.3)

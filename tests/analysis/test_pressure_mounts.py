@@ -157,3 +157,15 @@ def test_steady_part_load_measured_excitation_is_referred_to_the_load_law(tmp_pa
         for q in (4.0, 6.0):
             assert abs(t.loc[(sensor, q), "ratio_measured_excitation"] - 1) < 0.005
         assert abs(t.loc[(sensor, 2.0), "ratio_measured_excitation"] - 1) < 0.05
+
+
+def test_the_sensor_plot_draws_the_measured_excitation_prediction(vib):
+    fig = vib.plot(sensor="acc_rod_y")
+    ax = fig.axes[0]
+    dotted = [ln for ln in ax.get_lines() if ln.get_linestyle() == ":"]
+    assert len(dotted) == len(vib.table[(vib.table["sensor"] == "acc_rod_y")
+                                        & vib.table["required"]])
+    assert "from the measured pressure" in ax.get_title()
+    row = vib.table.set_index(["sensor", "order"]).loc[("acc_rod_y", 4.0)]
+    assert any(np.isclose(np.max(ln.get_ydata()), row["predicted_measured_excitation"])
+               for ln in dotted)
