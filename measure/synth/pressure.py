@@ -29,9 +29,10 @@ record; a constant load, ``L = 1``, is a plain Wiebe cycle). The channel then ge
   (a TDC mark set δ too early): the thermodynamic TDC lies δ after the reference.
 
 The ground truth of each channel (:func:`pressure_truth` reads it back from a truth Dataset)
-holds, per cycle, the firing-TDC time, heat release, net and gross IMEP and PMEP (the
-trapezoidal loop integral of the 0.1° model trace), the peak pressure and its angle (a dense
-evaluation of the spline), MFB50 of the Wiebe law (closed form), and the settings above.
+holds, per cycle, the firing-TDC time, the load factor L, the heat release (L Q_k), net and
+gross IMEP and PMEP (the trapezoidal loop integral of the 0.1° model trace), the peak pressure
+and its angle (a dense evaluation of the spline), MFB50 of the Wiebe law (closed form), and the
+settings above.
 
 Scene keys of a ``kind = "pressure"`` sensor: ``cylinder``, ``sample_rate``, ``location`` and
 ``thermal_shock``, ``thermal_shock_deg``, ``tdc_error_deg``, ``cycle_variation`` (plus the
