@@ -277,6 +277,8 @@ class VibrographResult:
         :func:`compare_vibrograph`); with it the table has ``predicted_measured_excitation``
         and ``ratio_measured_excitation``, and ``curves_measured_excitation`` holds
         ``{(sensor, order): predicted}`` per block from it.
+    indicator : dict
+        ``{channel: IndicatorResult}`` the measured excitation rests on (empty without).
     speed_range_rpm : tuple
     sweep_rate_rpm_per_s : float
     tolerance : float
@@ -298,6 +300,7 @@ class VibrographResult:
     settings: dict = field(default_factory=dict)
     measured_excitation: object = None
     curves_measured_excitation: dict = field(default_factory=dict)
+    indicator: dict = field(default_factory=dict)
 
     @property
     def verdict(self):
@@ -444,9 +447,10 @@ def _instrument(attrs, quantity):
 
 
 def _measured_excitation(rec, engine, indicator, orders, load):
-    """(excitation, note) from the record's cylinder pressure, or (None, "")."""
+    """(excitation, note, indicator results) from the record's cylinder pressure, or
+    (None, "", {})."""
     if indicator is None:
-        return None, ""
+        return None, "", {}
     from crankbench.predict.errors import CrankbenchError
 
     from .excitation_compare import excitation_from_indicator
@@ -458,14 +462,15 @@ def _measured_excitation(rec, engine, indicator, orders, load):
                 raise ConfigError(f"indicator={indicator!r} must be 'auto', None or a dict of "
                                   "IndicatorResult")
             if not pressure_channels(rec):
-                return None, ""
+                return None, "", {}
             indicator = indicator_analyses(rec, engine)
-        return excitation_from_indicator(indicator, engine, orders=orders, load=load)
+        exc, note = excitation_from_indicator(indicator, engine, orders=orders, load=load)
+        return exc, note, dict(indicator)
     except ConfigError:
         raise
     except CrankbenchError as exc:
         log.warning("block vibration from the measured excitation skipped: %s", exc)
-        return None, ""
+        return None, "", {}
 
 
 def compare_vibrograph(record, model, *, load=None, speed_channel=None, orders=None,
@@ -583,7 +588,7 @@ def compare_vibrograph(record, model, *, load=None, speed_channel=None, orders=N
     except (ModelError, ValueError) as exc:
         log.info("no gas-torque reaction predicted (%s); inertia loads only", exc)
     loads = block_excitation(engine, orders, excitation=excitation, counterweights=spec.masses)
-    measured_x, x_note = _measured_excitation(rec, engine, indicator, orders, load)
+    measured_x, x_note, indicator = _measured_excitation(rec, engine, indicator, orders, load)
     tol = None
     integer = [int(round(q)) for q in orders if abs(q - round(q)) < 1e-9]
     if integer:
@@ -777,4 +782,5 @@ def compare_vibrograph(record, model, *, load=None, speed_channel=None, orders=N
         sensors=tuple(tracked), skipped=skipped, table=table, verdicts=tuple(verdicts),
         residuals=residuals, curves=curves, speed_range_rpm=(lo, hi),
         sweep_rate_rpm_per_s=sweep, tolerance=tolerance, settings=settings,
-        measured_excitation=measured_x, curves_measured_excitation=curves_x)
+        measured_excitation=measured_x, curves_measured_excitation=curves_x,
+        indicator=indicator)

@@ -192,4 +192,8 @@ def build_vibrograph_report(result, *, title=None, parameters=None, record_path=
     rep.add_provenance(files=files, model=mp if mp.is_file() else None, parameters=params)
     rep.add_settings(result.settings)
     add_vibrograph(rep, result, figures=figures)
+    if result.indicator:                # the cylinder pressure the measured excitation rests on
+        from .excitation_compare import add_indicator_section
+
+        add_indicator_section(rep, result.indicator, figures=figures)
     return rep

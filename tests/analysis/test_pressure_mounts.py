@@ -169,3 +169,12 @@ def test_the_sensor_plot_draws_the_measured_excitation_prediction(vib):
     row = vib.table.set_index(["sensor", "order"]).loc[("acc_rod_y", 4.0)]
     assert any(np.isclose(np.max(ln.get_ydata()), row["predicted_measured_excitation"])
                for ln in dotted)
+
+
+def test_engine_model_report_has_the_indicator_section(vib, tmp_path):
+    from crankbench.analysis.vibrograph_report import build_vibrograph_report
+
+    assert set(vib.indicator) == {"p_cyl1"}
+    html = Path(build_vibrograph_report(vib, figures=False).save(tmp_path / "v.html")
+                ).read_text()
+    assert "Indicator analysis" in html and "predicted measured excitation" in html
