@@ -44,7 +44,9 @@ def vibrograph_json(result) -> dict:
     """The comparison as JSON-ready data: ``summary``, ``rows`` (one per judged (sensor,
     order): ``sensor``, ``order``, ``measured``, ``predicted`` in SI units, ``ratio``,
     ``passed``, ``verdict``…), ``informational`` (the same for the orders too weak or too
-    noisy to be judged), ``residuals``, ``verdicts``, ``sensors``, ``skipped``, ``settings``."""
+    noisy to be judged), ``residuals``, ``verdicts``, ``sensors``, ``skipped``, ``settings``,
+    ``indicator`` (summaries of the cylinder-pressure channels behind the measured excitation,
+    empty without)."""
     res = result.residuals
     t = result.table
     return {"summary": result.summary(), "rows": t[t["required"]],
@@ -57,7 +59,8 @@ def vibrograph_json(result) -> dict:
             "verdict": result.verdict.as_dict(),
             "sensors": [s.describe() for s in result.sensors],
             "skipped": [{"channel": c, "reason": r} for c, r in result.skipped],
-            "settings": result.settings}
+            "settings": result.settings,
+            "indicator": {c: r.summary() for c, r in getattr(result, "indicator", {}).items()}}
 
 
 def print_vibrograph(result, *, header=True) -> None:

@@ -178,3 +178,18 @@ def test_engine_model_report_has_the_indicator_section(vib, tmp_path):
     html = Path(build_vibrograph_report(vib, figures=False).save(tmp_path / "v.html")
                 ).read_text()
     assert "Indicator analysis" in html and "predicted measured excitation" in html
+
+
+def test_compare_json_of_an_engine_model_carries_both_predictions(run, tmp_path, capsys):
+    import json
+
+    from crankbench.analysis.cli import main
+
+    path = tmp_path / "r.h5"
+    run.write(path)
+    assert main(["compare", str(path), str(ENGINE), "--json"]) in (0, 1)
+    out = json.loads(capsys.readouterr().out)
+    vib = out.get("vibrograph", out)
+    rows = {(r["sensor"], r["order"]): r for r in vib["rows"]}
+    assert abs(rows[("acc_rod_y", 4.0)]["ratio_measured_excitation"] - 1) < 0.01
+    assert abs(vib["indicator"]["p_cyl1"]["imep_net_bar"] - 10.0) < 0.1
