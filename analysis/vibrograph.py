@@ -464,6 +464,13 @@ def _measured_excitation(rec, engine, indicator, orders, load):
             if not pressure_channels(rec):
                 return None, "", {}
             indicator = indicator_analyses(rec, engine)
+        from .pressure import IndicatorResult
+
+        if not isinstance(indicator, dict) or not all(
+                isinstance(v, IndicatorResult) for v in indicator.values()):
+            raise ConfigError("indicator= must be 'auto', None or a dict {channel: "
+                              "IndicatorResult} (analysis.pressure.indicator_analyses), got "
+                              f"{type(indicator).__name__}")
         exc, note = excitation_from_indicator(indicator, engine, orders=orders, load=load)
         return exc, note, dict(indicator)
     except ConfigError:

@@ -90,6 +90,8 @@ def test_no_pressure_or_indicator_none_leaves_the_table_as_it_was(run, vib):
     assert np.allclose(plain.table["predicted"], vib.table["predicted"])
     with pytest.raises(ConfigError, match="indicator="):
         compare_vibrograph(run.record, ENGINE, max_order=6.0, indicator="yes")
+    with pytest.raises(ConfigError, match="IndicatorResult"):
+        compare_vibrograph(run.record, ENGINE, max_order=6.0, indicator={"p": 1.0})
 
 
 def test_pipeline_feeds_the_measured_excitation_to_the_block_and_reports_it(run, tmp_path):
