@@ -11,8 +11,10 @@ that torque comes from, the gas pressure above the crankcase scaled by ``L``:
 
     p_k(ψ) = p_cc + L (p_motored(ψ) + Q_k u(ψ) − p_cc),        p_cc = 1 bar,
 
-so that its net IMEP is exactly ``L`` times the scene's ``imep`` (the model's IMEP at that
-load; tests/measure/test_synth_pressure.py asserts 0.5 %, it holds to quadrature) and its
+with ``L`` the law at the cycle's mean speed (cycle angle / cycle time, the speed the indicator
+analysis reports), so that its net IMEP is exactly ``L`` times the scene's ``imep`` (the model's
+IMEP at that load; tests/measure/test_synth_pressure.py asserts 0.5 % per cycle, steady and on a
+run-up; the truth holds it to quadrature) and its
 gas-torque harmonics are exactly ``L G_q``. At ``L < 1`` this is not a physical part-load
 cycle: its compression is a polytropic plus ``(1 − L) p_cc``, which the polytropic peg of
 :func:`analysis.pressure.indicator_analysis` reads as an offset (pass ``peg="none"`` on such a
@@ -195,7 +197,12 @@ def pressure_channel(scene, spec, psi0, rng, *, vibration=None):
     k0 = int(k.min())
     n_cyc = int(k.max()) - k0 + 1
     scale = 1.0 + err.cycle_variation * rng.standard_normal(n_cyc)
-    load = scene.load.scale(prof.speed(ts) / RPM)
+    # the load of each cycle: the law at the cycle's mean speed (time average over its
+    # samples = cycle angle / cycle time, the speed the indicator analysis reports)
+    counts = np.bincount(k - k0, minlength=n_cyc)
+    mean_rpm = np.bincount(k - k0, weights=prof.speed(ts), minlength=n_cyc) / np.maximum(
+        counts, 1) / RPM
+    load = scene.load.scale(mean_rpm)[k - k0]
     shifted = psi - np.radians(err.tdc_error_deg)
     wrapped = np.mod(shifted, period)
     true = P_CC + load * (motored(wrapped) + q * scale[k - k0] * unit(wrapped) - P_CC)
@@ -235,7 +242,8 @@ def _truth(engine, full, q, motored, unit, scale, k0, psi0, fire, prof, err, spe
         if target - period / 2 < a_grid[0] or target + period / 2 > a_grid[-1]:
             continue
         t_tdc = float(np.interp(target, a_grid, t_grid))
-        lf = float(load_spec.scale(prof.speed(np.array([t_tdc])) / RPM)[0])
+        t0, t1 = np.interp([target - period / 2, target + period / 2], a_grid, t_grid)
+        lf = float(load_spec.scale(np.array([period / (t1 - t0) / RPM]))[0])
         tr = PressureTrace(angle=ang, pressure=P_CC + lf * (m_grid + q * s * u_grid - P_CC),
                            cycle=engine.cycle)
         net = tr.work(engine) / engine.swept_volume
