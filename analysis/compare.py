@@ -22,7 +22,8 @@ import numpy as np
 from crankbench.predict._validate import check_positive, check_range
 from crankbench.predict.errors import AnalysisError
 
-__all__ = ["CriticalComparison", "match_criticals", "BalanceComparison", "compare_balance"]
+__all__ = ["CriticalComparison", "match_criticals", "not_judged_reason", "BalanceComparison",
+           "compare_balance"]
 
 log = logging.getLogger("crankbench")
 
@@ -448,6 +449,26 @@ def match_criticals(measured, predicted, *, gate=0.15, tolerance=0.03,
                     [float(v) for v in speed_range_rpm], combine_sweeps=bool(combine_sweeps))
     return CriticalComparison(matched, unmatched_measured, unmatched_predicted, nat, gate,
                               tolerance, amplitude_tolerance, tuple(flags), settings)
+
+
+def not_judged_reason(predicted, mode, order) -> str:
+    """Why a predicted critical in the range is listed but not judged: the reason the sweep
+    analysis recorded (``predicted['not_judged']``, e.g. not covered with both flanks), else
+    'weak (below the significance threshold)'.
+
+    Examples
+    --------
+    >>> import pandas as pd
+    >>> p = pd.DataFrame({"mode": [1, 2], "order": [0.5, 6.0],
+    ...                   "not_judged": ["not covered by the run", ""]})
+    >>> not_judged_reason(p, 1, 0.5), not_judged_reason(p, 2, 6.0)
+    ('not covered by the run', 'weak (below the significance threshold)')
+    """
+    if predicted is not None and "not_judged" in getattr(predicted, "columns", ()):
+        hit = predicted[(predicted["mode"] == mode) & (predicted["order"] == order)]
+        if len(hit) and isinstance(hit["not_judged"].iloc[0], str) and hit["not_judged"].iloc[0]:
+            return hit["not_judged"].iloc[0]
+    return "weak (below the significance threshold)"
 
 
 def _natural_frequencies(matched, pred):

@@ -449,6 +449,11 @@ def _track(x, fs, rpm, orders, *, method, bandwidth_orders, revolutions):
                        overlap=0.9)
 
 
+#: the steps of :func:`analyse`, in order, as its ``progress`` callback names them
+STEPS = ("read", "prediction", "order tracking", "resonances", "comparison", "balance",
+         "limits", "measured excitation")
+
+
 def analyse(record, model, *, channel=None, speed_channel=None, orders=None, max_order=12.0,
             method="vkf", bandwidth_orders=None, revolutions=4, load=None, gate=0.15,
             tolerance=0.03, amplitude_tolerance=0.5, machine_class=None,
@@ -722,6 +727,9 @@ def _swept_like_with_like(predicted, resonances, track, quantity, gate):
                  "flanks (and the sweep delay); listed, not judged", r["mode"], r["order"],
                  r["speed_rpm"])
     expected.loc[edge, "significant"] = False
+    expected["not_judged"] = ""          # why a critical in range is listed but not judged
+    expected.loc[edge, "not_judged"] = ("not covered by the run with both flanks (and the "
+                                        "sweep delay)")
     measured = correct_sweep_delay(resonances.to_frame(), expected, gate=gate)
     return expected, measured
 
@@ -848,7 +856,7 @@ def _limit_checks(rec, system, track, grid, pred_stress, response, orders, chann
                  "per section, superposed over the cycle")
         checks.extend(check_torsional_stress(
             centre, total, limits, sections=[names[c] for c in cols],
-            operating_range_rpm=operating_range_rpm, name=f"measured torsional stress",
+            operating_range_rpm=operating_range_rpm, name="measured torsional stress",
             basis=basis, covered_rpm=(lo, hi)))
         if getattr(system, "engine", None) is not None and load is not None and \
                 hasattr(limits, "misfire_operation"):
@@ -863,7 +871,14 @@ def _limit_checks(rec, system, track, grid, pred_stress, response, orders, chann
                            f"{lo:.0f}–{hi:.0f} rpm, run's load law"),
                     required=bool(limits.misfire_operation), covered_rpm=(lo, hi)))
             except (ModelError, AnalysisError) as exc:
-                log.debug("misfire case not computed: %s", exc)
+                # never dropped silently: a stated case that could not be computed is listed
+                # as not assessed (inconclusive; counts only when the model requires it)
+                log.warning("misfire case not computed: %s", exc)
+                checks.append(not_assessed(
+                    "predicted torsional stress, one cylinder misfiring",
+                    f"the misfire case could not be computed ({exc})",
+                    basis=f"model, {lo:.0f}–{hi:.0f} rpm",
+                    required=bool(limits.misfire_operation)))
     checks.extend(_severity_checks(rec, system, machine_class, standard))
     return checks
 

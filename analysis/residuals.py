@@ -48,6 +48,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from crankbench.predict._threads import single_threaded_blas
+
 __all__ = ["ResidualEstimate", "estimate_residuals"]
 
 log = logging.getLogger("crankbench")
@@ -209,6 +211,7 @@ def _solve(rows, data, sigma):
     return (xr[:p] + 1j * xr[p:], cov, cond, chi2), cond
 
 
+@single_threaded_blas  # small least-squares solves: BLAS threads only cost (issue 21)
 def estimate_residuals(blocks, channels, orders, loads, engine, spec, *, phase,
                        residual_orders, speed_rpm=None, excitation_has_gas=True):
     """Estimate per-order shaking forces and moments from vibrograph order tracks.

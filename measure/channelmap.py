@@ -29,6 +29,15 @@ says the rest, once per rig, so no Python is needed to bring its records in
     quantity = "pressure"         # optional when the unit implies it
     location = "cylinder 1"       # optional sensor metadata: location, direction, node
 
+    [channel.acc_fl_z]            # a vibrograph on the block, placed for the mount model:
+    column = 4
+    units = "g"
+    direction = "z"               # x, y, z (signed), vertical, lateral, axial (engine frame)
+    mount = "FL"                  # at a named mount of the engine model, or
+    # position = ["0.35 m", "-0.42 m", "-0.30 m"]   # x, y, z in the engine frame
+    # instrument_natural_frequency = "12 Hz"        # a seismic pick-up read through its model
+    # instrument_damping_ratio = 0.65
+
     [channel.crank]
     column = 1
     role = "wheel"                # a raw pulse signal: decoded to edge times
@@ -80,8 +89,12 @@ _SOURCE_TABLE_KEYS = ("sample_rate", "time_column", "time_units", "delimiter", "
 #: every key of [source] and of a [channel.<name>] table
 SOURCE_KEYS = _SOURCE_TABLE_KEYS + ("start_time", "engine_id", "test_id", "keep_unmapped")
 CHANNEL_KEYS = ("column", "units", "quantity", "scale", "offset", "location", "direction",
-                "node", "role", "pulses_per_rev", "missing_teeth", "per_cycle", "keep_raw",
-                "slope", "level", "hysteresis", "tdc_offset_deg")
+                "node", "position", "mount", "instrument_natural_frequency",
+                "instrument_damping_ratio", "role", "pulses_per_rev", "missing_teeth",
+                "per_cycle", "keep_raw", "slope", "level", "hysteresis", "tdc_offset_deg")
+#: sensor-placement keys of plain channels (vibrograph comparison, analysis.vibrograph)
+_PLACEMENT_KEYS = ("position", "mount", "instrument_natural_frequency",
+                   "instrument_damping_ratio")
 
 
 @dataclass(frozen=True)
@@ -107,6 +120,14 @@ class ChannelSpec:
     slope : str
     level, hysteresis : float or None
     tdc_offset_deg : float or None
+    position : tuple of 3 float or None
+        Sensor position x, y, z, m, in the engine frame (vibrograph placement).
+    mount : str or None
+        Name of the engine model's mount the sensor sits at (instead of ``position``).
+    instrument_natural_frequency : float or None
+        Natural frequency, Hz, of a seismic pick-up whose reading the channel is.
+    instrument_damping_ratio : float or None
+        Its damping ratio (default 0.65 when only the frequency is given).
     """
 
     name: str
@@ -127,6 +148,10 @@ class ChannelSpec:
     level: float | None = None
     hysteresis: float | None = None
     tdc_offset_deg: float | None = None
+    position: tuple | None = None
+    mount: str | None = None
+    instrument_natural_frequency: float | None = None
+    instrument_damping_ratio: float | None = None
 
 
 @dataclass(frozen=True)
@@ -291,6 +316,21 @@ def _column(t, key):
     return value
 
 
+def _placement(t, kw) -> None:
+    """The sensor-placement keys of a plain channel (position in m, mount name, pick-up)."""
+    if "position" in t:
+        kw["position"] = tuple(float(v) for v in t.numbers("position", unit="m", length=3))
+    kw["mount"] = t.string("mount", None)
+    if kw["mount"] is not None and kw.get("position") is not None:
+        t.fail("mount", "and 'position' both place the sensor; give one")
+    kw["instrument_natural_frequency"] = t.number("instrument_natural_frequency", None,
+                                                  unit="Hz", low=0.0, strict_low=True)
+    kw["instrument_damping_ratio"] = t.number("instrument_damping_ratio", None, unit="1",
+                                              low=0.0, strict_low=True)
+    if kw["instrument_damping_ratio"] is not None and kw["instrument_natural_frequency"] is None:
+        t.fail("instrument_damping_ratio", "needs instrument_natural_frequency (Hz) too")
+
+
 def _channel(t, name) -> ChannelSpec:
     kw = {"name": name, "column": _column(t, "column")}
     role = t.string("role", None, options=list(ROLES))
@@ -309,6 +349,13 @@ def _channel(t, name) -> ChannelSpec:
     kw["offset"] = t.number("offset", 0.0, unit=None)
     for key in ("location", "direction", "node"):
         kw[key] = t.string(key, None)
+    if role is not None:
+        for key in _PLACEMENT_KEYS:
+            if key in t:
+                t.fail(key, "places a vibration sensor; it does not apply to pulse channels "
+                            "(role = 'wheel' or 'tdc')")
+    else:
+        _placement(t, kw)
     if role is None:
         if kw["units"] is None:
             t.fail("units", "is missing (required): the unit of the channel's values, e.g. "
@@ -406,6 +453,11 @@ def _channel_record_spec(spec, values, time, fs, label, file):
         attrs["calibration"] = (f"{spec.units} = raw × {spec.scale:.10g} + {spec.offset:.10g}")
     if spec.node:
         attrs["node"] = spec.node
+    if spec.position is not None:
+        attrs["position"] = list(spec.position)
+    for key in ("mount", "instrument_natural_frequency", "instrument_damping_ratio"):
+        if getattr(spec, key) is not None:
+            attrs[key] = getattr(spec, key)
     out = dict(data=values, units=spec.units, sample_rate=fs, location=spec.location,
                direction=spec.direction, attrs=attrs, **time)
     if spec.quantity:

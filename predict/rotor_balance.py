@@ -35,6 +35,7 @@ import numpy as np
 
 from crankbench.predict._deprecate import renamed
 
+from ._threads import single_threaded_blas
 from ._validate import check_finite_array, check_positive, check_range
 from .errors import AnalysisError, ModelError
 
@@ -190,6 +191,7 @@ class BalanceResult:
         return fig
 
 
+@single_threaded_blas  # small least-squares solves (issue 21)
 def influence_balance(initial, trial_runs, trial_masses, *, min_response_change=0.25,
                       max_condition=30.0) -> BalanceResult:
     """Influence-coefficient balancing with any number of planes (least squares).

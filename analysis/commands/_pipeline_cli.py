@@ -174,10 +174,15 @@ def vibrograph_options(options) -> dict:
                 tolerance=options.get("vibration_tolerance", 0.5))
 
 
-def progress_bar(total_steps: int = 7, *, desc: str = "", disable: bool = False):
-    """A tqdm bar over the pipeline steps and the ``progress(step)`` callback that moves it."""
+def progress_bar(total_steps: int | None = None, *, desc: str = "", disable: bool = False):
+    """A tqdm bar over the pipeline steps (default: :data:`analysis.pipeline.STEPS`) and the
+    ``progress(step)`` callback that moves it."""
     from tqdm import tqdm
 
+    if total_steps is None:
+        from crankbench.analysis.pipeline import STEPS
+
+        total_steps = len(STEPS)
     bar = tqdm(total=total_steps, desc=desc, unit="step", leave=False, disable=disable)
 
     def progress(step_name):

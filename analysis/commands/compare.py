@@ -95,7 +95,13 @@ def run(args) -> int:
         print()
         cols = ["mode", "order", "speed_rpm_predicted", "speed_rpm_measured", "deviation_rpm",
                 "deviation_pct", "amplitude_ratio", "confidence", "significant"]
-        print_table(comp.matched[cols], title="matched critical speeds")
+        matched = comp.matched[cols].copy()
+        if len(matched) and not matched["significant"].all():
+            from crankbench.analysis.compare import not_judged_reason
+
+            matched["judged"] = ["yes" if r["significant"] else "no: " + not_judged_reason(
+                result.predicted, r["mode"], r["order"]) for _, r in matched.iterrows()]
+        print_table(matched, title="matched critical speeds")
         print()
         print_table(comp.natural_frequencies, title="natural frequencies by mode")
         sig = comp.unmatched_predicted
@@ -105,6 +111,21 @@ def run(args) -> int:
             print()
             print_table(sig[["mode", "order", "speed_rpm", "amplitude"]],
                         title="predicted criticals not found")
+        listed = comp.unmatched_predicted
+        if len(listed):
+            listed = listed[~listed["significant"]]
+        if len(listed):          # in the range but not judged: say so, and why
+            why = listed["not_judged"].fillna("") if "not_judged" in listed else \
+                listed["mode"].map(lambda _: "")
+            uncovered = listed[why != ""].assign(why=why[why != ""])
+            if len(uncovered):
+                print()
+                print_table(uncovered[["mode", "order", "speed_rpm", "why"]],
+                            title="predicted criticals listed, not judged")
+            weak = int((why == "").sum())
+            if weak:
+                print(f"  ({weak} weaker predicted critical(s) in the range, below the "
+                      "significance threshold: listed in the report and --json, not judged)")
         if len(comp.unmatched_measured):
             print()
             print_table(comp.unmatched_measured, title="measured resonances without a critical")
@@ -154,3 +175,4 @@ def _run_engine(args, quiet) -> int:
     if args.strict and not result.passed:
         return 1
     return 0
+

@@ -73,7 +73,10 @@ def run(args) -> int:
     for p in outputs:
         check_overwrite(p, args.overwrite, option="--overwrite")
     quiet = args.json or log.getEffectiveLevel() > logging.INFO
-    bar, progress = progress_bar(total_steps=9, desc="demo", disable=quiet)
+    from crankbench.analysis.pipeline import STEPS
+
+    # synthesize and write the record, then the pipeline's own steps
+    bar, progress = progress_bar(total_steps=2 + len(STEPS), desc="demo", disable=quiet)
     try:
         progress("synthesize")
         scene = Scene.from_toml(data / SCENE)

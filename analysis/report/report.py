@@ -478,6 +478,8 @@ def critical_speed_table(comparison, predicted=None):
     """
     import pandas as pd
 
+    from ..compare import not_judged_reason
+
     cols = ["mode", "order", "speed_rpm_predicted", "speed_rpm_measured", "deviation_pct",
             "frequency_hz_predicted", "frequency_hz_measured", "amplitude_predicted",
             "amplitude_measured", "amplitude_ratio", "damping_ratio", "confidence",
@@ -486,7 +488,8 @@ def critical_speed_table(comparison, predicted=None):
     for _, r in comparison.matched.iterrows():
         d = {c: r.get(c) for c in cols if c in r}
         ok = bool(r.speed_ok) and bool(r.amplitude_ok)
-        d["status"] = "matched" if ok or not r.significant else "matched, outside tolerance"
+        d["status"] = ("matched" if ok else "matched, outside tolerance") if r.significant \
+            else "matched, not judged: " + not_judged_reason(predicted, r["mode"], r["order"])
         rows.append(d)
     for _, r in comparison.unmatched_predicted.iterrows():
         rows.append({"mode": r["mode"], "order": r["order"],
@@ -494,7 +497,9 @@ def critical_speed_table(comparison, predicted=None):
                      "frequency_hz_predicted": r.get("frequency_hz"),
                      "amplitude_predicted": r.get("amplitude"),
                      "significant": bool(r["significant"]),
-                     "status": "not found" if r["significant"] else "weak, not found"})
+                     "status": "not found" if r["significant"] else
+                     "not found, not judged: " + not_judged_reason(predicted, r["mode"],
+                                                                   r["order"])})
     for _, r in comparison.unmatched_measured.iterrows():
         rows.append({"mode": None, "order": r["order"], "speed_rpm_measured": r["speed_rpm"],
                      "frequency_hz_measured": r.get("frequency_hz"),

@@ -154,3 +154,35 @@ def test_batch_without_distributed_names_the_extra(tmp_path, capsys, monkeypatch
                    "--scheduler", "tcp://127.0.0.1:1", "--no-cache"])
     assert status == 2
     assert "pip install 'crankbench[distributed]'" in capsys.readouterr().err
+
+
+@pytest.mark.slow
+def test_demo_happy_path_is_quiet_and_verbose_shows_more(tmp_path):
+    """Issue 15 point 5, as a user sees the terminal: the default demo prints no warning, each
+    message once, a progress bar that ends at its own total (never 10/9), and ``-v`` prints
+    more than the default."""
+    import os
+    import sys
+
+    env = {**os.environ, "COLUMNS": "120"}
+
+    def run(*flags, out):
+        proc = subprocess.run([sys.executable, "-m", "crankbench", *flags, "demo", "-o",
+                               str(tmp_path / out)], capture_output=True, text=True, env=env,
+                              timeout=600)
+        assert proc.returncode == 0, proc.stderr[-2000:]
+        return proc.stderr
+
+    quiet = run(out="a")
+    lines = [ln.strip() for ln in re.split(r"[\r\n]", quiet) if ln.strip()]
+    messages = [ln for ln in lines if not ln.startswith("demo:")]
+    assert not [m for m in messages if "warning" in m.lower()], messages
+    assert len(messages) == len(set(messages)), messages           # each message once
+    counts = [(int(a), int(b)) for a, b in re.findall(r"(\d+)/(\d+) \[", quiet)]
+    assert counts and all(a <= b for a, b in counts), counts        # never past its total
+    assert max(a for a, _ in counts) == counts[0][1]                # and it reaches it
+    assert not re.search(r"\d+step \[", quiet)                       # (tqdm's overflow form)
+    verbose = run("-v", out="b")
+    more = [ln for ln in re.split(r"[\r\n]", verbose) if ln.strip() and
+            not ln.strip().startswith("demo:")]
+    assert len(more) > len(messages), (messages, more)

@@ -222,3 +222,24 @@ def test_steady_run_with_nothing_compared_is_inconclusive(tmp_path):
     assert result.steady and comp.status == "inconclusive" and "steady-speed run" in comp.reason
     assert result.verdict.status in ("inconclusive", "fail") and not result.passed
     assert result.summary()["comparison_verdict"] == "inconclusive"
+
+
+@pytest.mark.slow
+def test_misfire_case_that_cannot_be_computed_is_listed_not_dropped(marine, monkeypatch):
+    """A stated misfire case the model cannot compute is 'not assessed' (inconclusive) in the
+    limit table, never silently missing."""
+    import crankbench.analysis.pipeline as pipeline
+    from crankbench.predict.errors import ModelError
+
+    def broken(*args, **kwargs):
+        raise ModelError("no cylinder pressure model for the misfire case")
+
+    monkeypatch.setattr(pipeline, "_misfire_stress", broken)
+    run, normal = marine
+    scene_load = LoadCase(imep=2.4e6, law="propeller", reference_rpm=720.0)
+    result = analyse(run.record, MODEL, load=scene_load)
+    before = [c for c in normal.limits if "misfiring" in c.name]
+    after = [c for c in result.limits if "misfiring" in c.name]
+    assert before and all(c.status != "inconclusive" for c in before)
+    assert len(after) == 1 and after[0].status == "inconclusive"
+    assert "could not be computed" in after[0].detail and "no cylinder pressure" in after[0].detail

@@ -50,3 +50,15 @@ def test_every_scene_compares_clean_against_its_own_model(path):
         assert m.speed_rpm_measured == pytest.approx(natural, rel=0.005), (m["mode"], m.order)
     if result.vibrograph is not None:
         assert result.vibrograph.verdict.status == "pass"
+    # a critical in the range that is not judged says why, in the report's one table
+    from crankbench.analysis.report.report import critical_speed_table
+
+    table = critical_speed_table(comp, result.predicted)
+    listed = table[(table["significant"] == False) & table["mode"].notna()]  # noqa: E712
+    assert listed["status"].str.contains("not judged: ").all(), listed["status"].tolist()
+    uncovered = result.predicted[result.predicted["not_judged"] != ""]
+    for _, p in uncovered.iterrows():
+        row = table[(table["mode"] == p["mode"]) & (table["order"] == p["order"])]
+        assert row["status"].str.contains("not covered by the run").all(), row
+    if path.stem == "i4_runup":    # its first mode's 0.5 order is entered on its flank
+        assert ((uncovered["mode"] == 1) & (uncovered["order"] == 0.5)).any()

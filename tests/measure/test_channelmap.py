@@ -167,6 +167,14 @@ def _write(tmp_path, text, name="map.toml"):
     ('[channel.a]\ncolumn = 1\nunits = "V"\n[channel.b]\ncolumn = 1\nunits = "V"\n',
      r"channel.b.column = 1 is also the column of channel.a"),
     ('description = "x"\n', r"channel is missing: a map names at least one channel"),
+    ('[channel.a]\ncolumn = 1\nunits = "g"\nposition = [0.1, 0.2]\n',
+     r"channel.a.position has 2 values, expected 3"),
+    ('[channel.a]\ncolumn = 1\nunits = "g"\nposition = [0.1, 0.2, 0.3]\nmount = "FL"\n',
+     r"channel.a.mount and 'position' both place the sensor"),
+    ('[channel.a]\ncolumn = 1\nunits = "g"\ninstrument_damping_ratio = 0.6\n',
+     r"channel.a.instrument_damping_ratio needs instrument_natural_frequency"),
+    ('[channel.w]\ncolumn = 1\nrole = "wheel"\npulses_per_rev = 60\nmount = "FL"\n',
+     r"channel.w.mount places a vibration sensor; it does not apply to pulse channels"),
 ])
 def test_bad_map_keys_are_named_like_model_files(tmp_path, text, pattern):
     path = _write(tmp_path, text)
@@ -213,3 +221,50 @@ def test_undecodable_pulse_column_names_file_column_and_what_was_seen(tmp_path):
                                           r"missing teeth found in 3 edges, 0.1 revolutions of a "
                                           r"60-pitch wheel"):
         io.read(rig.path, map=path)
+
+
+def test_map_places_vibrograph_sensors_for_the_mount_model(tmp_path):
+    """``mount``/``position``/instrument keys reach the channel attrs, and the vibrograph
+    comparison places the sensors from them: at the named mount's position (from the engine
+    model, independent of the map) or at the given coordinates (quantity strings in mm)."""
+    from crankbench.analysis.vibrograph import place_sensors
+    from crankbench.predict.mounts import MountedEngine
+
+    mounted = MountedEngine.from_toml("sample_data/engines/i4.toml")
+    mount = mounted.mounts[0]
+    fs, n = 2000.0, 4000
+    t = np.arange(n) / fs
+    data = np.column_stack([0.1 * np.sin(2 * np.pi * 50 * t), 0.2 * np.cos(2 * np.pi * 50 * t)])
+    raw = tmp_path / "block.txt"
+    np.savetxt(raw, data, delimiter="\t", fmt="%.6f")
+    cmap = tmp_path / "block_map.toml"
+    cmap.write_text(f"""
+[source]
+sample_rate = {fs}
+[channel.acc_mount]
+column = 1
+units = "g"
+direction = "z"
+mount = "{mount.name}"
+[channel.acc_pos]
+column = 2
+units = "g"
+direction = "y"
+position = ["350 mm", "-420 mm", "-300 mm"]
+instrument_natural_frequency = "12 Hz"
+instrument_damping_ratio = 0.6
+""")
+    rec = io.read(raw, map=cmap)
+    assert rec["acc_mount"].attrs["mount"] == mount.name
+    assert rec["acc_pos"].attrs["position"] == pytest.approx([0.35, -0.42, -0.30], abs=1e-12)
+    assert rec["acc_pos"].attrs["instrument_natural_frequency"] == 12.0
+    assert rec["acc_pos"].attrs["instrument_damping_ratio"] == 0.6
+    np.testing.assert_allclose(rec["acc_mount"].values, 9.80665 * data[:, 0], rtol=1e-5,
+                               atol=1e-5)
+    sensors, skipped = place_sensors(rec, mounted)
+    assert not skipped
+    by = {s.channel: s for s in sensors}
+    np.testing.assert_allclose(by["acc_mount"].position, mount.position, atol=0)
+    assert by["acc_mount"].placed_by == f"mount {mount.name}"
+    np.testing.assert_allclose(by["acc_pos"].position, [0.35, -0.42, -0.30], atol=1e-12)
+    np.testing.assert_allclose(by["acc_pos"].direction, [0.0, 1.0, 0.0], atol=0)
