@@ -450,8 +450,8 @@ def _track(x, fs, rpm, orders, *, method, bandwidth_orders, revolutions):
 
 
 #: the steps of :func:`analyse`, in order, as its ``progress`` callback names them
-STEPS = ("read", "prediction", "order tracking", "resonances", "comparison", "balance",
-         "limits", "measured excitation")
+STEPS = ("read", "prediction", "order tracking", "resonances", "comparison",
+         "measured excitation", "balance", "limits")
 
 
 def analyse(record, model, *, channel=None, speed_channel=None, orders=None, max_order=12.0,

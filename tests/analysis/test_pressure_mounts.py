@@ -195,3 +195,12 @@ def test_compare_json_of_an_engine_model_carries_both_predictions(run, tmp_path,
     rows = {(r["sensor"], r["order"]): r for r in vib["rows"]}
     assert abs(rows[("acc_rod_y", 4.0)]["ratio_measured_excitation"] - 1) < 0.01
     assert abs(vib["indicator"]["p_cyl1"]["imep_net_bar"] - 10.0) < 0.1
+
+
+def test_pipeline_steps_in_the_order_they_run(run):
+    """The measured excitation runs before the balance step that uses it; STEPS says so."""
+    from crankbench.analysis.pipeline import STEPS, analyse
+
+    seen = []
+    analyse(run.record, MODEL, orders=[2.0], progress=seen.append)
+    assert [s for s in seen if s in STEPS] == list(STEPS)
