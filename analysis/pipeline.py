@@ -458,8 +458,8 @@ def _track(x, fs, rpm, orders, *, method, bandwidth_orders, revolutions):
 
 
 #: the steps of :func:`analyse`, in order, as its ``progress`` callback names them
-STEPS = ("read", "prediction", "order tracking", "resonances", "comparison", "balance",
-         "limits", "measured excitation")
+STEPS = ("read", "prediction", "order tracking", "resonances", "comparison",
+         "measured excitation", "balance", "limits")
 
 
 def analyse(record, model, *, channel=None, speed_channel=None, orders=None, max_order=12.0,
@@ -662,8 +662,16 @@ def analyse(record, model, *, channel=None, speed_channel=None, orders=None, max
                                  speed_range_rpm=(lo, hi))
     done("comparison")
 
+    step("measured excitation")                # cylinder pressure, if the record has it
+    from .excitation_compare import measured_excitation_prediction
+
+    pressure = measured_excitation_prediction(rec, system, grid, all_orders, node, quantity,
+                                              units, load, track, response_da)
+    done("measured excitation")
+
     step("balance")
-    vibrograph = _vibrograph(rec, system, load, speed_channel, vibration_tolerance)
+    vibrograph = _vibrograph(rec, system, load, speed_channel, vibration_tolerance,
+                             indicator=None if pressure is None else pressure.indicator)
     done("balance")
 
     step("limits")
@@ -671,13 +679,6 @@ def analyse(record, model, *, channel=None, speed_channel=None, orders=None, max
                            channel, machine_class, operating_range_rpm, load=load,
                            standard=vibration_standard, speed_range=(lo, hi))
     done("limits")
-
-    step("measured excitation")                # cylinder pressure, if the record has it
-    from .excitation_compare import measured_excitation_prediction
-
-    pressure = measured_excitation_prediction(rec, system, grid, all_orders, node, quantity,
-                                              units, load, track, response_da)
-    done("measured excitation")
 
     ppr = next((int(rec[n].attrs["pulses_per_rev"]) for n in rec.data_vars
                 if "pulses_per_rev" in rec[n].attrs), None)
@@ -741,9 +742,11 @@ def _swept_like_with_like(predicted, resonances, track, quantity, gate):
     return expected, measured
 
 
-def _vibrograph(rec, system, load, speed_channel, tolerance):
+def _vibrograph(rec, system, load, speed_channel, tolerance, *, indicator=None):
     """The vibrograph comparison of the record's block/mount channels against the shaft line's
-    engine on its mounts; None without ``[mounts]`` or placeable channels."""
+    engine on its mounts, with the prediction from the measured excitation beside it when
+    ``indicator`` (the indicator results of the record's pressure) is given; None without
+    ``[mounts]`` or placeable channels."""
     from .vibrograph import compare_vibrograph
 
     engine = getattr(system, "engine", None)
@@ -752,7 +755,7 @@ def _vibrograph(rec, system, load, speed_channel, tolerance):
         return None
     try:
         return compare_vibrograph(rec, source, load=load, speed_channel=speed_channel,
-                                  tolerance=tolerance)
+                                  tolerance=tolerance, indicator=indicator)
     except ConfigError as exc:        # no [mounts] in the engine model
         log.info("no vibrograph comparison: %s", exc)
     except (RecordError, AnalysisError) as exc:   # no channel to place, nothing to compare
