@@ -55,14 +55,13 @@ class LoadCase:
         the model's ``imep`` (``[shaftline] imep``) or the engine's combustion data.
     law : {'constant', 'propeller'}
         Propeller law: gas load ∝ speed². The factor scales the whole gas torque, the
-        compression (motored) part included — a simplification the synthetic bench shares.
-        A real cylinder at part load keeps its compression torque, so at low speed on a
-        propeller law the prediction underestimates the gas-torque harmonics, most at the
-        major orders, whose rigid-body response dominates at low speed (on the 6L32 demo run
-        the response predicted from the bench's own pressure channel is far above the
-        law-scaled one at order 3 near 200 rpm, while the peaks near rated speed agree).
-        The measured-excitation comparison (:mod:`analysis.excitation_compare`) shows it
-        whenever the record has cylinder pressure.
+        compression (motored) part included; the synthetic bench's pressure channels follow
+        the same law (gauge pressure × factor, :mod:`measure.synth.pressure`), so a synthetic
+        record agrees with it. A real cylinder at part load keeps its compression torque:
+        at low speed on a propeller law the prediction then underestimates the gas-torque
+        harmonics, most at the major orders, whose rigid-body response dominates at low
+        speed. The measured-excitation comparison (:mod:`analysis.excitation_compare`) shows
+        it whenever the record has cylinder pressure.
     reference_rpm : float or None
         Speed where ``imep`` applies for the propeller law (default: the engine's rated
         speed).
