@@ -68,6 +68,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from crankbench.predict._threads import single_threaded_blas
 from crankbench.predict._validate import check_option, check_range
 from crankbench.predict.errors import AnalysisError
 
@@ -378,6 +379,7 @@ def _offset_field(peg_info, psi, t_grid, window_deg):
 
 
 # ------------------------------------------------------------------------------ analysis
+@single_threaded_blas  # per-cycle small least squares: BLAS threads only cost (issue 21)
 def indicator_analysis(record, engine, *, channel=None, cylinder=None, angle_channel=None,
                        tdc_channel=None, phase_channel=None, tdc_offset_deg=None, peg="auto",
                        peg_pressure=None, peg_window_deg=(-100.0, -35.0),
