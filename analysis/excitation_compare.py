@@ -10,8 +10,11 @@ does not, the pressure model is at fault; if both predictions miss alike, the dy
 
 On a sweep (cycle speeds spanning more than 5 % of their mean) the gas torque is taken per
 speed bin as measured (:func:`analysis.pressure.measured_speed_excitation`, no load law); on a
-steady run the cycles are averaged into one operating point, scaled over the model's speed
-grid by the same load law as the parametric excitation — stated in the result.
+steady run the cycles are averaged into one operating point whose gas torque is divided by the
+load law's factor at the measured speed and then scaled over the model's speed grid by the
+same law as the parametric excitation (:func:`excitation_from_indicator`) — stated in the
+result. The same measured excitation drives the block on its mounts in the vibrograph
+comparison (:func:`analysis.vibrograph.compare_vibrograph`, ``indicator``).
 """
 
 from __future__ import annotations
@@ -24,7 +27,7 @@ import numpy as np
 from crankbench.predict.errors import CrankbenchError
 
 __all__ = ["ExcitationComparison", "measured_excitation_prediction", "add_pressure_section",
-           "add_indicator_section"]
+           "add_indicator_section", "excitation_from_indicator"]
 
 log = logging.getLogger("crankbench")
 
@@ -82,6 +85,64 @@ class ExcitationComparison:
         return fig
 
 
+def excitation_from_indicator(results, engine, *, orders, load):
+    """The measured torque excitation of indicator results, ready for a load law.
+
+    On a sweep (cycle speeds spanning more than 5 % of their mean) the gas torque per speed
+    bin (:func:`analysis.pressure.measured_speed_excitation`, ``speed_dependent``: no load law
+    applies); on a steady run the mean cycles (:func:`analysis.pressure.measured_excitation`)
+    with the gas part divided by the load law's factor at the measured speed, so that the law
+    (``load.scale``) applied to it gives the measured torque at the measured speed and the
+    law's change elsewhere.
+
+    Parameters
+    ----------
+    results : dict
+        ``{channel: IndicatorResult}`` (:func:`analysis.pressure.indicator_analyses`).
+    engine : predict.engine.Engine
+    orders : array_like
+        Orders of the excitation.
+    load : analysis.pipeline.LoadCase
+
+    Returns
+    -------
+    excitation : Excitation or SpeedExcitation
+    note : str
+        What the excitation rests on.
+
+    Examples
+    --------
+    >>> from crankbench.analysis.pipeline import LoadCase
+    >>> excitation_from_indicator({}, None, orders=[2.0], load=LoadCase())
+    Traceback (most recent call last):
+    ...
+    crankbench.predict.errors.AnalysisError: no indicator results: the measured excitation needs at least one analysed pressure channel
+    """
+    from dataclasses import replace
+
+    from crankbench.predict.errors import AnalysisError
+
+    from .pressure import measured_excitation, measured_speed_excitation
+
+    if not results:
+        raise AnalysisError("no indicator results: the measured excitation needs at least one "
+                            "analysed pressure channel")
+    speeds = np.concatenate([r.speed_rpm for r in results.values()])
+    if np.ptp(speeds) > 0.05 * speeds.mean():       # a sweep: the gas torque per speed
+        exc = measured_speed_excitation(results, engine, orders=orders)
+        return exc, f"{exc.source}; the gas torque of each speed as measured (no load law)"
+    exc = measured_excitation(results, engine, orders=orders)
+    mean = float(speeds.mean())
+    factor = float(load.scale(np.array([mean]))[0])
+    if factor != 1.0:
+        exc = replace(exc, gas=exc.gas / factor,
+                      source=f"{exc.source}; gas part divided by the load factor {factor:.4g} "
+                             f"at {mean:.0f} rpm")
+    lo, hi = float(speeds.min()), float(speeds.max())
+    return exc, (f"{exc.source}; measured at {lo:.0f}-{hi:.0f} rpm and scaled over the sweep "
+                 f"by the load law ({load.law})")
+
+
 def measured_excitation_prediction(record, system, grid, orders, node, quantity, units, load,
                                    track, model_response):
     """The measured-excitation prediction of a pipeline run, or None without pressure.
@@ -89,19 +150,14 @@ def measured_excitation_prediction(record, system, grid, orders, node, quantity,
     A problem with the pressure (no crank-angle source, no complete cycle, ...) is logged as a
     warning and gives None: the torsional comparison does not depend on it.
     """
-    from .pressure import (indicator_analyses, measured_excitation, measured_speed_excitation,
-                           pressure_channels)
+    from .pressure import indicator_analyses, pressure_channels
 
     engine = getattr(system, "engine", None)
     if engine is None or not pressure_channels(record):
         return None
     try:
         results = indicator_analyses(record, engine)
-        speeds = np.concatenate([r.speed_rpm for r in results.values()])
-        if np.ptp(speeds) > 0.05 * speeds.mean():       # a sweep: the gas torque per speed
-            exc = measured_speed_excitation(results, engine, orders=orders)
-        else:
-            exc = measured_excitation(results, engine, orders=orders)
+        exc, note = excitation_from_indicator(results, engine, orders=orders, load=load)
     except CrankbenchError as exc_:
         log.warning("measured excitation skipped: %s", exc_)
         return None
@@ -139,12 +195,6 @@ def measured_excitation_prediction(record, system, grid, orders, node, quantity,
                      else float("nan")})
     table = pd.DataFrame(rows)
     table.attrs["units"] = units
-    if getattr(exc, "speed_dependent", False):
-        note = f"{exc.source}; the gas torque of each speed as measured (no load law)"
-    else:
-        speeds = [float(np.mean(r.speed_rpm)) for r in results.values()]
-        note = (f"{exc.source}; measured at {min(speeds):.0f}-{max(speeds):.0f} rpm and scaled "
-                f"over the sweep by the load law ({load.law})")
     return ExcitationComparison(indicator=results, excitation=exc, response=response,
                                 table=table, note=note)
 

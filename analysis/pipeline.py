@@ -59,7 +59,14 @@ class LoadCase:
         Mean indicated pressure, Pa (at ``reference_rpm`` for the propeller law); None takes
         the model's ``imep`` (``[shaftline] imep``) or the engine's combustion data.
     law : {'constant', 'propeller'}
-        Propeller law: gas load ∝ speed².
+        Propeller law: gas load ∝ speed². The factor scales the whole gas torque, the
+        compression (motored) part included; the synthetic bench's pressure channels follow
+        the same law (gauge pressure × factor, :mod:`measure.synth.pressure`), so a synthetic
+        record agrees with it. A real cylinder at part load keeps its compression torque:
+        at low speed on a propeller law the prediction then underestimates the gas-torque
+        harmonics, most at the major orders, whose rigid-body response dominates at low
+        speed. The measured-excitation comparison (:mod:`analysis.excitation_compare`) shows
+        it whenever the record has cylinder pressure.
     reference_rpm : float or None
         Speed where ``imep`` applies for the propeller law (default: the engine's rated
         speed).
@@ -451,8 +458,8 @@ def _prediction(system, orders, node, quantity, units, load, lo, hi, base_points
 
 
 #: the steps of :func:`analyse`, in order, as its ``progress`` callback names them
-STEPS = ("read", "prediction", "order tracking", "resonances", "comparison", "balance",
-         "limits", "measured excitation")
+STEPS = ("read", "prediction", "order tracking", "resonances", "comparison",
+         "measured excitation", "balance", "limits")
 
 
 def analyse(record, model, *, channel=None, speed_channel=None, orders=None, max_order=12.0,
@@ -672,8 +679,16 @@ def analyse(record, model, *, channel=None, speed_channel=None, orders=None, max
                                  speed_range_rpm=(lo, hi))
     done("comparison")
 
+    step("measured excitation")                # cylinder pressure, if the record has it
+    from .excitation_compare import measured_excitation_prediction
+
+    pressure = measured_excitation_prediction(rec, system, grid, all_orders, node, quantity,
+                                              units, load, track, response_da)
+    done("measured excitation")
+
     step("balance")
-    vibrograph = _vibrograph(rec, system, load, speed_channel, vibration_tolerance)
+    vibrograph = _vibrograph(rec, system, load, speed_channel, vibration_tolerance,
+                             indicator=None if pressure is None else pressure.indicator)
     done("balance")
 
     step("limits")
@@ -681,13 +696,6 @@ def analyse(record, model, *, channel=None, speed_channel=None, orders=None, max
                            channel, machine_class, operating_range_rpm, load=load,
                            standard=vibration_standard, speed_range=(lo, hi))
     done("limits")
-
-    step("measured excitation")                # cylinder pressure, if the record has it
-    from .excitation_compare import measured_excitation_prediction
-
-    pressure = measured_excitation_prediction(rec, system, grid, all_orders, node, quantity,
-                                              units, load, track, response_da)
-    done("measured excitation")
 
     ppr = next((int(rec[n].attrs["pulses_per_rev"]) for n in rec.data_vars
                 if "pulses_per_rev" in rec[n].attrs), None)
@@ -749,9 +757,11 @@ def _swept_like_with_like(predicted, resonances, track, quantity, gate):
     return expected, measured
 
 
-def _vibrograph(rec, system, load, speed_channel, tolerance):
+def _vibrograph(rec, system, load, speed_channel, tolerance, *, indicator=None):
     """The vibrograph comparison of the record's block/mount channels against the shaft line's
-    engine on its mounts; None without ``[mounts]`` or placeable channels."""
+    engine on its mounts, with the prediction from the measured excitation beside it when
+    ``indicator`` (the indicator results of the record's pressure) is given; None without
+    ``[mounts]`` or placeable channels."""
     from .vibrograph import compare_vibrograph
 
     engine = getattr(system, "engine", None)
@@ -760,7 +770,7 @@ def _vibrograph(rec, system, load, speed_channel, tolerance):
         return None
     try:
         return compare_vibrograph(rec, source, load=load, speed_channel=speed_channel,
-                                  tolerance=tolerance)
+                                  tolerance=tolerance, indicator=indicator)
     except ConfigError as exc:        # no [mounts] in the engine model
         log.info("no vibrograph comparison: %s", exc)
     except (RecordError, AnalysisError) as exc:   # no channel to place, nothing to compare

@@ -117,8 +117,12 @@ def _find(record, names, want):
     return [n for _, n in sorted(out)]
 
 
-def _angle(record, *, angle_channel, tdc_channel, tdc_offset_deg):
-    """AngleTrace, a description of its zero, and whether that zero is a TDC."""
+def _angle(record, *, angle_channel, tdc_channel, tdc_offset_deg, marks_out=None):
+    """AngleTrace, a description of its zero, and whether that zero is a TDC.
+
+    ``marks_out`` (a dict), when given, receives ``name`` and ``times`` (s) of the TDC-mark
+    channel used, if any.
+    """
     from crankbench.measure.tacho import angle_from_pulses
 
     names = [str(n) for n in record.data_vars]
@@ -148,6 +152,8 @@ def _angle(record, *, angle_channel, tdc_channel, tdc_offset_deg):
     given = tdc_offset_deg
     if tdc_channel is not None:
         marks = _mark_times(record, tdc_channel)
+        if marks_out is not None:
+            marks_out.update(name=tdc_channel, times=marks)
         off = 0.0 if given is None else float(given)
         trace = _referenced(angle_from_pulses(edges, pulses_per_rev=ppr, missing_teeth=missing),
                             marks, off, tdc_channel)
@@ -313,16 +319,75 @@ def _phase(theta, p, cyl_offset, period, phase_marks, record_name):
         return int(odd > 0.5) * TWO_PI + cyl_offset, \
             f"phase channel {record_name!r}: firing TDC of cylinder 1 is the first TDC at or " \
             "after each mark"
-    means = []
-    for c in cands:
-        rel = np.mod(theta - c + period / 2, period) - period / 2
-        sel = np.abs(rel) <= 30 * DEG
-        means.append(float(np.mean(p[sel])) if sel.any() else -np.inf)
+    means = _tdc_means(theta, p, cands, period)
     k = int(np.argmax(means))
     other = means[1 - k]
     text = (f"from the pressure: mean {means[k] / BAR:.3g} bar within ±30 deg of the chosen "
             f"TDC against {other / BAR:.3g} bar at the other")
     return cands[k], text
+
+
+def _tdc_means(theta, p, cands, period):
+    """Mean pressure within ±30° of each candidate TDC (rad, in θ), Pa."""
+    means = []
+    for c in cands:
+        rel = np.mod(theta - c + period / 2, period) - period / 2
+        sel = np.abs(rel) <= 30 * DEG
+        means.append(float(np.mean(p[sel])) if sel.any() else -np.inf)
+    return means
+
+
+#: the pressure decides the firing TDC of a 4-stroke only when the mean pressure within ±30°
+#: of one TDC exceeds the other's by this factor (a compression alone gives 5-20)
+PHASE_CONTRAST = 1.25
+
+
+def _cycle_mark_phase(theta, p, base, cyl_offset, period, mark_angles, name, warnings):
+    """Firing TDC of a 4-stroke checked against a once-per-cycle TDC mark.
+
+    ``mark_angles``: crank angles (rad, in θ) of the TDC marks. When they come once per cycle
+    (spacing 720°) their relation to the firing TDC chosen from the pressure is stated (at
+    the firing TDC, or at the gas-exchange TDC 360° away); when the pressure cannot tell the
+    two TDCs apart (contrast below :data:`PHASE_CONTRAST`) the marks are taken as the firing
+    TDC of cylinder 1 (stated, with a warning). With once-per-revolution marks and such a
+    pressure the choice is flagged as a guess. Returns ``(base, text)`` to append to the
+    phase description ("" when there is nothing to add).
+    """
+    if period <= TWO_PI + 1e-9:
+        return base, ""
+    cands = [cyl_offset, cyl_offset + TWO_PI]
+    means = _tdc_means(theta, p, cands, period)
+    lo, hi = sorted(means)
+    clear = lo > 0 and hi >= PHASE_CONTRAST * lo
+    per_cycle = mark_angles is not None and mark_angles.size >= 2 and abs(
+        np.median(np.diff(mark_angles)) - 2 * TWO_PI) < 0.25 * TWO_PI
+    if per_cycle:
+        # which of cylinder 1's two TDCs of the cycle (θ = 0 or 2π mod 4π) the marks sit on
+        parity = np.mod(np.rint(mark_angles / TWO_PI).astype(np.int64), 2)
+        odd = int(np.mean(parity) > 0.5)
+        if 0.1 < float(np.mean(parity)) < 0.9:
+            warnings.append(f"TDC mark {name!r}: its once-per-cycle marks fall on both TDCs of "
+                            "the cycle (a slipping cam or a once-per-revolution mark with "
+                            "dropouts); the majority is used")
+        mark_tdc = cyl_offset + odd * TWO_PI
+        if not clear:
+            warnings.append(
+                f"the pressure does not tell the firing TDC from the gas-exchange TDC (mean "
+                f"{hi / BAR:.3g} against {lo / BAR:.3g} bar within ±30 deg); the once-per-cycle "
+                f"TDC mark {name!r} is taken as the firing TDC of cylinder 1 (give "
+                "phase_channel= for a cam/phase mark if it is not)")
+            return mark_tdc, (f"; pressure inconclusive: the once-per-cycle mark {name!r} taken "
+                              "as the firing TDC of cylinder 1")
+        same = abs(np.mod(base - mark_tdc + period / 2, period) - period / 2) < 0.5 * TWO_PI
+        where = "on the firing TDC" if same else "on the gas-exchange TDC, 360 deg from firing"
+        return base, f"; the once-per-cycle TDC mark {name!r} sits {where} of cylinder 1"
+    if not clear:
+        warnings.append(f"the pressure does not tell the firing TDC from the gas-exchange TDC "
+                        f"(mean {hi / BAR:.3g} against {lo / BAR:.3g} bar within ±30 deg) and "
+                        "there is no once-per-cycle mark: the 4-stroke phase is a guess; give "
+                        "phase_channel= (a cam/phase mark)")
+        return base, "; inconclusive (see the warnings)"
+    return base, ""
 
 
 def _coarse_tdc(theta, p, period):

@@ -272,6 +272,13 @@ class VibrographResult:
     residuals : ResidualEstimate or None
     curves : dict
         ``{(sensor, order): (speed_rpm, measured, predicted)}`` per block.
+    measured_excitation : Excitation, SpeedExcitation or None
+        The excitation from the record's cylinder pressure (``indicator`` of
+        :func:`compare_vibrograph`); with it the table has ``predicted_measured_excitation``
+        and ``ratio_measured_excitation``, and ``curves_measured_excitation`` holds
+        ``{(sensor, order): predicted}`` per block from it.
+    indicator : dict
+        ``{channel: IndicatorResult}`` the measured excitation rests on (empty without).
     speed_range_rpm : tuple
     sweep_rate_rpm_per_s : float
     tolerance : float
@@ -291,6 +298,9 @@ class VibrographResult:
     sweep_rate_rpm_per_s: float
     tolerance: float
     settings: dict = field(default_factory=dict)
+    measured_excitation: object = None
+    curves_measured_excitation: dict = field(default_factory=dict)
+    indicator: dict = field(default_factory=dict)
 
     @property
     def verdict(self):
@@ -343,7 +353,8 @@ class VibrographResult:
 
     def plot(self, ax=None, *, sensor=None):
         """Measured (solid) and predicted (dashed) order amplitudes of one sensor against
-        speed, the judged orders; returns the figure."""
+        speed, the judged orders, and (dotted) the prediction from the measured excitation
+        when there is one; returns the figure."""
         import matplotlib.pyplot as plt
 
         if ax is None:
@@ -356,10 +367,15 @@ class VibrographResult:
             rpm, meas, pred = self.curves[(name, float(r["order"]))]
             line, = ax.semilogy(rpm, meas, lw=1.0, label=f"order {r['order']:g}")
             ax.semilogy(rpm, pred, "--", color=line.get_color(), lw=1.2)
+            px = self.curves_measured_excitation.get((name, float(r["order"])))
+            if px is not None:
+                ax.semilogy(rpm, px, ":", color=line.get_color(), lw=1.5)
         units = rows["units"].iloc[0] if len(rows) else ""
         ax.set_xlabel("speed (rpm)")
         ax.set_ylabel(f"order amplitude, peak ({units})")
-        ax.set_title(f"{name}: measured (solid) and predicted (dashed)", fontsize=9)
+        ax.set_title(f"{name}: measured (solid) and predicted (dashed" + (
+            "; dotted: from the measured pressure)" if self.curves_measured_excitation
+            else ")"), fontsize=9)
         if len(rows):
             ax.legend(fontsize=7, ncol=2)
         ax.grid(alpha=0.3)
@@ -430,10 +446,44 @@ def _instrument(attrs, quantity):
                              quantity)
 
 
+def _measured_excitation(rec, engine, indicator, orders, load):
+    """(excitation, note, indicator results) from the record's cylinder pressure, or
+    (None, "", {})."""
+    if indicator is None:
+        return None, "", {}
+    from crankbench.predict.errors import CrankbenchError
+
+    from .excitation_compare import excitation_from_indicator
+    from .pressure import indicator_analyses, pressure_channels
+
+    try:
+        if isinstance(indicator, str):
+            if indicator != "auto":
+                raise ConfigError(f"indicator={indicator!r} must be 'auto', None or a dict of "
+                                  "IndicatorResult")
+            if not pressure_channels(rec):
+                return None, "", {}
+            indicator = indicator_analyses(rec, engine)
+        from .pressure import IndicatorResult
+
+        if not isinstance(indicator, dict) or not all(
+                isinstance(v, IndicatorResult) for v in indicator.values()):
+            raise ConfigError("indicator= must be 'auto', None or a dict {channel: "
+                              "IndicatorResult} (analysis.pressure.indicator_analyses), got "
+                              f"{type(indicator).__name__}")
+        exc, note = excitation_from_indicator(indicator, engine, orders=orders, load=load)
+        return exc, note, dict(indicator)
+    except ConfigError:
+        raise
+    except CrankbenchError as exc:
+        log.warning("block vibration from the measured excitation skipped: %s", exc)
+        return None, "", {}
+
+
 def compare_vibrograph(record, model, *, load=None, speed_channel=None, orders=None,
                        max_order=12.0, tolerance=0.5, revolutions=8, significant_fraction=0.02,
                        min_snr=10.0, channels=None, residual_orders=None, speed_rpm=None,
-                       progress=None) -> VibrographResult:
+                       indicator="auto", progress=None) -> VibrographResult:
     """Compare a record's vibrograph channels with the engine model on its mounts.
 
     Parameters
@@ -463,6 +513,16 @@ def compare_vibrograph(record, model, *, load=None, speed_channel=None, orders=N
     speed_rpm : float, optional
         Speed at which residual forces and moments are reported (default: the highest
         measured).
+    indicator : "auto", dict or None
+        Cylinder pressure for a second prediction from the *measured* excitation
+        (:func:`analysis.excitation_compare.excitation_from_indicator`: the gas-torque
+        reaction from the measured pressure, the inertia loads from the model): ``"auto"``
+        analyses the record's pressure channels when it has any
+        (:func:`analysis.pressure.indicator_analyses`; a failure is logged, not raised), a
+        dict ``{channel: IndicatorResult}`` is used as given, None skips it. The table then
+        has ``predicted_measured_excitation`` and ``ratio_measured_excitation`` (measured
+        peak over that prediction's peak, same speeds) beside ``predicted``; the verdicts
+        stay on the model's prediction.
     progress : callable, optional
 
     Returns
@@ -535,6 +595,7 @@ def compare_vibrograph(record, model, *, load=None, speed_channel=None, orders=N
     except (ModelError, ValueError) as exc:
         log.info("no gas-torque reaction predicted (%s); inertia loads only", exc)
     loads = block_excitation(engine, orders, excitation=excitation, counterweights=spec.masses)
+    measured_x, x_note, indicator = _measured_excitation(rec, engine, indicator, orders, load)
     tol = None
     integer = [int(round(q)) for q in orders if abs(q - round(q)) < 1e-9]
     if integer:
@@ -544,7 +605,7 @@ def compare_vibrograph(record, model, *, load=None, speed_channel=None, orders=N
 
     step("order tracking")
     lo_band, hi_band = 1.0 / (1.0 + tolerance), 1.0 + tolerance
-    rows, verdicts, curves, blocks = [], [], {}, {}
+    rows, verdicts, curves, blocks, curves_x = [], [], {}, {}, {}
     rate, tracked = [], []
     for s in sensors:
         var = rec[s.channel]
@@ -582,6 +643,15 @@ def compare_vibrograph(record, model, *, load=None, speed_channel=None, orders=N
         pred_c = np.einsum("kbj,kj->kb", h, loads.gas) * lf[None, :] + \
             np.einsum("kbj,kj->kb", h, loads.inertia) * (omega_b**2)[None, :]
         pred = np.abs(pred_c)
+        pred_x = None
+        if measured_x is not None:         # the gas roll from the measured pressure
+            from crankbench.predict.gas_torque import torque_reaction
+
+            roll = torque_reaction(engine, measured_x, orders, omega_b).T         # (n_o, n_b)
+            if not getattr(measured_x, "speed_dependent", False):
+                roll = roll * lf[None, :]
+            pred_x = np.abs(np.einsum("kbj,kj->kb", h, loads.inertia) * (omega_b**2)[None, :]
+                            + h[:, :, 3] * roll)
         blocks[s.channel] = dict(time=t_b, rpm=rpm_b, measured=meas_c, noise=noise, h=h,
                                  load=lf, fs=fs, speed_rpm=rpm)
         tracked.append(s)
@@ -667,9 +737,17 @@ def compare_vibrograph(record, model, *, load=None, speed_channel=None, orders=N
                              passed=v.status == "pass", required=v.required, rule=v.rule,
                              reason=v.reason))
             curves[(s.channel, float(q))] = (rpm_b, mk, pk)
+            if pred_x is not None:         # same speeds as the model's peak
+                px = float(pred_x[k][use].max())
+                rows[-1].update(predicted_measured_excitation=px,
+                                ratio_measured_excitation=m_peak / px if px > 0
+                                else float("inf"))
+                curves_x[(s.channel, float(q))] = pred_x[k]
     cols = ["sensor", "order", "measured", "predicted", "ratio", "ratio_median", "speed_rpm",
             "noise", "snr", "allowed", "units", "quantity", "significant", "verdict", "passed",
             "required", "rule", "reason"]
+    if measured_x is not None:
+        cols[4:4] = ["predicted_measured_excitation", "ratio_measured_excitation"]
     table = pd.DataFrame(rows, columns=cols)
     sweep = float(np.median(np.concatenate(rate))) if rate else 0.0
 
@@ -701,6 +779,7 @@ def compare_vibrograph(record, model, *, load=None, speed_channel=None, orders=N
                                          else ", model imep"),
                 "gas-torque reaction": "yes" if excitation is not None else "no (no combustion "
                                                                             "data)",
+                "measured excitation": x_note or "none (no cylinder pressure)",
                 "balance masses": len(spec.masses),
                 "manufacturing tolerances": "stated" if spec.stated else "none in the model",
                 "sensors": "; ".join(s.describe() for s in sensors),
@@ -709,4 +788,6 @@ def compare_vibrograph(record, model, *, load=None, speed_channel=None, orders=N
         source=source, record_sha256=str(rec.attrs.get("sha256", "")), model_path=model_path,
         sensors=tuple(tracked), skipped=skipped, table=table, verdicts=tuple(verdicts),
         residuals=residuals, curves=curves, speed_range_rpm=(lo, hi),
-        sweep_rate_rpm_per_s=sweep, tolerance=tolerance, settings=settings)
+        sweep_rate_rpm_per_s=sweep, tolerance=tolerance, settings=settings,
+        measured_excitation=measured_x, curves_measured_excitation=curves_x,
+        indicator=indicator)

@@ -24,16 +24,29 @@ RESIDUAL_COLUMNS = ["order", "force_forward_n", "force_forward_unc_n", "force_ba
                     "moment_backward_unc_nm", "predicted_moment_forward_nm",
                     "roll_nm", "predicted_roll_nm", "condition", "verdict_force",
                     "verdict_moment"]
+#: shown beside ``predicted`` when the record has cylinder pressure
+MEASURED_EXCITATION_COLUMNS = ["predicted_measured_excitation", "ratio_measured_excitation"]
 UNBALANCE_COLUMNS = ["unbalance_kgm", "unbalance_unc_kgm", "unbalance_angle_deg",
                      "unbalance_angle_unc_deg", "unbalance_position_m",
                      "unbalance_position_unc_m"]
+
+
+def _row_columns(table):
+    """:data:`ROW_COLUMNS`, with the measured-excitation prediction after ``predicted`` when
+    the table has it."""
+    if "predicted_measured_excitation" not in table:
+        return ROW_COLUMNS
+    k = ROW_COLUMNS.index("ratio_median") + 1
+    return ROW_COLUMNS[:k] + MEASURED_EXCITATION_COLUMNS + ROW_COLUMNS[k:]
 
 
 def vibrograph_json(result) -> dict:
     """The comparison as JSON-ready data: ``summary``, ``rows`` (one per judged (sensor,
     order): ``sensor``, ``order``, ``measured``, ``predicted`` in SI units, ``ratio``,
     ``passed``, ``verdict``…), ``informational`` (the same for the orders too weak or too
-    noisy to be judged), ``residuals``, ``verdicts``, ``sensors``, ``skipped``, ``settings``."""
+    noisy to be judged), ``residuals``, ``verdicts``, ``sensors``, ``skipped``, ``settings``,
+    ``indicator`` (summaries of the cylinder-pressure channels behind the measured excitation,
+    empty without)."""
     res = result.residuals
     t = result.table
     return {"summary": result.summary(), "rows": t[t["required"]],
@@ -46,7 +59,8 @@ def vibrograph_json(result) -> dict:
             "verdict": result.verdict.as_dict(),
             "sensors": [s.describe() for s in result.sensors],
             "skipped": [{"channel": c, "reason": r} for c, r in result.skipped],
-            "settings": result.settings}
+            "settings": result.settings,
+            "indicator": {c: r.summary() for c, r in getattr(result, "indicator", {}).items()}}
 
 
 def print_vibrograph(result, *, header=True) -> None:
@@ -65,8 +79,10 @@ def print_vibrograph(result, *, header=True) -> None:
     print()
     t = result.table
     shown = t[t["required"] | (t["verdict"] != "inconclusive")]
-    print_table(shown[ROW_COLUMNS], title="block/mount vibration per order (peak, SI units; "
-                                          f"agreement: ratio within ±{result.tolerance:g})")
+    print_table(shown[_row_columns(t)], title="block/mount vibration per order (peak, SI "
+                f"units; agreement: ratio within ±{result.tolerance:g})")
+    if "predicted_measured_excitation" in t:
+        print(f"  (predicted_measured_excitation: {result.settings['measured excitation']})")
     hidden = len(t) - len(shown)
     if hidden:
         print(f"  ({hidden} weak orders below the noise or the significance threshold not "
@@ -106,13 +122,17 @@ def add_vibrograph(rep, result, *, figures=True, section="Block and mount vibrat
                      f"{c} ({r})" for c, r in result.skipped) + "."),
                  title="Vibrograph sensors", section=section)
     t = result.table
-    rep.add_table(t[t["required"] | (t["verdict"] != "inconclusive")][ROW_COLUMNS],
+    extra = ("" if "predicted_measured_excitation" not in t else
+             " Beside it the prediction from the measured excitation (the gas-torque reaction "
+             "from the measured cylinder pressure, the inertia loads from the model; same "
+             f"speeds): {result.settings['measured excitation']}.")
+    rep.add_table(t[t["required"] | (t["verdict"] != "inconclusive")][_row_columns(t)],
                   title="Measured against predicted order amplitude", section=section,
                   caption="measured/predicted: peak order amplitude (SI units, peak) over the "
                           "speeds where the prediction is at least 10 % of its largest; ratio "
                           f"band ±{result.tolerance:g}; prediction: the engine model's "
                           "inertia forces and moments and torque reaction through the mount "
-                          "model.")
+                          "model." + extra)
     if figures:
         for s in result.sensors:
             try:
@@ -175,4 +195,8 @@ def build_vibrograph_report(result, *, title=None, parameters=None, record_path=
     rep.add_provenance(files=files, model=mp if mp.is_file() else None, parameters=params)
     rep.add_settings(result.settings)
     add_vibrograph(rep, result, figures=figures)
+    if result.indicator:                # the cylinder pressure the measured excitation rests on
+        from .excitation_compare import add_indicator_section
+
+        add_indicator_section(rep, result.indicator, figures=figures)
     return rep

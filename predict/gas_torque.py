@@ -13,6 +13,8 @@ pressure curve.
   ones (each in its own crank angle, i.e. delayed by its firing angle when placed on the
   shaft); with one measured cylinder that is the usual assumption of equal cylinders, stated
   in ``Excitation.source``.
+* :func:`torque_reaction` — the gas part of the roll moment on the block at given speeds
+  (per speed for a :class:`SpeedExcitation` measured on a run-up).
 * :func:`mount_excitation` — the force and moment phasors on the engine block for one order
   (:func:`predict.mounts.block_excitation` fed with the measured excitation: the free forces
   and moments plus the reaction to the crankshaft torque, a roll moment), ready for
@@ -41,7 +43,8 @@ from dataclasses import dataclass
 from .pressure import PressureTrace, as_trace
 from .torsion.excitation import Excitation, torque_harmonics
 
-__all__ = ["excitation_from_pressure", "mount_excitation", "mount_response", "SpeedExcitation"]
+__all__ = ["excitation_from_pressure", "mount_excitation", "mount_response", "SpeedExcitation",
+           "torque_reaction"]
 
 
 def _traces_by_cylinder(engine, pressure) -> dict:
@@ -293,8 +296,55 @@ def mount_excitation(engine, excitation, *, order, omega, load=1.0):
     # layout and the torque reaction) with this excitation
     block = block_excitation(engine, [q], excitation=excitation)
     loads = block.at(np.array([w]), load=float(load))[0, 0]
+    if getattr(excitation, "speed_dependent", False):      # the gas roll measured at this speed
+        loads[3] += float(load) * (torque_reaction(engine, excitation, [q], [w])[0, 0]
+                                   - block.gas[0, 3])
     return {"force": loads[:3].copy(), "moment": loads[3:].copy(),
             "point": np.asarray(block.point, float), "freq_hz": q * w / (2 * np.pi)}
+
+
+def torque_reaction(engine, excitation, orders, omega) -> np.ndarray:
+    """Gas part of the roll moment on the engine block per speed and order, N·m.
+
+    The reaction to the crankshaft's gas torque, ``M_x = Σ_c G_q,c e^{−i q φ_c}`` (``φ_c`` the
+    firing angle of cylinder c), about +x in the mount frame, the convention of
+    :func:`predict.mounts.block_excitation`; for a :class:`SpeedExcitation` the gas harmonics
+    are those measured at each speed, for an :class:`~predict.torsion.excitation.Excitation`
+    the same at every speed (a load law applies outside).
+
+    Parameters
+    ----------
+    engine : predict.engine.Engine
+    excitation : Excitation or SpeedExcitation
+    orders : array_like
+        Orders, each in the excitation.
+    omega : array_like
+        Crankshaft speeds, rad/s (>= 0).
+
+    Returns
+    -------
+    ndarray (n_s, n_o), complex
+
+    Examples
+    --------
+    >>> from crankbench.predict.engine import Engine
+    >>> from crankbench.predict.mounts import block_excitation
+    >>> from crankbench.predict.torsion.excitation import engine_excitation
+    >>> e = Engine.from_toml("sample_data/engines/i4.toml")
+    >>> x = engine_excitation(e, imep=1.0e6, orders=[2.0, 4.0])
+    >>> m = torque_reaction(e, x, [2.0, 4.0], [300.0])
+    >>> bool(np.allclose(m[0], block_excitation(e, [2.0, 4.0], excitation=x).gas[:, 3]))
+    True
+    """
+    orders = check_finite_array(orders, "orders", ndim=1, min_length=1, error=ModelError)
+    w = np.atleast_1d(check_finite_array(omega, "omega", error=ModelError))
+    if np.any(w < 0):
+        raise ModelError("omega must be >= 0 (rad/s)")
+    unit = excitation.harmonics(np.ones(1), orders)[0] - excitation.harmonics(np.zeros(1),
+                                                                              orders)[0]
+    gas = excitation.harmonics(w, orders) - (w**2)[:, None, None] * unit[None]
+    phase = np.exp(-1j * np.deg2rad(np.outer(orders, engine.firing_angles_deg())))
+    return (gas * phase[None]).sum(axis=2)
 
 
 def mount_response(mounted, engine, excitation, *, speed_rpm, orders, points, load=1.0):

@@ -212,17 +212,19 @@ def compare(candidates: dict, *, rounds: int = 7, warmup: int = 1,
 
     Examples
     --------
-    Two loops that burn 4 ms and 2 ms of this process's CPU time (a CPU-time clock, so a busy
-    machine does not change the ratio):
+    Two loops that burn 4 ms and 2 ms of this thread's CPU time, timed by the same clock (a
+    CPU-time clock, so a busy machine — or busy threads elsewhere in the process — does not
+    change the ratio):
 
     >>> import time
     >>> def spin(seconds):
     ...     def run():
-    ...         t0 = time.process_time()
-    ...         while time.process_time() - t0 < seconds:
+    ...         t0 = time.thread_time()
+    ...         while time.thread_time() - t0 < seconds:
     ...             pass
     ...     return run
-    >>> t = compare({"double": spin(0.004), "single": spin(0.002)}, rounds=5, min_time=0.0)
+    >>> t = compare({"double": spin(0.004), "single": spin(0.002)}, rounds=5, min_time=0.0,
+    ...             cpu_clock=time.thread_time)
     >>> 1.5 < t.ratio("double", "single")[0] < 2.7
     True
     """

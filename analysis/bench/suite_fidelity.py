@@ -109,14 +109,17 @@ def pareto_distance(auto_fidelity, auto_error: float, manual, tol: float, *,
     return max(0.0, float(cost_ratio(min(meeting))) - 1.0)
 
 
-def paired_ratio(func_a, func_b, *, pairs: int = 7, min_time: float = 0.005) -> float:
+def paired_ratio(func_a, func_b, *, pairs: int = 7, min_time: float = 0.005,
+                 cpu_clock=None) -> float:
     """Median over ``pairs`` interleaved rounds of CPU time(func_a) / CPU time(func_b)
-    (:func:`analysis.bench.compare`).
+    (:func:`analysis.bench.compare`; ``cpu_clock`` as there, default the process's CPU time).
 
     Each measurement loops the call for about ``min_time`` seconds; alternating A and B makes
     a slow-down of the machine hit both alike.
     """
-    return compare({"a": func_a, "b": func_b}, rounds=pairs, min_time=min_time).ratio("a", "b")[0]
+    extra = {} if cpu_clock is None else {"cpu_clock": cpu_clock}
+    return compare({"a": func_a, "b": func_b}, rounds=pairs, min_time=min_time,
+                   **extra).ratio("a", "b")[0]
 
 
 def _timed(quick: bool, cands: dict):

@@ -227,20 +227,29 @@ def store_result(store_path, result, *, record_path, model_path, settings: dict,
                  report_path=None, elapsed_s: float | None = None) -> str:
     """Write one analysed record into a campaign store (created if missing); return its
     run_id. A run with the same record and settings is replaced, never duplicated."""
+    from crankbench.analysis.report import file_sha256
+
+    model_sha = file_sha256(model_path)
+    return _store(store_path, record_path, {**settings, "model": Path(model_path).name},
+                  model_sha, getattr(result, "record_sha256", None),
+                  lambda **ids: document_from_result(
+                      result, record_path=record_path, model_path=model_path,
+                      model_sha256=model_sha, report_path=report_path, elapsed_s=elapsed_s,
+                      **ids))
+
+
+def _store(store_path, record_path, settings, model_sha256, record_sha256, make) -> str:
+    """Identify a run (record hash, settings key), build its document with ``make(run_id=,
+    settings=, settings_key_=)`` and put it into the store (created if missing)."""
     from crankbench.analysis._output import to_jsonable
     from crankbench.analysis.report import file_sha256
 
     from .store import Store, run_id_for
 
-    model_sha = file_sha256(model_path)
-    settings = {**to_jsonable(settings), "model": Path(model_path).name}
-    key = settings_key(settings, model_sha)
-    record_sha = getattr(result, "record_sha256", None) or file_sha256(record_path)
-    run_id = run_id_for(record_sha, key)
-    document = document_from_result(result, record_path=record_path, run_id=run_id,
-                                    settings=settings, model_path=model_path,
-                                    model_sha256=model_sha, settings_key_=key,
-                                    report_path=report_path, elapsed_s=elapsed_s)
+    settings = to_jsonable(settings)
+    key = settings_key(settings, model_sha256)
+    record_sha = record_sha256 or file_sha256(record_path)
+    document = make(run_id=run_id_for(record_sha, key), settings=settings, settings_key_=key)
     with Store(store_path, create=True) as store:
         return store.put(document)
 
@@ -303,18 +312,10 @@ def store_tracks(store_path, tracks, *, record_path, settings: dict, steady_tabl
                  attrs: dict | None = None, elapsed_s: float | None = None) -> str:
     """Write one order analysis (no model) into a campaign store (created if missing); return
     its run_id. The same record analysed with the same settings replaces its rows."""
-    from crankbench.analysis._output import to_jsonable
     from crankbench.analysis.report import file_sha256
 
-    from .store import Store, run_id_for
-
-    settings = {**to_jsonable(settings), "command": "analyse"}
-    key = settings_key(settings, "")
     record_sha = file_sha256(record_path)
-    run_id = run_id_for(record_sha, key)
-    document = document_from_tracks(tracks, record_path=record_path, run_id=run_id,
-                                    settings=settings, record_sha256=record_sha,
-                                    settings_key_=key, steady_table=steady_table,
-                                    elapsed_s=elapsed_s, attrs=attrs)
-    with Store(store_path, create=True) as store:
-        return store.put(document)
+    return _store(store_path, record_path, {**settings, "command": "analyse"}, "", record_sha,
+                  lambda **ids: document_from_tracks(
+                      tracks, record_path=record_path, record_sha256=record_sha,
+                      steady_table=steady_table, elapsed_s=elapsed_s, attrs=attrs, **ids))

@@ -1,10 +1,24 @@
 """Cylinder-pressure channels of the synthetic bench, with the errors of real transducers.
 
 The true pressure of each cycle is the single-zone Wiebe trace of :mod:`predict.pressure`
-(evaluated on a 0.1° grid and interpolated by a periodic cubic spline). The trace is affine in
-the heat released, ``p = p_motored + Q u(ψ)``, so cycle-to-cycle variation is a random heat
-release per cycle, ``Q_k = Q (1 + cycle_variation ε_k)``, ε ~ N(0, 1), times the scene's load
-factor at that speed (a load law scales the fuel, not the compression). The channel then gets
+at the scene's ``imep`` (evaluated on a 0.1° grid and interpolated by a periodic cubic spline).
+The trace is affine in the heat released, ``p = p_motored + Q u(ψ)``, so cycle-to-cycle
+variation is a random heat release per cycle, ``Q_k = Q (1 + cycle_variation ε_k)``,
+ε ~ N(0, 1). The scene's load law (factor ``L`` at each speed, :class:`.scene.LoadSpec`) scales
+the *gas torque* of the bench's torsional and mount channels, ``L G_q`` (the model's
+convention, :func:`analysis.pipeline.predicted_response`); the pressure written is the one
+that torque comes from, the gas pressure above the crankcase scaled by ``L``:
+
+    p_k(ψ) = p_cc + L (p_motored(ψ) + Q_k u(ψ) − p_cc),        p_cc = 1 bar,
+
+with ``L`` the law at the cycle's mean speed (cycle angle / cycle time, the speed the indicator
+analysis reports), so that its net IMEP is exactly ``L`` times the scene's ``imep`` (the model's
+IMEP at that load; tests/measure/test_synth_pressure.py asserts 0.5 % per cycle, steady and on a
+run-up; the truth holds it to quadrature) and its
+gas-torque harmonics are exactly ``L G_q``. At ``L < 1`` this is not a physical part-load
+cycle: its compression is a polytropic plus ``(1 − L) p_cc``, which the polytropic peg of
+:func:`analysis.pressure.indicator_analysis` reads as an offset (pass ``peg="none"`` on such a
+record; a constant load, ``L = 1``, is a plain Wiebe cycle). The channel then gets
 
 * ``offset`` (Pa: the unknown level of a piezoelectric transducer — the pegging error),
   ``gain_error``, ``drift_rate`` (Pa/s) and ``noise_rms`` (Pa): the sampled-channel faults of
@@ -17,9 +31,10 @@ factor at that speed (a load law scales the fuel, not the compression). The chan
   (a TDC mark set δ too early): the thermodynamic TDC lies δ after the reference.
 
 The ground truth of each channel (:func:`pressure_truth` reads it back from a truth Dataset)
-holds, per cycle, the firing-TDC time, heat release, net and gross IMEP and PMEP (the
-trapezoidal loop integral of the 0.1° model trace), the peak pressure and its angle (a dense
-evaluation of the spline), MFB50 of the Wiebe law (closed form), and the settings above.
+holds, per cycle, the firing-TDC time, the load factor L, the heat release (L Q_k), net and
+gross IMEP and PMEP (the trapezoidal loop integral of the 0.1° model trace), the peak pressure
+and its angle (a dense evaluation of the spline), MFB50 of the Wiebe law (closed form), and the
+settings above.
 
 Scene keys of a ``kind = "pressure"`` sensor: ``cylinder``, ``sample_rate``, ``location`` and
 ``thermal_shock``, ``thermal_shock_deg``, ``tdc_error_deg``, ``cycle_variation`` (plus the
@@ -52,6 +67,8 @@ _UNITS = {"thermal_shock": dict(unit="Pa", plausible=(1.0, 1e7)),
 
 TWO_PI = 2.0 * np.pi
 RPM = TWO_PI / 60.0
+#: crankcase pressure of the gas torque (predict.torsion.excitation.tangential_torque), Pa
+P_CC = 1.0e5
 
 
 @dataclass(frozen=True)
@@ -180,10 +197,15 @@ def pressure_channel(scene, spec, psi0, rng, *, vibration=None):
     k0 = int(k.min())
     n_cyc = int(k.max()) - k0 + 1
     scale = 1.0 + err.cycle_variation * rng.standard_normal(n_cyc)
-    load = scene.load.scale(prof.speed(ts) / RPM)
+    # the load of each cycle: the law at the cycle's mean speed (time average over its
+    # samples = cycle angle / cycle time, the speed the indicator analysis reports)
+    counts = np.bincount(k - k0, minlength=n_cyc)
+    mean_rpm = np.bincount(k - k0, weights=prof.speed(ts), minlength=n_cyc) / np.maximum(
+        counts, 1) / RPM
+    load = scene.load.scale(mean_rpm)[k - k0]
     shifted = psi - np.radians(err.tdc_error_deg)
     wrapped = np.mod(shifted, period)
-    true = motored(wrapped) + q * load * scale[k - k0] * unit(wrapped)
+    true = P_CC + load * (motored(wrapped) + q * scale[k - k0] * unit(wrapped) - P_CC)
     data = true
     start = np.radians(full.parameters["combustion_start_deg"])
     if err.thermal_shock > 0:
@@ -220,8 +242,10 @@ def _truth(engine, full, q, motored, unit, scale, k0, psi0, fire, prof, err, spe
         if target - period / 2 < a_grid[0] or target + period / 2 > a_grid[-1]:
             continue
         t_tdc = float(np.interp(target, a_grid, t_grid))
-        lf = float(load_spec.scale(prof.speed(np.array([t_tdc])) / RPM)[0])
-        tr = PressureTrace(angle=ang, pressure=m_grid + q * s * lf * u_grid, cycle=engine.cycle)
+        t0, t1 = np.interp([target - period / 2, target + period / 2], a_grid, t_grid)
+        lf = float(load_spec.scale(np.array([period / (t1 - t0) / RPM]))[0])
+        tr = PressureTrace(angle=ang, pressure=P_CC + lf * (m_grid + q * s * u_grid - P_CC),
+                           cycle=engine.cycle)
         net = tr.work(engine) / engine.swept_volume
         if bdc is not None:
             sel = (ang <= np.pi) | (ang >= 3 * np.pi)
@@ -232,9 +256,10 @@ def _truth(engine, full, q, motored, unit, scale, k0, psi0, fire, prof, err, spe
             gross = float(np.sum(0.5 * (p2[1:] + p2[:-1]) * np.diff(v))) / engine.swept_volume
         else:
             gross = net
-        pf = m_f + q * s * lf * u_f
+        pf = P_CC + lf * (m_f + q * s * u_f - P_CC)
         i = int(np.argmax(pf))
-        rows.append({"time_s": t_tdc, "heat_release_j": q * s * lf, "imep_net_pa": net,
+        rows.append({"time_s": t_tdc, "load_factor": lf, "heat_release_j": q * s * lf,
+                     "imep_net_pa": net,
                      "imep_gross_pa": gross, "pmep_pa": gross - net,
                      "peak_pressure_pa": float(pf[i]),
                      "peak_angle_deg": float(np.degrees(fine[i]))})

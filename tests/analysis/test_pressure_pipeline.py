@@ -15,57 +15,15 @@ import pytest
 
 from crankbench.analysis.cli import main
 from crankbench.analysis.pipeline import LoadCase, analyse
+from pressure_scenes import MODEL, bench_scene
 
 ROOT = Path(__file__).resolve().parents[2]
-MODEL = ROOT / "sample_data/shaftlines/i4.toml"
-
-SCENE = f"""
-[scene]
-name = "I4 run-up with cylinder pressure"
-engine = "{ROOT / 'sample_data/engines/i4.toml'}"
-shaftline = "{MODEL}"
-seed = 7
-max_order = 6.0
-
-[profile]
-kind = "runup"
+SCENE = bench_scene(name="I4 run-up with cylinder pressure", seed=7, profile="""kind = "runup"
 start_rpm = 1200.0
 end_rpm = 3600.0
 duration = 4.0
 hold_start = 0.3
-hold_end = 0.3
-
-[load]
-imep = 1.0e6
-
-[[sensor]]
-kind = "torsiograph"
-name = "tv_pulley"
-node = "pulley hub"
-quantity = "angle"
-sample_rate = 3000.0
-
-[[sensor]]
-kind = "tacho"
-name = "wheel"
-node = "cyl 1"
-pulses_per_rev = 60
-missing_teeth = 2
-tdc_offset_deg = 84.0
-
-[[sensor]]
-kind = "tacho"
-name = "tdc"
-node = "cyl 1"
-pulses_per_rev = 1
-
-[[sensor]]
-kind = "pressure"
-name = "p_cyl1"
-cylinder = 1
-sample_rate = 20000.0
-noise_rms = 2.0e3
-"""
+hold_end = 0.3""")
 
 
 @pytest.fixture(scope="module")
