@@ -215,6 +215,8 @@ def first_order_phasors(record, channels, *, speed_channel: str | None = None,
         if clock not in speeds:
             speeds[clock] = speed_reference(record, ch, speed_channel=speed_channel)
         rpm = speeds[clock]
+        # phases from the integrated speed, re-referred to the tacho mark below
+        rpm = rpm.drop_vars("shaft_angle", errors="ignore")
         track = order_track(record[ch], speed_rpm=rpm, orders=[1], revolutions=revolutions)
         amp = track.amplitude.values[0]
         phase = track.phase.values[0]

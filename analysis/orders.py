@@ -1,55 +1,44 @@
-"""Order analysis: order spectrum, order map, order tracks and the rpm–frequency (Campbell) map.
+"""Order tracks: amplitude and phase of shaft orders against time and speed.
 
 Methods and which to use when
 -----------------------------
+``order_track(method="auto")`` (the default) — the settings are chosen from the record
+(:mod:`analysis.autotrack`): Vold–Kalman filtering with a bandwidth per order set by its noise
+(narrow where the order is steady, for noise rejection) and widened in time around sharp peaks
+found in a first pass (a resonance crossing keeps its peak); the chosen settings and why are in
+``attrs['auto_settings']``, and a warning names the sweep rate, the expected bias and the
+setting to use where no setting meets about 1 %.
+
 ``order_track(method="cot")`` — computed order tracking: the record is resampled at constant
 shaft angle (:func:`analysis.resample.angle_resample`) and each block of ``revolutions``
-revolutions is analysed by a windowed DFT evaluated *at the exact order* (so an order need not
-sit on a bin). Amplitude resolution is one block; use it for steady-amplitude orders in
-run-ups and for slow sweeps across resonances (≲ 100 rpm/s for Q ≈ 20). Error: the
-interpolation error (``resample`` docs) plus the noise ``σ_A ≈ sqrt(N0 · ENBW / T_block)``
-(``N0`` the one-sided noise density, ``T_block`` the block duration) plus, when the amplitude
-changes within the block, the smoothing of the envelope over one block.
-
-``order_map`` — the order spectrum of each block (rfft of the angle-domain block): the picture
-of every order against speed. Its amplitude per bin is the *coherent* (peak) amplitude;
-with ``scaling="power"`` each bin holds mean-square, so that :func:`band_amplitude` can sum the
-energy of an order band (an order between bins loses nothing). Same resolution trade-off as COT.
+revolutions is fitted by weighted least squares (window weights) with every requested order
+*and* a constant and a slope (the channel's trend, reported as ``mean``, order 0) at once, so an
+order need not sit on a bin, no trend leaks into low orders, and requested orders inside each
+other's window main lobe are separated (a warning gives the noise amplification; orders closer
+than one bin are refused). Amplitude resolution is one block. Error: the interpolation error
+(``resample`` docs) plus the noise ``σ_A ≈ κ sqrt(N0 · ENBW / T_block)`` (``κ`` the least-squares
+noise amplification, 1 for well separated orders) plus the smoothing of the envelope over the
+block, ``≈ (μ₂/2)|A''|`` with ``μ₂`` the window's second moment in time; both are in
+``amplitude_uncertainty``.
 
 ``order_track(method="vkf")`` — Vold–Kalman filter (:mod:`analysis.vkf`): the envelopes of all
-requested orders solved jointly by least squares with a smoothness constraint. Its time
-resolution is set by the bandwidth, not by a block; use it for fast sweeps through resonances,
-for crossing orders and for closely spaced orders. See ``analysis.vkf`` for its error.
+requested orders and an order-0 trend solved jointly by least squares with a smoothness
+constraint. Its time resolution is set by the bandwidth, not by a block; use it for fast sweeps
+through resonances, for crossing orders and for closely spaced orders.
 
-Measured (bench suite ``orders``; order 3 crossing a Q = 20 resonance at 100 Hz, i.e. 2000 rpm,
-half-power bandwidth ``f_n/Q`` = 5 Hz; truth = exact envelope from ``solve_ivp``):
+The order map, order spectrum, band amplitudes and Campbell map are in
+:mod:`analysis.ordermap` (re-exported here).
 
-=============================  ==============  ==============  ===============
-peak-amplitude error           100 rpm/s       400 rpm/s       1000 rpm/s
-=============================  ==============  ==============  ===============
-COT tracks, Hann, 2 rev        −0.04 %         −0.48 %         −1.9 %
-COT tracks, Hann, 4 rev        −0.17 %         −1.9 %          −7.0 %
-order map, 2 rev, band ±2 bin  −0.01 %         −0.12 %         −0.42 %
-VKF p=2, B = 4 f_n/Q           < 0.01 %        −0.05 %         −0.70 %
-VKF p=2, B = 8 f_n/Q           < 0.01 %        < 0.01 %        −0.04 %
-=============================  ==============  ==============  ===============
-
-Which method when:
-
-* **fast sweeps through resonances** (the resonance crossed in a few of its decay times,
-  ``(df/dt)/(f_n/Q)² ≳ 0.5``): VKF, second order, bandwidth 4–8 × the resonance's
-  half-power bandwidth ``f_n/Q`` (wider passes more noise: ``σ_A ∝ sqrt(B)``);
-* **slow sweeps and steady or slowly varying orders** (run-ups with ≲ 100 rpm/s across a
-  Q ≈ 20 resonance, steady-state points): COT tracks or the order map with blocks of
-  ``revolutions`` long enough for the noise (error ``sqrt(N0·ENBW/T_block)``) and short
-  enough for the envelope (a block spans ≲ 1/5 of the resonance's half-power crossing time);
-* **crossing orders** (orders of different shafts, or an order through a fixed-frequency
-  component): VKF with all of them in one solve;
-* **an overview of all orders**: the order map (``scaling="power"`` + :func:`band_amplitude`
-  when an order falls between bins); the Campbell map for fixed-frequency resonances.
+Measured (bench suite ``orders``; an order crossing a Q = 20 resonance, truth = the exact
+envelope from ``solve_ivp``): see the rows ``resonance …`` and ``defaults …`` of
+``crankbench bench orders``; the defaults keep the peak within 0.5 % at 100–1000 rpm/s on that
+case (``tests/analysis/test_autotrack.py`` checks 2 % at 400 rpm/s and 5 % at 1000 rpm/s on other
+Q, orders and noise).
 
 Conventions: the phase of an order ``o`` is that of ``A cos(o φ + phase)`` with the shaft
-angle ``φ`` from the speed reference, zero at the first sample of the record. Amplitudes are
+angle ``φ`` of the speed reference: from TDC of cylinder 1 when the speed reference carries the
+encoder angle (:func:`analysis.speedref.speed_reference` attaches it from a pulse train), else
+zero at the first sample of the record; ``attrs['phase_reference']`` says which. Amplitudes are
 given as ``'peak'`` (A), ``'rms'`` (A/√2) or ``'peak-to-peak'`` (2A).
 
 References
@@ -57,32 +46,39 @@ References
 K. R. Fyfe and E. D. S. Munck, "Analysis of computed order tracking", MSSP 11(2) (1997).
 G. Heinzel, A. Rüdiger, R. Schilling, "Spectrum and spectral density estimation by the DFT",
 Max-Planck-Institut report (2002), §9–10 (window normalisation, ENBW, band power).
+S. M. Kay, *Fundamentals of Statistical Signal Processing: Estimation Theory* (1993), §8.6
+(weighted least squares of sinusoids with nuisance terms).
 """
 
 from __future__ import annotations
 
 import logging
+import warnings
 
 import numpy as np
 
-from crankbench.predict._validate import (check_finite_array, check_int, check_option,
-                                          check_positive,
-                               check_range)
-from crankbench.predict.errors import AnalysisError
 from crankbench.predict._deprecate import renamed
+from crankbench.predict._validate import (check_finite_array, check_int, check_option,
+                                          check_range)
+from crankbench.predict.errors import AnalysisError
 
-from .resample import INTERPOLATIONS, _as_rpm, _as_signal, angle_resample
+from .resample import INTERPOLATIONS, _angle_input, _as_rpm, _as_signal, resample_arrays
 
 __all__ = ["order_track", "order_map", "order_spectrum", "band_amplitude", "campbell_map",
-           "AMPLITUDES", "amplitude_factor", "get_window"]
+           "AMPLITUDES", "amplitude_factor", "get_window", "BlockFit", "OrderWarning"]
 
 log = logging.getLogger("crankbench")
 
 #: amplitude conventions and their factor relative to the peak amplitude
 AMPLITUDES = {"peak": 1.0, "rms": 1.0 / np.sqrt(2.0), "peak-to-peak": 2.0}
 
-_METHODS = ("cot", "vkf")
+_METHODS = ("auto", "cot", "vkf")
 _FRAMES_PER_BATCH = 256  # frames transformed at a time (bounds memory)
+
+
+class OrderWarning(UserWarning):
+    """An order result is less accurate than asked: the message names the cause and the
+    setting to use."""
 
 
 def amplitude_factor(amplitude: str) -> float:
@@ -125,16 +121,25 @@ def get_window(window, length: int) -> np.ndarray:
 def _t0(x) -> float:
     """Time of the first sample of a Record channel (its time coordinate), else 0."""
     dims = getattr(x, "dims", None)
-    if dims and dims[0] in getattr(x, "coords", {}):
+    if dims and dims[0] in getattr(x, "coords", {}) and x.shape[0]:
         return float(x.coords[dims[0]].values[0])
     return 0.0
 
 
 def _check_orders(orders) -> np.ndarray:
+    """Orders as a float array: finite, > 0, each given once."""
     arr = check_finite_array(np.atleast_1d(np.asarray(orders, dtype=float)), "orders", ndim=1,
                              min_length=1, error=AnalysisError)
     if (arr <= 0).any():
-        raise AnalysisError(f"orders must be > 0 (cycles per shaft revolution), got {arr.tolist()}")
+        raise AnalysisError(f"orders must be > 0 (cycles per shaft revolution), got {arr.tolist()}"
+                            "; the channel's mean (order 0) is reported as the track's 'mean'")
+    srt = np.sort(arr)
+    same = np.flatnonzero(np.diff(srt) <= 1e-9 * np.maximum(1.0, srt[1:]))
+    if same.size:
+        dup = sorted({float(srt[i]) for i in same})
+        raise AnalysisError(f"orders contain duplicates ({', '.join(f'{o:g}' for o in dup)} "
+                            f"given more than once in {[float(v) for v in arr]}); give each order "
+                            "once")
     return arr
 
 
@@ -157,6 +162,17 @@ def _check_order_range(top_order: float, samples_per_rev: int, x, fs, rpm, *,
                             f"rpm, above the Nyquist frequency {0.5 * fs_:.6g} Hz of {label}")
 
 
+def default_samples_per_rev(top_order: float) -> int:
+    """Angle samples per revolution: 64, or more so the top order is in the pass band.
+
+    Examples
+    --------
+    >>> default_samples_per_rev(4.5), default_samples_per_rev(24)
+    (64, 96)
+    """
+    return int(max(64, 8 * np.ceil(4.0 * top_order / 8.0)))
+
+
 def _frames(n: int, length: int, overlap: float) -> np.ndarray:
     """Start indices of frames of ``length`` samples with fractional ``overlap``."""
     hop = max(1, int(round(length * (1.0 - overlap))))
@@ -168,237 +184,6 @@ def _frames(n: int, length: int, overlap: float) -> np.ndarray:
 def _frame_batches(starts: np.ndarray, batch: int = _FRAMES_PER_BATCH):
     for i in range(0, starts.shape[0], batch):
         yield slice(i, min(starts.shape[0], i + batch))
-
-
-def _angle_blocks(x, fs, rpm, samples_per_rev, revolutions, overlap, interpolation):
-    """Resample and cut into blocks; returns (resampled DataArray, starts, block length)."""
-    samples_per_rev = check_int(samples_per_rev, "samples_per_rev", minimum=4, error=AnalysisError)
-    revolutions = check_int(revolutions, "revolutions", minimum=1, error=AnalysisError)
-    overlap = check_range(overlap, "overlap", 0.0, 1.0, inclusive=(True, False),
-                          error=AnalysisError)
-    check_option(interpolation, "interpolation", INTERPOLATIONS, error=AnalysisError)
-    y = angle_resample(x, fs=fs, speed_rpm=rpm, samples_per_rev=samples_per_rev,
-                       interpolation=interpolation)
-    length = samples_per_rev * revolutions
-    starts = _frames(y.shape[0], length, overlap)
-    if starts.shape[0] == 0:
-        raise AnalysisError(
-            f"{y.name}: the record covers {y.shape[0] / samples_per_rev:.4g} revolutions, fewer "
-            f"than one block of revolutions={revolutions}; lower revolutions")
-    return y, starts, length
-
-
-def _block_coords(y, starts, length):
-    centre = starts + length / 2.0 - 0.5
-    idx = np.arange(y.shape[0])
-    t = np.interp(centre, idx, y["time"].values)
-    r = np.interp(centre, idx, y["rpm"].values)
-    return t, r
-
-
-# ---------------------------------------------------------------------------- order track
-
-
-@renamed(rpm="speed_rpm")
-def order_track(x, *, fs=None, speed_rpm, orders, amplitude: str = "peak", method: str = "cot",
-                samples_per_rev: int = 64, revolutions: int = 16, overlap: float = 0.5,
-                window="hann", interpolation: str = "cubic", bandwidth_hz=None,
-                bandwidth_orders=None, filter_order: int = 2):
-    """Amplitude and phase of shaft orders against time (and speed).
-
-    Parameters
-    ----------
-    x : array_like or xarray.DataArray
-        Signal (any SI unit); a Record channel supplies ``fs`` and ``units``.
-    fs : float, optional
-        Sample rate, Hz (required for a plain array).
-    speed_rpm : float or array_like
-        Shaft speed, rpm, one value per sample (see :func:`analysis.speedref.speed_reference`).
-    orders : sequence of float
-        Orders to track (cycles per shaft revolution; 0.5 = half order of a 4-stroke).
-    amplitude : {'peak', 'rms', 'peak-to-peak'}
-        Amplitude convention of the result.
-    method : {'cot', 'vkf'}
-        Computed order tracking (angle resampling + block DFT at each order) or Vold–Kalman
-        filtering (see the module docstring for which to use when).
-    samples_per_rev, revolutions, overlap, window, interpolation
-        COT parameters: angle samples per revolution, block length (revolutions; the order
-        resolution is ``1/revolutions``), fractional block overlap, scipy window name, and the
-        resampling interpolation ('linear', 'cubic', 'bandlimited').
-    bandwidth_hz, bandwidth_orders, filter_order
-        VKF parameters (see :func:`analysis.vkf.vold_kalman`).
-
-    Returns
-    -------
-    xarray.Dataset
-        ``amplitude`` (units of ``x``) and ``phase`` (rad) over (``order``, ``time``), with
-        ``rpm`` along ``time``; attrs name the method and its parameters. COT adds
-        ``amplitude_noise`` (time): the 1-σ amplitude error due to the block's broadband noise
-        floor; VKF reports ``attrs['amplitude_std_estimate']`` per order.
-
-    References
-    ----------
-    Fyfe & Munck (1997); Heinzel et al. (2002) — see the module docstring.
-
-    Examples
-    --------
-    >>> fs = 4000.0
-    >>> t = np.arange(int(8 * fs)) / fs
-    >>> rpm = 900 + 60 * t                                  # slow run-up
-    >>> from crankbench.analysis.resample import shaft_angle
-    >>> phi = shaft_angle(rpm, fs)
-    >>> x = 2.0 * np.cos(2 * phi + 0.3) + 0.5 * np.cos(0.5 * phi)
-    >>> res = order_track(x, fs=fs, speed_rpm=rpm, orders=[0.5, 2], revolutions=8)
-    >>> np.round(res.amplitude.mean("time").values, 4)
-    array([0.5, 2. ])
-    >>> round(float(res.phase.sel(order=2).mean()), 4)
-    0.3
-    """
-    method = check_option(method, "method", _METHODS, error=AnalysisError)
-    factor = amplitude_factor(amplitude)
-    orders = _check_orders(orders)
-    masked = _dropout_spans(x, fs)
-    if masked is not None:
-        return _track_around_dropouts(x, fs, masked, speed_rpm=speed_rpm, orders=orders,
-                                      amplitude=amplitude, method=method,
-                                      samples_per_rev=samples_per_rev, revolutions=revolutions,
-                                      overlap=overlap, window=window,
-                                      interpolation=interpolation, bandwidth_hz=bandwidth_hz,
-                                      bandwidth_orders=bandwidth_orders,
-                                      filter_order=filter_order)
-    if method == "vkf":
-        from .vkf import vold_kalman
-
-        values, fs_, units, label = _as_signal(x, fs)
-        res = vold_kalman(values, fs=fs_, speed_rpm=speed_rpm, orders=orders,
-                          bandwidth_hz=bandwidth_hz,
-                          bandwidth_orders=bandwidth_orders, filter_order=filter_order)
-        amp = np.abs(res["envelope"].values) * factor
-        ds = _track_dataset(amp, np.angle(res["envelope"].values), orders,
-                            res["time"].values + _t0(x), res["rpm"].values, units, label)
-        ds.attrs.update(res.attrs)
-        ds.attrs.update({"amplitude_convention": amplitude})
-        return ds
-    _check_order_range(float(orders.max()), check_int(samples_per_rev, "samples_per_rev",
-                                                       minimum=4, error=AnalysisError), x, fs, speed_rpm)
-    y, starts, length = _angle_blocks(x, fs, speed_rpm, samples_per_rev, revolutions, overlap,
-                                      interpolation)
-    w = get_window(window, length)
-    # complex amplitude A = 2 Σ y w e^{-i o φ} / Σ w  (coherent gain, exact at any order)
-    local = 2.0 * np.pi * np.arange(length) / samples_per_rev
-    kernel = (w[:, None] * np.exp(-1j * np.outer(local, orders))) * (2.0 / w.sum())
-    data = y.values
-    phi0 = y["angle"].values[starts]
-    coef = np.empty((starts.shape[0], orders.shape[0]), dtype=complex)
-    floor = np.empty(starts.shape[0])
-    enbw = float(length * np.sum(w ** 2) / np.sum(w) ** 2)
-    # broadband noise floor of each block: median mean-square per bin over the pass band
-    # (robust to the order lines) / ln 2 (median of an exponential variable); the 1-sigma
-    # error of an amplitude is then sqrt(P_noise * ENBW)
-    from scipy import fft
-
-    band = slice(1, min(length // 2, int(samples_per_rev / 4.0 * revolutions)) + 1)
-    for sl in _frame_batches(starts):
-        idx = starts[sl, None] + np.arange(length)[None, :]
-        frames = data[idx]
-        coef[sl] = frames @ kernel
-        power = _scale_spectrum(fft.rfft(frames * w, axis=1), w, "power", 1.0)[:, band]
-        floor[sl] = np.median(power, axis=1) / np.log(2.0)
-    coef *= np.exp(-1j * np.outer(phi0, orders))
-    t, r = _block_coords(y, starts, length)
-    t = t + _t0(x)
-    ds = _track_dataset(np.abs(coef).T * factor, np.angle(coef).T, orders, t, r,
-                        y.attrs.get("units", ""), y.name)
-    ds["amplitude_noise"] = ("time", np.sqrt(floor * enbw) * factor,
-                             {"units": y.attrs.get("units", ""), "long_name":
-                              "1-sigma amplitude error from the broadband noise floor"})
-    ds.attrs.update({"method": "computed order tracking (angle resampling + block DFT at order)",
-                     "amplitude_convention": amplitude, "window": str(window),
-                     "samples_per_rev": samples_per_rev, "revolutions": revolutions,
-                     "resolution_orders": 1.0 / revolutions, "overlap": overlap,
-                     "interpolation": interpolation, "enbw_bins": enbw})
-    return ds
-
-
-def _dropout_spans(x, fs):
-    """NaN/inf spans ``[(start, stop), ...]`` of a 1-D signal with some finite samples, else
-    None (a clean signal, or one that is not usable at all: left to the normal checks)."""
-    from crankbench.measure.record import nonfinite_spans
-
-    values = getattr(x, "values", x)
-    try:
-        values = np.asarray(values, dtype=float)
-    except (TypeError, ValueError):
-        return None
-    if values.ndim != 1 or np.isfinite(values).all() or not np.isfinite(values).any():
-        return None
-    if fs is None and getattr(x, "attrs", {}).get("sample_rate") is None:
-        return None
-    return nonfinite_spans(values)
-
-
-def _track_around_dropouts(x, fs, spans, **options):
-    """Order-track a signal with dropouts (NaN/inf runs, e.g. a record read with
-    ``allow_nonfinite=True``): the runs are bridged by linear interpolation for the computation
-    only, and every result whose analysis window reaches a run is set to NaN, with a warning
-    naming the spans. The window is the block (``revolutions``) for COT and ±2/bandwidth
-    (the filter's memory: outside it the bridged gap moves a 2nd-order VKF track by ~1e-4
-    relative) for VKF, plus one revolution of guard."""
-    import warnings
-
-    from crankbench.measure.record import RecordWarning
-
-    values = np.asarray(getattr(x, "values", x), dtype=float)
-    fs_ = float(fs if fs is not None else x.attrs["sample_rate"])
-    label = str(getattr(x, "name", None) or "x")
-    good = np.isfinite(values)
-    idx = np.arange(values.shape[0])
-    filled = values.copy()
-    filled[~good] = np.interp(idx[~good], idx[good], values[good])
-    t0 = _t0(x)
-    times = [(t0 + a / fs_, t0 + (b - 1) / fs_) for a, b in spans]
-    shown = ", ".join(f"{a:.6g}..{b:.6g} s" for a, b in times[:5])
-    more = f" and {len(times) - 5} more" if len(times) > 5 else ""
-    warnings.warn(f"{label}: {int((~good).sum())} NaN/inf sample(s) masked at {shown}{more}; "
-                  "order-track results whose analysis window reaches them are NaN",
-                  RecordWarning, stacklevel=3)
-    signal = x.copy(data=filled) if hasattr(x, "dims") else filled
-    ds = order_track(signal, fs=fs, **options)
-    rpm = ds["rpm"].values
-    rev = 60.0 / rpm                                            # s per revolution at each result
-    if options["method"] == "vkf":
-        half = 2.0 / float(ds.attrs["bandwidth_hz_min"]) + rev
-    else:
-        half = (0.5 * options["revolutions"] + 1.0) * rev
-    t = ds["time"].values
-    hit = np.zeros(t.shape[0], bool)
-    for a, b in times:
-        hit |= (t + half >= a) & (t - half <= b)
-    for name in ("amplitude", "phase"):
-        ds[name] = ds[name].where(~hit)
-    if "amplitude_noise" in ds:
-        ds["amplitude_noise"] = ds["amplitude_noise"].where(~hit)
-    ds.attrs["masked_spans_s"] = [v for span in times for v in span]
-    return ds
-
-
-def _track_dataset(amp, phase, orders, t, r, units, label):
-    import xarray as xr
-
-    coords = {"order": ("order", orders, {"units": "1", "long_name": "shaft order"}),
-              "time": ("time", np.asarray(t, float), {"units": "s"}),
-              "rpm": ("time", np.asarray(r, float), {"units": "rpm", "long_name": "shaft speed"})}
-    return xr.Dataset(
-        {"amplitude": (("order", "time"), amp, {"units": units,
-                                                "long_name": f"{label} order amplitude"}),
-         "phase": (("order", "time"), phase, {"units": "rad",
-                                               "long_name": "phase of A cos(o φ + phase)"})},
-        coords=coords, attrs={"channel": str(label),
-                              "phase_reference": "shaft angle 0 at the first sample of the "
-                                                 "record (speed-reference integration)"})
-
-
-# ---------------------------------------------------------------------------- order map
 
 
 def _scale_spectrum(X: np.ndarray, w: np.ndarray, scaling: str, factor: float) -> np.ndarray:
@@ -418,314 +203,565 @@ def _scale_spectrum(X: np.ndarray, w: np.ndarray, scaling: str, factor: float) -
     return out
 
 
-def _map_values(y, starts, length, w, scaling, factor, n_orders):
-    from scipy import fft
-
-    data = y.values
-    out = np.empty((starts.shape[0], n_orders))
-    for sl in _frame_batches(starts):
-        idx = starts[sl, None] + np.arange(length)[None, :]
-        X = fft.rfft(data[idx] * w, axis=1)[:, :n_orders]
-        # reference each block's phase to φ = 0 is not needed for magnitudes
-        out[sl] = _scale_spectrum(X, w, scaling, factor)
-    return out
+# ---------------------------------------------------------------------------- block fit
 
 
-@renamed(rpm="speed_rpm", rpm_bins="speed_bins_rpm")
-def order_map(x, *, fs=None, speed_rpm, samples_per_rev: int = 64, revolutions: int = 16,
-              overlap: float = 0.5, window="hann", amplitude: str = "peak",
-              scaling: str = "amplitude", max_order=None, speed_bins_rpm=None,
-              interpolation: str = "cubic"):
-    """Order spectrum of each block of revolutions: the order map (time or rpm × order).
+class BlockFit:
+    """Weighted least squares of every requested order and a trend in one angle-domain block.
+
+    The model of a block of ``length`` angle samples (``samples_per_rev`` per revolution) is
+    ``y(φ) ≈ Σ_d c_d P_d(s) + Σ_k Re{A_k e^{i o_k φ}}`` with ``P_d`` Legendre polynomials in the
+    block position ``s ∈ [−1, 1]`` (``trend_degree`` + 1 terms), solved with the window as
+    weights. The same matrix serves every block, so the fit of a batch of blocks is one matrix
+    product (the cost of the windowed DFT it replaces). Used by :func:`order_track` and the
+    streamed tracker alike.
 
     Parameters
     ----------
-    x, fs, rpm
-        Signal, sample rate (Hz) and shaft speed (rpm per sample) as in :func:`order_track`.
-    samples_per_rev, revolutions, overlap, window, interpolation
-        As in :func:`order_track`; bins are ``1/revolutions`` orders apart.
+    orders : ndarray
+        Orders (checked).
+    samples_per_rev, revolutions : int
+    window : str or tuple
+    trend_degree : int
+        Degree of the per-block trend polynomial (1: constant and slope).
+
+    Attributes
+    ----------
+    noise_gain : ndarray
+        Per order: amplitude noise of the fit relative to the windowed DFT at that order
+        alone (1 when orders lie outside each other's main lobe).
+    enbw : float
+        Equivalent noise bandwidth of the window, bins.
+    """
+
+    def __init__(self, orders, samples_per_rev: int, revolutions: int, window="hann",
+                 trend_degree: int = 1):
+        self.orders = np.asarray(orders, float)
+        self.spr, self.revolutions = int(samples_per_rev), int(revolutions)
+        self.length = length = self.spr * self.revolutions
+        self.window = window
+        w = get_window(window, length)
+        self.w = w
+        self.enbw = float(length * np.sum(w ** 2) / np.sum(w) ** 2)
+        local = 2.0 * np.pi * np.arange(length) / self.spr
+        s = np.linspace(-1.0, 1.0, length)
+        from numpy.polynomial import legendre
+
+        trend = np.stack([legendre.legval(s, np.eye(trend_degree + 1)[d])
+                          for d in range(trend_degree + 1)], axis=1)
+        phase = np.outer(local, self.orders)
+        basis = np.concatenate([trend, np.cos(phase), -np.sin(phase)], axis=1)
+        self.n_trend = trend_degree + 1
+        weight = np.clip(w, 0.0, None)             # flat-top windows dip below zero
+        gram = basis.T @ (basis * weight[:, None])
+        cond = np.linalg.cond(gram)
+        k = self.orders.shape[0]
+        # each order alone (windowed DFT): the reference noise level of its amplitude
+        alone = 2.0 / w.sum() * np.sqrt(0.5 * np.sum(w ** 2))
+        if cond > 1e12:
+            raise AnalysisError(self._too_close(None))
+        proj = np.linalg.solve(gram, (basis * weight[:, None]).T)   # (n_par, length)
+        self.proj = np.ascontiguousarray(proj.T)                    # frames @ proj -> params
+        self.basis = basis
+        var = np.sum(proj ** 2, axis=1)                             # white-noise variance / σ²
+        amp_std = np.sqrt(0.5 * (var[self.n_trend:self.n_trend + k]
+                                 + var[self.n_trend + k:]))
+        self.noise_gain = amp_std / alone
+        # time second moment of the window (in blocks², scaled by the block duration later)
+        x = (np.arange(length) + 0.5) / length - 0.5
+        self.mu2 = float(np.sum(w * x ** 2) / np.sum(w))
+
+    def _too_close(self, gain):
+        o = np.sort(np.concatenate([[0.0], self.orders]))
+        gap = float(np.min(np.diff(o)))
+        need = int(np.ceil(2.0 / gap))
+        return (f"orders {', '.join(f'{v:g}' for v in self.orders)} (and the channel's trend, "
+                f"order 0) are closer ({gap:g} orders) than one bin of a "
+                f"{self.revolutions}-revolution block (1/{self.revolutions}); they cannot be "
+                f"separated: use revolutions >= {need} (or method='vkf')")
+
+    def check_spacing(self) -> None:
+        """Refuse orders closer than one bin; warn when they share a main lobe (noise × κ)."""
+        o = np.sort(np.concatenate([[0.0], self.orders]))
+        gap = float(np.min(np.diff(o)))
+        if gap < 1.0 / self.revolutions - 1e-12:
+            raise AnalysisError(self._too_close(None))
+        bad = self.noise_gain > 1.5
+        if bad.any():
+            worst = int(np.argmax(self.noise_gain))
+            need = int(np.ceil(4.0 / gap))
+            warnings.warn(
+                f"orders {', '.join(f'{v:g}' for v in self.orders[bad])} lie inside another "
+                f"order's (or order 0's) window main lobe in {self.revolutions}-revolution "
+                f"blocks (spacing {gap:g} orders); they are separated by least squares with "
+                f"the noise amplified up to {self.noise_gain[worst]:.2g}x; use revolutions >= "
+                f"{need} for independent estimates", OrderWarning, stacklevel=4)
+
+    def fit(self, frames: np.ndarray, phi0: np.ndarray):
+        """Complex amplitudes (blocks, orders) referred to the absolute angle, the block means,
+        and the broadband noise floor per bin of the residual (mean square per bin)."""
+        from scipy import fft
+
+        k = self.orders.shape[0]
+        params = frames @ self.proj
+        nt = self.n_trend
+        coef = params[:, nt:nt + k] + 1j * params[:, nt + k:]
+        coef *= np.exp(-1j * np.outer(phi0, self.orders))
+        resid = frames - params @ self.basis.T
+        band = slice(1, min(self.length // 2, int(self.spr / 4.0 * self.revolutions)) + 1)
+        power = _scale_spectrum(fft.rfft(resid * self.w, axis=1), self.w, "power", 1.0)[:, band]
+        # median of an exponential variable is ln 2 of its mean
+        floor = np.median(power, axis=1) / np.log(2.0)
+        return coef, params[:, 0], floor
+
+    def noise(self, floor: np.ndarray) -> np.ndarray:
+        """1-σ amplitude error per (block, order) from the noise floor (mean square per bin)."""
+        return np.sqrt(floor * self.enbw)[:, None] * self.noise_gain[None, :]
+
+
+def smearing_bias(coef: np.ndarray, t: np.ndarray, span_s: np.ndarray, mu2: float):
+    """Estimated envelope-smearing error of block (or filter) estimates: ``(μ₂/2)|A''|``.
+
+    ``coef`` (blocks, orders) complex amplitudes at times ``t`` (s), ``span_s`` the averaging
+    span (s) of each estimate and ``mu2`` its second moment in units of the span². The second
+    derivative is taken by finite differences of neighbouring estimates (exact for a quadratic
+    envelope; it under-reads a peak much narrower than the span, which the automatic settings
+    avoid)."""
+    n = coef.shape[0]
+    out = np.zeros(coef.shape)
+    if n < 3:
+        return out
+    dt = np.gradient(t)
+    d1 = np.gradient(coef, t, axis=0)
+    d2 = np.abs(np.gradient(d1, t, axis=0))
+    del dt
+    return 0.5 * mu2 * (span_s ** 2)[:, None] * d2
+
+
+# ---------------------------------------------------------------------------- order track
+
+
+@renamed(rpm="speed_rpm")
+def order_track(x, *, fs=None, speed_rpm, orders, amplitude: str = "peak", method: str = "auto",
+                samples_per_rev=None, revolutions=None, overlap: float = 0.5,
+                window="hann", interpolation: str = "auto", bandwidth_hz=None,
+                bandwidth_orders=None, filter_order: int = 2, shaft_angle=None,
+                trend: str = "auto", min_bandwidth_orders=None):
+    """Amplitude and phase of shaft orders against time (and speed).
+
+    Parameters
+    ----------
+    x : array_like or xarray.DataArray
+        Signal (any SI unit); a Record channel supplies ``fs``, ``units`` and ``quantity``.
+    fs : float, optional
+        Sample rate, Hz (required for a plain array).
+    speed_rpm : float or array_like
+        Shaft speed, rpm, one value per sample (see :func:`analysis.speedref.speed_reference`,
+        whose result may carry the encoder angle as a ``shaft_angle`` coordinate).
+    orders : sequence of float
+        Orders to track, each once (cycles per shaft revolution; 0.5 = half order of a
+        4-stroke). The channel's mean (order 0) is always reported as ``mean``.
     amplitude : {'peak', 'rms', 'peak-to-peak'}
-        Convention when ``scaling='amplitude'``.
-    scaling : {'amplitude', 'power'}
-        ``'amplitude'``: coherent amplitude per bin (exact for an order on a bin);
-        ``'power'``: mean square per bin (units²) so that band sums are exact
-        (:func:`band_amplitude`).
-    max_order : float, optional
-        Highest order kept (default ``samples_per_rev/4``, the anti-alias pass band; at most
-        ``samples_per_rev/2``, the bins above ``samples_per_rev/4`` being in the filter's
-        transition band).
-    speed_bins_rpm : int or array_like, optional
-        Average the blocks in speed bins (count or edges in rpm; power average). The result then
-        has dims (``rpm``, ``order``); otherwise (``time``, ``order``) with ``rpm`` along time.
+        Amplitude convention of the result.
+    method : {'auto', 'cot', 'vkf'}
+        'auto': chosen from the record (:mod:`analysis.autotrack`; COT when ``revolutions``
+        or ``samples_per_rev`` is given, VKF with that bandwidth when one is); 'cot': computed order
+        tracking (angle resampling + block least squares); 'vkf': Vold–Kalman filtering (see
+        the module docstring for which to use when).
+    samples_per_rev, revolutions, overlap, window, interpolation
+        COT parameters: angle samples per revolution (default 64, more for orders above 16),
+        block length (revolutions; the order resolution is ``1/revolutions``; default chosen
+        from the sweep rate and the order spacing), fractional block overlap, scipy window
+        name, and the resampling interpolation ('auto', 'bandlimited', 'cubic', 'linear').
+    bandwidth_hz, bandwidth_orders, filter_order
+        VKF parameters (see :func:`analysis.vkf.vold_kalman`).
+    shaft_angle : array_like, optional
+        Shaft angle (rad, increasing) per sample for resampling and phase (default: the
+        ``shaft_angle`` coordinate of ``speed_rpm`` if present, else the integrated speed).
+    trend : {'auto', 'none', 'angle ramp', 'speed mean'}
+        The channel's trend removed before tracking (:func:`analysis.trend.remove_trend`);
+        'auto' detects an encoder angle's ramp and an IAS channel's mean speed.
+    min_bandwidth_orders : float, optional
+        'auto' only: a bandwidth floor in orders (a caller that must resolve features of a
+        known width, e.g. resonance identification at a known damping).
 
     Returns
     -------
-    xarray.DataArray
-        Order map with units in attrs and the parameters used.
+    xarray.Dataset
+        ``amplitude`` (units of ``x``) and ``phase`` (rad) over (``order``, ``time``), with
+        ``rpm`` along ``time``; ``mean`` (time): order 0, the channel's mean (after any trend
+        removed, see ``attrs['trend']``); ``amplitude_uncertainty`` (order, time): 1-σ noise
+        and the estimated envelope smearing combined; COT adds ``amplitude_noise`` (time,
+        noise part at unit noise gain). Attrs name the method and its parameters and the
+        ``phase_reference``.
+
+    References
+    ----------
+    Fyfe & Munck (1997); Heinzel et al. (2002); Kay (1993) — see the module docstring.
 
     Examples
     --------
     >>> fs = 4000.0
-    >>> t = np.arange(int(6 * fs)) / fs
-    >>> rpm = 1200 + 100 * t
+    >>> t = np.arange(int(8 * fs)) / fs
+    >>> rpm = 900 + 60 * t                                  # slow run-up
     >>> from crankbench.analysis.resample import shaft_angle
-    >>> x = 0.7 * np.cos(3 * shaft_angle(rpm, fs))
-    >>> m = order_map(x, fs=fs, speed_rpm=rpm, revolutions=8)
-    >>> round(float(m.sel(order=3).mean()), 4), m.dims
-    (0.7, ('time', 'order'))
+    >>> phi = shaft_angle(rpm, fs)
+    >>> x = 2.0 * np.cos(2 * phi + 0.3) + 0.5 * np.cos(0.5 * phi) + 7.0   # with an offset
+    >>> res = order_track(x, fs=fs, speed_rpm=rpm, orders=[0.5, 2], method="cot",
+    ...                   revolutions=8)
+    >>> np.round(res.amplitude.mean("time").values, 4), round(float(res["mean"].mean()), 4)
+    (array([0.5, 2. ]), 7.0)
+    >>> round(float(res.phase.sel(order=2).mean()), 4)
+    0.3
     """
-    scaling = check_option(scaling, "scaling", ("amplitude", "power"), error=AnalysisError)
-    factor = amplitude_factor(amplitude)
-    spr = check_int(samples_per_rev, "samples_per_rev", minimum=4, error=AnalysisError)
-    top = spr / 4.0 if max_order is None else check_positive(max_order, "max_order",
-                                                             error=AnalysisError)
-    if max_order is not None:
-        _check_order_range(top, spr, x, fs, speed_rpm, divisor=2)
-    y, starts, length = _angle_blocks(x, fs, speed_rpm, samples_per_rev, revolutions, overlap,
-                                      interpolation)
-    n_orders = min(length // 2 + 1, int(np.floor(top * revolutions)) + 1)
-    w = get_window(window, length)
-    values = _map_values(y, starts, length, w, scaling, factor, n_orders)
-    order_axis = np.arange(n_orders) / revolutions
-    t, r = _block_coords(y, starts, length)
-    t = t + _t0(x)
-    units = y.attrs.get("units", "")
-    out_units = units if scaling == "amplitude" else (f"({units})^2" if units else "1")
-    import xarray as xr
-
-    attrs = {"units": out_units, "method": "order map (angle resampling + block rfft)",
-             "scaling": scaling, "amplitude_convention": amplitude if scaling == "amplitude"
-             else "mean-square per bin", "window": str(window), "samples_per_rev": spr,
-             "revolutions": revolutions, "resolution_orders": 1.0 / revolutions,
-             "overlap": overlap, "interpolation": interpolation,
-             "enbw_bins": float(length * np.sum(w ** 2) / np.sum(w) ** 2)}
-    order_coord = ("order", order_axis, {"units": "1", "long_name": "shaft order"})
-    if speed_bins_rpm is None:
-        return xr.DataArray(values, dims=("time", "order"), name=f"{y.name} order map",
-                            coords={"time": ("time", t, {"units": "s"}),
-                                    "rpm": ("time", r, {"units": "rpm"}), "order": order_coord},
-                            attrs=attrs)
-    edges = (np.linspace(r.min(), r.max() * (1 + 1e-12), int(speed_bins_rpm) + 1)
-             if np.isscalar(speed_bins_rpm) else check_finite_array(speed_bins_rpm,
-                                                                    "speed_bins_rpm", ndim=1,
-                                                              min_length=2, error=AnalysisError))
-    which = np.digitize(r, edges) - 1
-    keep = (which >= 0) & (which < edges.shape[0] - 1)
-    power = values ** 2 if scaling == "amplitude" else values
-    binned = np.full((edges.shape[0] - 1, n_orders), np.nan)
-    counts = np.bincount(which[keep], minlength=edges.shape[0] - 1)
-    for b in np.flatnonzero(counts):
-        binned[b] = power[keep][which[keep] == b].mean(axis=0)
-    if scaling == "amplitude":
-        binned = np.sqrt(binned)
-    filled = counts > 0
-    centres = 0.5 * (edges[1:] + edges[:-1])
-    attrs["rpm_averaging"] = "power mean of the blocks in each speed bin"
-    return xr.DataArray(binned[filled], dims=("rpm", "order"), name=f"{y.name} order map",
-                        coords={"rpm": ("rpm", centres[filled], {"units": "rpm"}),
-                                "blocks": ("rpm", counts[filled]), "order": order_coord},
-                        attrs=attrs)
-
-
-@renamed(rpm="speed_rpm")
-def order_spectrum(x, *, fs=None, speed_rpm, samples_per_rev: int = 64, revolutions=None,
-                   overlap: float = 0.5, window="hann", amplitude: str = "peak",
-                   scaling: str = "amplitude", max_order=None, interpolation: str = "cubic"):
-    """Order spectrum at (nearly) steady speed, averaged over blocks (Welch, power average).
-
-    Parameters
-    ----------
-    x, fs, rpm, samples_per_rev, overlap, window, amplitude, scaling, max_order, interpolation
-        As in :func:`order_map`.
-    revolutions : int, optional
-        Block length in revolutions; default: the whole record in one block.
-
-    Returns
-    -------
-    xarray.DataArray
-        Over ``order``; ``scaling='power'`` gives mean square per bin (band sums via
-        :func:`band_amplitude`), ``'amplitude'`` the coherent amplitude per bin.
-
-    Examples
-    --------
-    >>> fs = 2000.0
-    >>> t = np.arange(int(4 * fs)) / fs
-    >>> from crankbench.analysis.resample import shaft_angle
-    >>> x = 1.5 * np.cos(2 * shaft_angle(np.full(t.size, 1500.0), fs))
-    >>> s = order_spectrum(x, fs=fs, speed_rpm=1500.0, revolutions=20)
-    >>> round(float(s.sel(order=2)), 4)
-    1.5
-    """
-    if revolutions is None:
-        # whole revolutions available after resampling (the anti-alias filter trims the ends)
-        y = angle_resample(x, fs=fs, speed_rpm=speed_rpm, samples_per_rev=samples_per_rev,
-                           interpolation=interpolation)
-        revolutions = max(1, y.shape[0] // int(samples_per_rev))
-    m = order_map(x, fs=fs, speed_rpm=speed_rpm, samples_per_rev=samples_per_rev,
-                  revolutions=revolutions,
-                  overlap=overlap, window=window, amplitude=amplitude, scaling=scaling,
-                  max_order=max_order, interpolation=interpolation)
-    if scaling == "amplitude":
-        out = np.sqrt((m ** 2).mean("time"))
-    else:
-        out = m.mean("time")
-    out.attrs.update(m.attrs)
-    out.attrs["blocks_averaged"] = int(m.sizes["time"])
-    out.attrs["rpm_mean"] = float(m["rpm"].mean())
-    out.name = m.name.replace("order map", "order spectrum")
-    return out
-
-
-def band_amplitude(power, orders, *, half_width, amplitude: str = "peak"):
-    """Amplitude of each order from the energy summed over a band of bins around it.
-
-    Parameters
-    ----------
-    power : xarray.DataArray
-        An order spectrum or map computed with ``scaling='power'`` (dim ``order``).
-    orders : sequence of float
-        Band centres (orders).
-    half_width : float
-        Half-width of each band, orders; it must hold the window's main lobe (for Hann at least
-        2 bins, i.e. ``2/revolutions``; 3 bins leaves < 1e-4 of the energy outside).
-    amplitude : {'peak', 'rms', 'peak-to-peak'}
-
-    Returns
-    -------
-    xarray.DataArray
-        Over ``order`` (plus any other dims of ``power``): ``sqrt(2 Σ P_k)`` × convention.
-
-    References
-    ----------
-    Heinzel et al. (2002) §10: the power in a band of bins of a power spectrum is exact by
-    Parseval's theorem whatever the tone's position between bins.
-
-    Examples
-    --------
-    >>> fs = 2000.0
-    >>> t = np.arange(int(4 * fs)) / fs
-    >>> from crankbench.analysis.resample import shaft_angle
-    >>> x = np.cos(2.025 * shaft_angle(np.full(t.size, 1500.0), fs))   # between bins
-    >>> p = order_spectrum(x, fs=fs, speed_rpm=1500.0, revolutions=20, scaling="power")
-    >>> round(float(band_amplitude(p, [2.025], half_width=0.2)[0]), 4)
-    1.0
-    """
-    if power.attrs.get("scaling") != "power":
-        raise AnalysisError("band_amplitude needs a spectrum or map computed with "
-                            "scaling='power'")
+    method = check_option(method, "method", _METHODS, error=AnalysisError)
+    if method == "auto" and (revolutions is not None or samples_per_rev is not None):
+        method = "cot"                     # a block length asked for: computed order tracking
     factor = amplitude_factor(amplitude)
     orders = _check_orders(orders)
-    half_width = check_positive(half_width, "half_width", error=AnalysisError)
-    import xarray as xr
+    options = dict(orders=orders, amplitude=amplitude, method=method,
+                   samples_per_rev=samples_per_rev, revolutions=revolutions, overlap=overlap,
+                   window=window, interpolation=interpolation, bandwidth_hz=bandwidth_hz,
+                   bandwidth_orders=bandwidth_orders, filter_order=filter_order, trend=trend,
+                   min_bandwidth_orders=min_bandwidth_orders)
+    masked = _dropout_spans(x, fs)
+    if masked is not None:
+        return _track_around_dropouts(x, fs, masked, speed_rpm=speed_rpm,
+                                      shaft_angle=shaft_angle, **options)
+    stops = _stopped_spans(x, fs, speed_rpm)
+    if stops is not None:
+        return _track_running_spans(x, fs, speed_rpm, stops, shaft_angle=shaft_angle, **options)
+    values, fs_, units, label = _as_signal(x, fs)
+    n = values.shape[0]
+    angle, reference = _angle_input(shaft_angle, speed_rpm, n)
+    speed = _as_rpm(speed_rpm, n, fs_)
+    f_top = float(orders.max()) * float(speed.max()) / 60.0
+    if f_top >= 0.5 * fs_:
+        raise AnalysisError(f"order {orders.max():g} reaches {f_top:.6g} Hz at "
+                            f"{speed.max():.6g} rpm, above the Nyquist frequency {0.5 * fs_:.6g} "
+                            f"Hz of {label}")
+    from .resample import shaft_angle as integrate
 
-    axis = power["order"].values
-    bands = []
-    for o in orders:
-        sel = np.abs(axis - o) <= half_width + 1e-12
-        if not sel.any():
-            raise AnalysisError(f"no bin within half_width={half_width} of order {o}")
-        bands.append(np.sqrt(2.0 * power.isel(order=np.flatnonzero(sel)).sum("order")) * factor)
-    out = xr.concat(bands, dim="order").assign_coords(order=orders)
-    base = str(power.attrs.get("units", "")).removeprefix("(").removesuffix(")^2")
-    out.attrs = {**power.attrs, "units": base, "scaling": "band amplitude",
-                 "band_half_width_orders": half_width, "amplitude_convention": amplitude}
-    return out
+    phi = integrate(speed, fs_) if angle is None else angle
+    from .trend import remove_trend
+
+    attrs = getattr(x, "attrs", {}) or {}
+    values, trend_info = remove_trend(values, fs_, phi=phi, speed_rpm=speed, kind=trend,
+                                      quantity=attrs.get("quantity"), units=units)
+    context = dict(values=values, fs=fs_, speed=speed, phi=phi, angle=angle, units=units,
+                   label=label, t0=_t0(x), factor=factor, reference=reference)
+    if method == "auto":
+        from .autotrack import auto_track
+
+        ds = auto_track(context, **options)
+    elif method == "vkf":
+        ds = _vkf_track(context, orders, bandwidth_hz=bandwidth_hz,
+                        bandwidth_orders=bandwidth_orders, filter_order=filter_order)
+    else:
+        ds = _cot_track(context, orders, samples_per_rev=samples_per_rev,
+                        revolutions=revolutions, overlap=overlap, window=window,
+                        interpolation=interpolation)
+    ds.attrs.update({"amplitude_convention": amplitude, "trend": trend_info["removed"],
+                     "trend_kind": trend_info["kind"]})
+    return ds
 
 
-# ---------------------------------------------------------------------------- Campbell map
+def _vkf_track(context, orders, *, bandwidth_hz, bandwidth_orders, filter_order):
+    """VKF of the prepared channel, as an order-track Dataset with the smearing estimate."""
+    from .vkf import vold_kalman
+
+    res = vold_kalman(context["values"], fs=context["fs"], speed_rpm=context["speed"],
+                      orders=orders, bandwidth_hz=bandwidth_hz,
+                      bandwidth_orders=bandwidth_orders, filter_order=filter_order,
+                      shaft_angle=context["phi"])
+    return _vkf_dataset(res, context, orders)
 
 
-@renamed(rpm="speed_rpm", rpm_bins="speed_bins_rpm")
-def campbell_map(x, *, fs=None, speed_rpm, nperseg: int = 4096, overlap: float = 0.5, window="hann",
-                 amplitude: str = "peak", max_frequency=None, orders=(0.5, 1, 1.5, 2, 3, 4, 6),
-                 speed_bins_rpm=None):
-    """Rpm–frequency (Campbell / waterfall) map: short-time spectra in the time domain.
+def _vkf_dataset(res, context, orders):
+    factor = context["factor"]
+    env = res["envelope"].values
+    ds = _track_dataset(np.abs(env) * factor, np.angle(env), orders,
+                        res["time"].values + context["t0"], res["rpm"].values,
+                        context["units"], context["label"], context["reference"])
+    ds["mean"] = ("time", res["mean"].values, {"units": context["units"], "long_name":
+                                               "order 0: the channel's mean (trend envelope)"})
+    ds["amplitude_uncertainty"] = (("order", "time"), res["amplitude_uncertainty"].values
+                                   * factor, {"units": context["units"], "long_name":
+                                              "1-sigma amplitude uncertainty (noise and "
+                                              "envelope smearing)"})
+    ds["amplitude_noise"] = (("order", "time"), res["amplitude_noise"].values * factor,
+                             {"units": context["units"], "long_name":
+                              "1-sigma amplitude noise (its part of the uncertainty)"})
+    ds.attrs.update(res.attrs)
+    ds.attrs["phase_reference"] = context["reference"]
+    return ds
 
-    Resonances (fixed frequencies) show as vertical lines and orders as rays through the origin;
-    the order rays to draw are stored in ``attrs['order_lines']`` (see
-    :func:`analysis.plots.plot_campbell`).
 
-    Parameters
-    ----------
-    x, fs, rpm
-        As in :func:`order_track`.
-    nperseg : int
-        Samples per short-time frame (frequency resolution ``fs/nperseg``).
-    overlap : float
-        Fractional frame overlap.
-    window : str
-        scipy window name.
-    amplitude : {'peak', 'rms', 'peak-to-peak'}
-        Coherent amplitude convention per bin.
-    max_frequency : float, optional
-        Highest frequency kept, Hz.
-    orders : sequence of float
-        Order lines recorded in attrs.
-    speed_bins_rpm : int or array_like, optional
-        Power-average the frames in speed bins (dims become (``rpm``, ``frequency``)).
+def cot_settings(speed, fs, orders, *, revolutions=None, samples_per_rev=None):
+    """Block length and angle sampling of COT for this speed and these orders.
 
-    Returns
-    -------
-    xarray.DataArray
-        Dims (``time``, ``frequency``) with ``rpm`` along time (mean speed of each frame).
+    ``revolutions``: at least 4 bins between neighbouring orders (and order 0), so every
+    order is outside the others' Hann main lobe; at most what keeps the envelope smearing of a
+    Q = 20 resonance crossed at the record's sweep rate below ~0.5 % (a block spans ≤ 1/5 of
+    the half-power crossing time); 16 when nothing constrains; even (half orders on bins).
 
     Examples
     --------
-    >>> fs = 2048.0
-    >>> t = np.arange(int(4 * fs)) / fs
-    >>> x = 0.25 * np.cos(2 * np.pi * 100.0 * t)
-    >>> c = campbell_map(x, fs=fs, speed_rpm=1500.0, nperseg=1024)
-    >>> round(float(c.sel(frequency=100.0).mean()), 4)
-    0.25
+    >>> cot_settings(np.full(10000, 1500.0), 2000.0, [0.5, 1.0, 1.5])
+    (16, 64)
     """
-    values, fs, units, label = _as_signal(x, fs)
-    speed = _as_rpm(speed_rpm, values.shape[0], fs)
-    factor = amplitude_factor(amplitude)
-    nperseg = check_int(nperseg, "nperseg", minimum=8, error=AnalysisError)
+    orders = np.asarray(orders, float)
+    spr = default_samples_per_rev(float(orders.max())) if samples_per_rev is None else \
+        check_int(samples_per_rev, "samples_per_rev", minimum=4, error=AnalysisError)
+    if revolutions is not None:
+        return check_int(revolutions, "revolutions", minimum=1, error=AnalysisError), spr
+    o = np.sort(np.concatenate([[0.0], orders]))
+    need = int(np.ceil(4.0 / float(np.min(np.diff(o)))))
+    from .autotrack import sweep_rate
+
+    rate = sweep_rate(speed, fs)
+    revs = 16
+    if rate > 0:
+        n = float(np.median(speed))
+        # crossing time of the half-power band of a Q = 20 resonance at order o_max
+        f_order = float(orders.max()) * n / 60.0
+        t_cross = (f_order / 20.0) / (float(orders.max()) * rate / 60.0)
+        revs = int(np.clip(np.floor(0.2 * t_cross * n / 60.0), 2, 16))
+    revs = max(revs, need)
+    revs += revs % 2
+    return int(revs), spr
+
+
+def _cot_track(context, orders, *, samples_per_rev, revolutions, overlap, window,
+               interpolation):
+    values, fs, speed = context["values"], context["fs"], context["speed"]
+    revolutions, spr = cot_settings(speed, fs, orders, revolutions=revolutions,
+                                    samples_per_rev=samples_per_rev)
     overlap = check_range(overlap, "overlap", 0.0, 1.0, inclusive=(True, False),
                           error=AnalysisError)
-    starts = _frames(values.shape[0], nperseg, overlap)
+    check_option(interpolation, "interpolation", INTERPOLATIONS, error=AnalysisError)
+    if orders.max() > spr / 4 + 1e-12:
+        raise AnalysisError(
+            f"order {orders.max():g} exceeds samples_per_rev/4 = {spr / 4:g} (the anti-alias "
+            f"pass band); use samples_per_rev >= {int(np.ceil(4 * orders.max()))}")
+    f_top = float(orders.max()) * float(speed.max()) / 60.0
+    if f_top >= 0.5 * fs:
+        raise AnalysisError(f"order {orders.max():g} reaches {f_top:.6g} Hz at "
+                            f"{speed.max():.6g} rpm, above the Nyquist frequency {0.5 * fs:.6g} "
+                            f"Hz of {context['label']}")
+    fitter = BlockFit(orders, spr, revolutions, window)
+    fitter.check_spacing()
+    y, t_rel, rpm, angle, plan = resample_arrays(
+        values, fs, speed, samples_per_rev=spr, interpolation=interpolation,
+        angle=context["angle"] if context["angle"] is not None else context["phi"],
+        label=context["label"])
+    length = fitter.length
+    starts = _frames(y.shape[0], length, overlap)
     if starts.shape[0] == 0:
-        raise AnalysisError(f"{label}: {values.shape[0]} samples is shorter than "
-                            f"nperseg={nperseg}")
-    freq = np.arange(nperseg // 2 + 1) * fs / nperseg
-    n_freq = freq.shape[0] if max_frequency is None else int(np.searchsorted(
-        freq, check_positive(max_frequency, "max_frequency", error=AnalysisError), "right"))
-    w = get_window(window, nperseg)
-    from scipy import fft
-
-    out = np.empty((starts.shape[0], n_freq))
+        raise AnalysisError(
+            f"{context['label']}: the record covers {y.shape[0] / spr:.4g} revolutions, fewer "
+            f"than one block of revolutions={revolutions}; lower revolutions")
+    coef = np.empty((starts.shape[0], orders.shape[0]), dtype=complex)
+    mean = np.empty(starts.shape[0])
+    floor = np.empty(starts.shape[0])
     for sl in _frame_batches(starts):
-        idx = starts[sl, None] + np.arange(nperseg)[None, :]
-        out[sl] = _scale_spectrum(fft.rfft(values[idx] * w, axis=1)[:, :n_freq], w,
-                                  "amplitude", factor)
-    cs = np.concatenate([[0.0], np.cumsum(speed)])
-    frame_rpm = (cs[starts + nperseg] - cs[starts]) / nperseg
-    t = (starts + nperseg / 2.0 - 0.5) / fs + _t0(x)
+        frames = y[starts[sl, None] + np.arange(length)[None, :]]
+        coef[sl], mean[sl], floor[sl] = fitter.fit(frames, angle[starts[sl]])
+    t, r, span = _block_coords(t_rel, rpm, starts, length)
+    return _cot_dataset(coef, mean, floor, fitter, t + context["t0"], r, span, context,
+                        overlap=overlap, interpolation=plan.interpolation, plan=plan)
+
+
+def _cot_dataset(coef, mean, floor, fitter, t, r, span, context, *, overlap, interpolation,
+                 plan=None):
+    """The COT order-track Dataset (shared by the in-memory and streamed trackers)."""
+    factor = context["factor"]
+    orders = fitter.orders
+    units, label = context["units"], context["label"]
+    noise = fitter.noise(floor)
+    bias = smearing_bias(coef, t, span, fitter.mu2)
+    ds = _track_dataset(np.abs(coef).T * factor, np.angle(coef).T, orders, t, r, units, label,
+                        context["reference"])
+    ds["mean"] = ("time", mean, {"units": units, "long_name":
+                                 "order 0: block mean of the channel"})
+    ds["amplitude_noise"] = ("time", np.sqrt(floor * fitter.enbw) * factor,
+                             {"units": units, "long_name":
+                              "1-sigma amplitude error from the broadband noise floor"})
+    ds["amplitude_uncertainty"] = (("order", "time"), np.hypot(noise, bias).T * factor,
+                                   {"units": units, "long_name":
+                                    "1-sigma amplitude uncertainty (noise, least-squares gain "
+                                    "and block smearing of the envelope)"})
+    ds.attrs.update({"method": "computed order tracking (angle resampling + block least "
+                               "squares at the orders)",
+                     "window": str(fitter.window), "samples_per_rev": fitter.spr,
+                     "revolutions": fitter.revolutions,
+                     "resolution_orders": 1.0 / fitter.revolutions, "overlap": overlap,
+                     "interpolation": interpolation, "enbw_bins": fitter.enbw,
+                     "noise_gain": fitter.noise_gain.tolist(),
+                     "decimation": list(plan.decimation) if plan is not None else []})
+    return ds
+
+
+def _block_coords(t_rel, rpm, starts, length):
+    """Time (s, from the first sample), speed and duration of each block."""
+    centre = starts + length / 2.0 - 0.5
+    idx = np.arange(t_rel.shape[0])
+    t = np.interp(centre, idx, t_rel)
+    r = np.interp(centre, idx, rpm)
+    span = np.interp(starts + length - 1.0, idx, t_rel) - t_rel[starts]
+    return t, r, span
+
+
+# ---------------------------------------------------------------------------- unusable spans
+
+
+def _dropout_spans(x, fs):
+    """NaN/inf spans ``[(start, stop), ...]`` of a 1-D signal with some finite samples, else
+    None (a clean signal, or one that is not usable at all: left to the normal checks)."""
+    from crankbench.measure.record import nonfinite_spans
+
+    values = getattr(x, "values", x)
+    try:
+        values = np.asarray(values, dtype=float)
+    except (TypeError, ValueError):
+        return None
+    if values.ndim != 1 or np.isfinite(values).all() or not np.isfinite(values).any():
+        return None
+    if fs is None and getattr(x, "attrs", {}).get("sample_rate") is None:
+        return None
+    return nonfinite_spans(values)
+
+
+def _result_window(ds, options):
+    """Half-width (s) of each result's analysis window plus one revolution of guard."""
+    rev = 60.0 / ds["rpm"].values
+    if "bandwidth_hz_min" in ds.attrs:
+        return 2.0 / float(ds.attrs["bandwidth_hz_min"]) + rev
+    return (0.5 * float(ds.attrs.get("revolutions", 16)) + 1.0) * rev
+
+
+def _track_around_dropouts(x, fs, spans, *, speed_rpm, shaft_angle, **options):
+    """Order-track a signal with dropouts (NaN/inf runs, e.g. a record read with
+    ``allow_nonfinite=True``): the runs are bridged by linear interpolation for the computation
+    only, and every result whose analysis window reaches a run is set to NaN, with a warning
+    naming the spans. The window is the block (``revolutions``) for COT and ±2/bandwidth
+    (the filter's memory: outside it the bridged gap moves a 2nd-order VKF track by ~1e-4
+    relative) for VKF, plus one revolution of guard."""
+    from crankbench.measure.record import RecordWarning
+
+    values = np.asarray(getattr(x, "values", x), dtype=float)
+    fs_ = float(fs if fs is not None else x.attrs["sample_rate"])
+    label = str(getattr(x, "name", None) or "x")
+    good = np.isfinite(values)
+    idx = np.arange(values.shape[0])
+    filled = values.copy()
+    filled[~good] = np.interp(idx[~good], idx[good], values[good])
+    t0 = _t0(x)
+    times = [(t0 + a / fs_, t0 + (b - 1) / fs_) for a, b in spans]
+    shown = ", ".join(f"{a:.6g}..{b:.6g} s" for a, b in times[:5])
+    more = f" and {len(times) - 5} more" if len(times) > 5 else ""
+    warnings.warn(f"{label}: {int((~good).sum())} NaN/inf sample(s) masked at {shown}{more}; "
+                  "order-track results whose analysis window reaches them are NaN",
+                  RecordWarning, stacklevel=3)
+    signal = x.copy(data=filled) if hasattr(x, "dims") else filled
+    ds = order_track(signal, fs=fs, speed_rpm=speed_rpm, shaft_angle=shaft_angle, **options)
+    half = _result_window(ds, options)
+    t = ds["time"].values
+    hit = np.zeros(t.shape[0], bool)
+    for a, b in times:
+        hit |= (t + half >= a) & (t - half <= b)
+    for name in ("amplitude", "phase", "amplitude_uncertainty", "amplitude_noise", "mean"):
+        if name in ds:
+            ds[name] = ds[name].where(~hit)
+    ds.attrs["masked_spans_s"] = [v for span in times for v in span]
+    return ds
+
+
+def _stopped_spans(x, fs, speed_rpm):
+    """Sample spans where the shaft stands (speed ≤ 0.5 % of the record's highest speed),
+    when the record also runs; None if it runs throughout (or not at all)."""
+    if np.isscalar(speed_rpm) or np.ndim(getattr(speed_rpm, "values", speed_rpm)) != 1:
+        return None
+    speed = np.asarray(getattr(speed_rpm, "values", speed_rpm), dtype=float)
+    if not np.isfinite(speed).all() or speed.max() <= 0:
+        return None
+    if speed.min() < 0:
+        return None                       # reverse rotation: _as_rpm names it
+    stopped = speed <= 5e-3 * speed.max()
+    if not stopped.any():
+        return None
+    edges = np.flatnonzero(np.diff(np.concatenate([[0], stopped.astype(np.int8), [0]])))
+    return list(zip(edges[0::2], edges[1::2]))
+
+
+def _track_running_spans(x, fs, speed_rpm, stops, *, shaft_angle, **options):
+    """Track each span where the shaft turns (the record stops and restarts); results of the
+    standing spans are absent and a warning names them."""
     import xarray as xr
 
-    orders = _check_orders(orders)
-    attrs = {"units": units, "method": "short-time FFT (rpm-frequency map)",
-             "window": str(window), "nperseg": nperseg, "overlap": overlap,
-             "resolution_hz": fs / nperseg, "amplitude_convention": amplitude,
-             "order_lines": orders.tolist()}
-    da = xr.DataArray(out, dims=("time", "frequency"), name=f"{label} campbell",
-                      coords={"time": ("time", t, {"units": "s"}),
-                              "rpm": ("time", frame_rpm, {"units": "rpm"}),
-                              "frequency": ("frequency", freq[:n_freq], {"units": "Hz"})},
-                      attrs=attrs)
-    if speed_bins_rpm is None:
-        return da
-    edges = (np.linspace(frame_rpm.min(), frame_rpm.max() * (1 + 1e-12), int(speed_bins_rpm) + 1)
-             if np.isscalar(speed_bins_rpm) else np.asarray(speed_bins_rpm, float))
-    which = np.digitize(frame_rpm, edges) - 1
-    rows, centres = [], []
-    for b in range(edges.shape[0] - 1):
-        sel = which == b
-        if sel.any():
-            rows.append(np.sqrt((out[sel] ** 2).mean(axis=0)))
-            centres.append(0.5 * (edges[b] + edges[b + 1]))
-    return xr.DataArray(np.array(rows), dims=("rpm", "frequency"), name=da.name,
-                        coords={"rpm": ("rpm", np.array(centres), {"units": "rpm"}),
-                                "frequency": da["frequency"]},
-                        attrs={**attrs, "rpm_averaging": "power mean of frames per speed bin"})
+    values, fs_, units, label = _as_signal(x, fs)
+    speed = np.asarray(getattr(speed_rpm, "values", speed_rpm), dtype=float)
+    angle = None if shaft_angle is None else np.asarray(getattr(shaft_angle, "values",
+                                                                shaft_angle), float)
+    if angle is None and hasattr(speed_rpm, "coords") and "shaft_angle" in speed_rpm.coords:
+        angle = np.asarray(speed_rpm.coords["shaft_angle"].values, float)
+    t0 = _t0(x)
+    n = values.shape[0]
+    bounds = [0] + [v for s in stops for v in s] + [n]
+    runs = [(a, b) for a, b in zip(bounds[0::2], bounds[1::2]) if b > a]
+    shown = ", ".join(f"{t0 + a / fs_:.6g}..{t0 + (b - 1) / fs_:.6g} s" for a, b in stops[:5])
+    warnings.warn(f"{label}: the shaft stands (speed <= 0.5 % of {speed.max():.6g} rpm) at "
+                  f"{shown}; orders are tracked in each running span separately",
+                  OrderWarning, stacklevel=3)
+    parts, skipped = [], []
+    attrs = getattr(x, "attrs", {}) or {}
+    for a, b in runs:
+        sub = xr.DataArray(values[a:b], dims=("time",),
+                           coords={"time": t0 + np.arange(a, b) / fs_},
+                           attrs={**attrs, "sample_rate": fs_}, name=label)
+        try:
+            ds = order_track(sub, speed_rpm=speed[a:b],
+                             shaft_angle=None if angle is None else angle[a:b], **options)
+        except AnalysisError as exc:
+            skipped.append(f"{t0 + a / fs_:.6g}..{t0 + (b - 1) / fs_:.6g} s ({exc})")
+            continue
+        parts.append(ds)
+    if not parts:
+        raise AnalysisError(f"{label}: no running span long enough to track: "
+                            f"{'; '.join(skipped)}")
+    if skipped:
+        log.info("%s: running spans not tracked: %s", label, "; ".join(skipped))
+    out = xr.concat(parts, dim="time", data_vars="minimal", coords="minimal",
+                    combine_attrs="override") if len(parts) > 1 else parts[0]
+    out.attrs["stopped_spans_s"] = [v for a, b in stops for v in (t0 + a / fs_,
+                                                                  t0 + (b - 1) / fs_)]
+    return out
+
+
+def _track_dataset(amp, phase, orders, t, r, units, label, reference=None):
+    import xarray as xr
+
+    coords = {"order": ("order", orders, {"units": "1", "long_name": "shaft order"}),
+              "time": ("time", np.asarray(t, float), {"units": "s"}),
+              "rpm": ("time", np.asarray(r, float), {"units": "rpm", "long_name": "shaft speed"})}
+    return xr.Dataset(
+        {"amplitude": (("order", "time"), amp, {"units": units,
+                                                "long_name": f"{label} order amplitude"}),
+         "phase": (("order", "time"), phase, {"units": "rad",
+                                               "long_name": "phase of A cos(o φ + phase)"})},
+        coords=coords, attrs={"channel": str(label),
+                              "phase_reference": reference or
+                              "shaft angle 0 at the first sample of the record (speed-reference "
+                              "integration)"})
+
+
+_MAP_NAMES = ("order_map", "order_spectrum", "band_amplitude", "campbell_map")
+
+
+def __getattr__(name):
+    """The order map and its relatives live in :mod:`analysis.ordermap` (re-exported)."""
+    if name in _MAP_NAMES:
+        from . import ordermap
+
+        return getattr(ordermap, name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -11,16 +11,19 @@ turns the result into the test report. The CLI commands ``demo``, ``compare``, `
 Steps and their fidelity knobs:
 
 1. speed reference per sample (:func:`analysis.speedref.speed_reference`);
-2. order tracking of every engine order up to ``max_order`` — Vold–Kalman (joint, default;
+2. order tracking (:mod:`analysis.pipeline_tracking`) of every engine order up to
+   ``max_order`` — Vold–Kalman (joint, default;
    ``bandwidth_orders`` sets its −3 dB width) or computed order tracking (``revolutions``);
 3. :func:`analysis.find_resonances` (baseline stripping, modal fit, sweep correction);
-4. the model's critical speeds in the measured speed range and the steady-state forced
+4. (:mod:`analysis.pipeline_prediction`) the model's critical speeds in the measured speed
+   range and the steady-state forced
    response (exact harmonic solve) at the measured node with the run's load law, refined
    around each critical (``refine_points`` speeds within ±6 %);
 5. :func:`analysis.match_criticals`;
-6. limit checks: measured vibratory stress = measured order amplitude × the model's stress per
-   unit node amplitude of that order (the classical torsiograph evaluation), summed over orders
-   (an upper bound on the superposed stress), against the continuous/transient limits;
+6. limit checks (:mod:`analysis.pipeline_limits`): measured vibratory stress = measured order
+   amplitude × the model's stress per unit node amplitude of that order (the classical
+   torsiograph evaluation), superposed over the cycle with the model's phases, against the
+   continuous/transient limits;
 7. block/mount vibration: every vibrograph channel placed on the engine block against the
    engine model on its mounts, per (sensor, order) (:mod:`analysis.vibrograph`).
 """
@@ -35,7 +38,11 @@ from pathlib import Path
 import numpy as np
 
 from crankbench.predict._validate import check_option, check_positive, suggest
-from crankbench.predict.errors import AnalysisError, ConfigError, ModelError, RecordError
+from crankbench.predict.errors import AnalysisError, ConfigError, RecordError
+
+from .pipeline_limits import _limit_checks
+from .pipeline_prediction import _prediction, predicted_response  # noqa: F401 (re-exported)
+from .pipeline_tracking import _track, _tracking_settings
 
 __all__ = ["LoadCase", "PipelineResult", "analyse", "torsional_channel"]
 
@@ -127,7 +134,8 @@ class PipelineResult:
     speed_channel : str
     speed_range_rpm : tuple
     sweep_rate_rpm_per_s : float
-        Median |d(rpm)/dt| over the record.
+        Median |d(rpm)/dt| over the record from straight-line fits over a tenth of it (0 for a
+        steady-speed record: ±1 % of its median).
     track : xarray.Dataset
         Order track of the channel.
     resonances : ResonanceTable
@@ -145,6 +153,10 @@ class PipelineResult:
         Every parameter used.
     timings : dict
         Seconds per step.
+    steady_orders : pandas.DataFrame or None
+        For a steady-speed record: the steady-state order table
+        (:func:`analysis.steady.steady_orders`: amplitude and phase per order with their
+        uncertainty) shown instead of a sweep rate and resonances.
     balance : tuple
         Kept for compatibility (empty): the vibrograph channels are compared in
         ``vibrograph``.
@@ -181,6 +193,7 @@ class PipelineResult:
     balance: tuple = ()
     pressure: object = None
     extra_verdicts: tuple = ()
+    steady_orders: object = None
     vibrograph: object = None
 
     @property
@@ -242,6 +255,7 @@ class PipelineResult:
                 "node": self.node, "speed_min_rpm": self.speed_range_rpm[0],
                 "speed_max_rpm": self.speed_range_rpm[1],
                 "sweep_rate_rpm_per_s": self.sweep_rate_rpm_per_s,
+                "steady_speed": self.steady_orders is not None,
                 "resonances": len(self.resonances), "matched": s["matched"],
                 "unmatched_measured": s["unmatched_measured"],
                 "unmatched_predicted_significant": s["unmatched_predicted_significant"],
@@ -317,145 +331,6 @@ def _load_model(model):
                       f"{type(model).__name__}")
 
 
-def predicted_response(system, speed_rpm, orders, node, *, load, quantity="angle",
-                       excitation=None):
-    """Steady-state order amplitudes at ``node`` and the complex stress of each section.
-
-    ``excitation`` (an :class:`predict.torsion.excitation.Excitation`, e.g. from measured
-    pressure) replaces the model's parametric one; its gas part is scaled by the load law —
-    except for a :class:`predict.gas_torque.SpeedExcitation`, measured at each speed.
-    Returns (amplitude (n_s, n_o), stress (n_s, n_o, n_edges) complex Pa — NaN where a
-    section has no diameter —, the ForcedResponse).
-    """
-    from crankbench.predict.torsion.forced import stress_factor
-
-    from crankbench.predict.torsion.excitation import engine_excitation
-
-    from .given_excitation import given_excitation, given_forcing
-
-    omega = np.asarray(speed_rpm, float) * np.pi / 30.0
-    if excitation is None and given_excitation(system) is not None:  # a bench without an engine
-        forced, torque = given_forcing(system, speed_rpm, orders)
-        res = forced.forced_response(speed_rpm, torque=torque, orders=orders, superpose=False)
-    else:
-        if excitation is None:
-            imep = load.imep if load.imep is not None else system.operating.get("imep")
-            excitation = engine_excitation(system, imep=imep, orders=orders)
-        if getattr(excitation, "speed_dependent", False):   # measured per speed: no load law
-            torque = excitation.harmonics(omega, orders)
-        else:
-            scale = load.scale(speed_rpm)
-            gas = excitation.harmonics(np.zeros(1), orders)[0]                 # (n_o, z)
-            inertia = excitation.harmonics(np.ones(1), orders)[0] - gas
-            torque = gas[None] * scale[:, None, None] \
-                + (omega**2)[:, None, None] * inertia[None]
-        res = system.forced_response(speed_rpm, torque=torque, orders=orders, superpose=False)
-    i = system.node_names.index(node)
-    amp = np.abs(res.angle[:, :, i])
-    if quantity == "angular_velocity":
-        amp = amp * omega[:, None] * np.asarray(orders)[None, :]
-    stress = res.torque * stress_factor(system)[None, None, :]
-    return amp, stress, res
-
-
-def _prediction(system, orders, node, quantity, units, load, lo, hi, base_points, *,
-                fraction=0.05, max_fit=8, min_prominence=0.05):
-    """Critical speeds in range, identified on the predicted response like the measurement.
-
-    The predicted steady-state order response at ``node`` is passed through the same
-    resonance finder as the measured track (SDOF modal fit), so measured and predicted
-    critical speeds, damping and amplitudes are estimated the same way; each predicted
-    resonance is assigned the mode of the nearest undamped critical of its order. A critical
-    is *significant* (expected in the measurement) when the finder identifies it on the
-    predicted curve with the prominence the measured finder demands (``min_prominence``) and
-    its amplitude is at least 5 % of the largest: a bump of a few per cent on a large
-    background cannot be identified in a measured track either.
-    """
-    import xarray as xr
-
-    from .resonance import find_resonances
-
-    crit = system.critical_speeds(orders, (lo, hi))
-    grid = np.linspace(lo, hi, int(base_points))
-    amp, pred_stress, res = predicted_response(system, grid, orders, node, load=load,
-                                           quantity=quantity)
-    i = system.node_names.index(node)
-    comp = res.angle[:, :, i].T  # (order, rpm)
-    if quantity == "angular_velocity":
-        comp = comp * 1j * (grid * np.pi / 30.0)[None, :] * np.asarray(orders)[:, None]
-    track = xr.Dataset({"amplitude": (("order", "rpm"), np.abs(comp), {"units": units}),
-                        "phase": (("order", "rpm"), np.angle(comp), {"units": "rad"})},
-                       coords={"order": orders, "rpm": grid})
-    # identify (fit) only the strongest orders: those whose raw peak near a critical is at
-    # least ``fraction`` of the largest, at most ``max_fit`` orders
-    raw = []
-    for _, c in crit.iterrows():
-        near = np.abs(grid - c.speed_rpm) <= 0.06 * c.speed_rpm
-        raw.append(float(amp[near, orders.index(float(c.order))].max()) if near.any() else 0.0)
-    raw = np.asarray(raw)
-    fit_orders = []
-    if raw.size:
-        best = {}
-        for q, a in zip(crit.order, raw):
-            if a >= fraction * raw.max():
-                best[float(q)] = max(best.get(float(q), 0.0), a)
-        fit_orders = sorted(sorted(best, key=best.get, reverse=True)[:max_fit])
-    import pandas as pd
-
-    found = find_resonances(track, orders=fit_orders, response="velocity"
-                            if quantity == "angular_velocity" else "displacement",
-                            min_amplitude_fraction=0.0, min_snr=1e-6,
-                            min_prominence=min_prominence,
-                            sweep_correction=False).to_frame() if fit_orders else \
-        pd.DataFrame(columns=["order", "speed_rpm", "frequency_hz", "amplitude",
-                              "damping_ratio"])
-    rows = []
-    for _, c in crit.iterrows():
-        cand = found[np.isclose(found["order"], c.order)] if len(found) else found
-        row = dict(mode=int(c["mode"]), order=float(c.order),
-                   speed_rpm_undamped=float(c.speed_rpm),
-                   frequency_hz_undamped=float(c.frequency_hz),
-                   vector_sum=float(c.vector_sum), major=bool(c.major))
-        j = orders.index(float(c.order))
-        if len(cand):
-            k = int(np.argmin(np.abs(cand["speed_rpm"].to_numpy() - c.speed_rpm)))
-            r = cand.iloc[k]
-            # the resonance belongs to this critical if no other critical of the order is closer
-            others = crit[np.isclose(crit.order, c.order)]["speed_rpm"].to_numpy()
-            if np.argmin(np.abs(others - r.speed_rpm)) == np.argmin(np.abs(others - c.speed_rpm)) \
-                    and abs(r.speed_rpm / c.speed_rpm - 1) < 0.15:
-                row.update(speed_rpm=float(r.speed_rpm), frequency_hz=float(r.frequency_hz),
-                           amplitude=float(r.amplitude), damping_ratio=float(r.damping_ratio),
-                           identified=True)
-                rows.append(row)
-                continue
-        near = np.abs(grid - c.speed_rpm) <= 0.03 * c.speed_rpm
-        row.update(speed_rpm=float(c.speed_rpm), frequency_hz=float(c.frequency_hz),
-                   amplitude=float(amp[near, j].max()) if near.any() else float("nan"),
-                   damping_ratio=float("nan"), identified=False)
-        rows.append(row)
-    cols = ["mode", "order", "speed_rpm", "frequency_hz", "amplitude", "damping_ratio",
-            "speed_rpm_undamped", "frequency_hz_undamped", "vector_sum", "major", "identified"]
-    predicted = pd.DataFrame(rows, columns=cols)
-    # a critical is expected in the measurement when its resonance shows in the prediction
-    big = predicted["amplitude"].max() if len(predicted) else 0.0
-    predicted["significant"] = predicted["identified"] & (predicted["amplitude"] >= 0.05 * big)
-    response_da = xr.DataArray(amp.T, dims=("order", "rpm"), coords={"order": orders, "rpm": grid},
-                               attrs={"units": units, "amplitude": "peak", "node": node})
-    return predicted, response_da, grid, pred_stress
-
-
-def _track(x, fs, rpm, orders, *, method, bandwidth_orders, revolutions):
-    from .orders import order_track
-
-    if method == "vkf":
-        return order_track(x, fs=fs, speed_rpm=rpm, orders=orders, method="vkf",
-                           bandwidth_orders=bandwidth_orders)
-    return order_track(x, fs=fs, speed_rpm=rpm, orders=orders, method="cot",
-                       revolutions=revolutions,
-                       overlap=0.9)
-
-
 #: the steps of :func:`analyse`, in order, as its ``progress`` callback names them
 STEPS = ("read", "prediction", "order tracking", "resonances", "comparison",
          "measured excitation", "balance", "limits")
@@ -484,10 +359,15 @@ def analyse(record, model, *, channel=None, speed_channel=None, orders=None, max
         predicted resonance amplitude in the range is at least ``order_fraction`` of the
         largest, at most ``max_tracked`` of them).
     max_order : float
-    method : {'vkf', 'cot'}
-        Order tracker: Vold–Kalman (time resolution for sweeps) or computed order tracking.
+    method : {'vkf', 'auto', 'cot'}
+        Order tracker: Vold–Kalman with ``bandwidth_orders`` chosen from the sweep rate (default:
+        the resonance identification and the comparison are calibrated on it), the adaptive
+        settings of :mod:`analysis.autotrack` (never narrower than ``bandwidth_orders``), or
+        computed order tracking.
     bandwidth_orders : float, optional
-        VKF −3 dB bandwidth in orders. Default from the sweep rate R (rpm/s): 0.25 up to
+        VKF −3 dB bandwidth in orders ('vkf'; with 'auto' the floor under the chosen
+        bandwidth, which the resonance identification needs). Default from the sweep rate R
+        (rpm/s): 0.25 up to
         25 rpm/s, then 0.25·√(R/25) up to 0.5 — a resonance crossed quickly has a wider
         envelope spectrum, and a narrow filter would flatten its peak (measured on the 6L32
         scene at 100 rpm/s: amplitude −17 % at 0.25 orders, −4 % at 0.5).
@@ -548,7 +428,7 @@ def analyse(record, model, *, channel=None, speed_channel=None, orders=None, max
     from .resonance import find_resonances
     from .speedref import find_speed_channel, speed_reference
 
-    check_option(method, "method", ("vkf", "cot"), error=ConfigError)
+    check_option(method, "method", ("auto", "vkf", "cot"), error=ConfigError)
     timings = {}
 
     def step(name):
@@ -587,10 +467,12 @@ def analyse(record, model, *, channel=None, speed_channel=None, orders=None, max
         # and the comparison says so (inconclusive)
         mid = 0.5 * (lo + hi)
         lo, hi = mid * 0.995, mid * 1.005
-    t = np.arange(x.size) / fs
-    rate = np.abs(np.gradient(rpm_ok, t))
-    moving = rate > 0.2
-    sweep_rate = float(np.median(rate[moving])) if moving.any() else 0.0
+    from .autotrack import steady_speed, sweep_rate as _sweep_rate
+
+    # robust to speed noise: a constant-speed record has no sweep (0), not its noise's slope
+    steady_run = steady_speed(rpm_ok, fs)
+    sweep_rate = 0.0 if steady_run else _sweep_rate(rpm_ok, fs)
+    speed_arg = rpm if bool(np.all(ok)) else rpm_ok   # keeps the encoder angle when present
     from .given_excitation import default_orders, given_excitation
 
     all_orders = [float(o) for o in (default_orders(system, max_order) if orders is None
@@ -639,7 +521,7 @@ def analyse(record, model, *, channel=None, speed_channel=None, orders=None, max
         bandwidth_orders = float(np.clip(0.25 * np.sqrt(max(sweep_rate, 1e-9) / 25.0),
                                          0.25, 0.5))
     step("order tracking")
-    track = _track(x, fs, rpm_ok, orders, method=method, bandwidth_orders=bandwidth_orders,
+    track = _track(x, fs, speed_arg, orders, method=method, bandwidth_orders=bandwidth_orders,
                    revolutions=revolutions)
     if method == "vkf" and track.sizes.get("time", 0) > 100:
         # the filter's ends are not settled: drop one time constant 1/B at each end
@@ -648,6 +530,16 @@ def analyse(record, model, *, channel=None, speed_channel=None, orders=None, max
         keep = (tt >= tt[0] + edge) & (tt <= tt[-1] - edge)
         if keep.sum() > 0.5 * tt.size:
             track = track.isel(time=keep)
+    steady_table = None
+    if steady_run:
+        from .steady import steady_orders
+
+        try:
+            steady_table = steady_orders(x, fs=fs, speed_rpm=speed_arg, orders=orders,
+                                         amplitude=track.attrs.get("amplitude_convention",
+                                                                   "peak"))
+        except AnalysisError as exc:
+            log.info("no steady-state order table: %s", exc)
     done("order tracking")
 
     step("resonances")
@@ -687,13 +579,11 @@ def analyse(record, model, *, channel=None, speed_channel=None, orders=None, max
         "sample rate (Hz)": fs, "orders predicted": ", ".join(f"{o:g}" for o in all_orders),
         "order tracking": track.attrs.get("method", method),
         "amplitude convention": track.attrs.get("amplitude_convention", "peak"),
-        "VKF bandwidth (orders)" if method == "vkf" else "COT block (revolutions)":
-            bandwidth_orders if method == "vkf" else revolutions,
-        "order resolution": (f"{bandwidth_orders:g} orders (−3 dB)" if method == "vkf"
-                             else f"{1 / revolutions:g} orders"),
-        "window": track.attrs.get("window", "— (VKF)" if method == "vkf" else "hann"),
+        **_tracking_settings(track, method, bandwidth_orders, revolutions),
+        "phase reference": track.attrs.get("phase_reference", ""),
+        "channel trend": track.attrs.get("trend", ""),
         "speed range (rpm)": f"{lo:.1f} – {hi:.1f}",
-        "sweep rate (rpm/s, median)": sweep_rate,
+        "sweep rate (rpm/s, median)": "steady (no sweep)" if steady_run else sweep_rate,
         "estimated sweep peak loss (max over resonances)": max(
             (r.sweep_peak_loss for r in resonances if np.isfinite(r.sweep_peak_loss)),
             default=0.0),
@@ -713,7 +603,7 @@ def analyse(record, model, *, channel=None, speed_channel=None, orders=None, max
         resonances=resonances, predicted=predicted, response=response_da,
         comparison=comparison, limits=tuple(limits), system=system, record=rec,
         settings=settings, timings=timings, vibrograph=vibrograph,
-        pressure=pressure)
+        pressure=pressure, steady_orders=steady_table)
 
 
 def _swept_like_with_like(predicted, resonances, track, quantity, gate):
@@ -760,217 +650,6 @@ def _vibrograph(rec, system, load, speed_channel, tolerance, *, indicator=None):
     except (RecordError, AnalysisError) as exc:   # no channel to place, nothing to compare
         log.info("no vibrograph comparison: %s", exc)
     return None
-
-
-def _superpose(stress, orders):
-    """Peak superposed stress over one engine cycle, (n_s, n_o, n_sec) complex → (n_s, n_sec).
-
-    32 samples per period of the highest order: the peak is under-estimated by at most
-    1 − cos(π/32) = 0.5 %.
-    """
-    q = np.asarray(orders, float)
-    cycle = 4.0 * np.pi if np.any(np.abs(q - np.round(q)) > 1e-9) else 2.0 * np.pi
-    theta = np.linspace(0.0, cycle, int(32 * q.max() * cycle / (2 * np.pi)), endpoint=False)
-    basis = np.exp(1j * np.outer(q, theta))  # (n_o, n_theta)
-    out = np.empty((stress.shape[0], stress.shape[2]))
-    for c in range(stress.shape[2]):
-        out[:, c] = np.max(np.abs(np.real(stress[:, :, c] @ basis)), axis=1)
-    return out
-
-
-def _misfire_stress(system, speed_rpm, orders, load, sections):
-    """Predicted superposed stress with one cylinder misfiring: the worst over the cylinders.
-
-    The misfiring cylinder keeps its inertia torque and loses its gas torque (motored
-    pressure neglected: a slight over-estimate of the unbalance between cylinders).
-    Returns (n_s, n_sections) Pa and the worst cylinder per speed.
-    """
-    from crankbench.predict.torsion.excitation import engine_excitation
-    from crankbench.predict.torsion.forced import stress_factor
-
-    imep = load.imep if load.imep is not None else system.operating.get("imep")
-    exc = engine_excitation(system, imep=imep, orders=orders)
-    omega = np.asarray(speed_rpm, float) * np.pi / 30.0
-    scale = load.scale(speed_rpm)
-    names = list(system.edge_names)
-    cols = [names.index(n) for n in sections]
-    factor = stress_factor(system)[cols]
-    worst = np.zeros((omega.size, len(cols)))
-    which = np.zeros(omega.size, int)
-    for cyl in range(1, exc.n_cylinders + 1):
-        gas = np.repeat(exc.gas[None, :, None] * scale[:, None, None], exc.n_cylinders, axis=2)
-        gas[:, :, cyl - 1] = 0.0
-        torque = gas + (omega**2)[:, None, None] * exc.inertia[None, :, None]
-        res = system.forced_response(speed_rpm, torque=torque, orders=orders, superpose=False)
-        tau = _superpose(res.torque[:, :, cols] * factor[None, None, :], orders)
-        better = tau.max(axis=1) > worst.max(axis=1)
-        which[better] = cyl
-        worst = np.maximum(worst, tau)
-    return worst, which
-
-
-def _limit_checks(rec, system, track, grid, pred_stress, response, orders, channel, machine_class,
-                  operating_range_rpm, *, load=None, standard=None, speed_range=None):
-    """Torsional stress against the rule limits (measured; predicted with a cylinder
-    misfiring); vibration severity of vibrograph channels.
-
-    Measured stress: the predicted complex stress of each order in each section, scaled by the
-    ratio of measured to predicted amplitude of that order at the measured node (ratio 1 for
-    orders not tracked, or where the prediction is below 5 % of its maximum over speed;
-    clipped to [0, 10]), superposed over one engine cycle with the model's phases
-    (:func:`_superpose`).
-    """
-    from .torsional_limits import check_torsional_stress, not_assessed
-
-    checks = []
-    limits = getattr(system, "limits", None)
-    rpm = np.asarray(track["rpm"].values, float)
-    lo, hi = (float(rpm.min()), float(rpm.max())) if speed_range is None else speed_range
-    if limits is None or not getattr(limits, "has_rule_data", True):
-        checks.append(not_assessed(
-            f"measured torsional stress ({channel})",
-            "the model has no stress limit data ([limits] with IACS UR M68 shafting data "
-            "[[limits.shafting]] or the engine maker's crankshaft figure [limits.crankshaft])",
-            basis=f"model {system.operating.get('source', '')}"))
-    else:
-        names = list(system.edge_names)
-        lim_secs = list(limits.sections)
-        cols = [names.index(s) for s in lim_secs] if lim_secs else \
-            [i for i in range(len(names)) if np.isfinite(pred_stress[:, :, i]).all()]
-        pred_amp = np.asarray(response.values, float).T  # (n_s, n_o)
-        edges = np.linspace(lo, hi, 301)
-        centre = 0.5 * (edges[1:] + edges[:-1])
-        idx = np.clip(np.searchsorted(edges, rpm) - 1, 0, 299)
-        ratio = np.ones((centre.size, len(orders)))
-        tracked = np.asarray(track["amplitude"].values, float)  # (order, time)
-        for jt, q in enumerate(np.asarray(track["order"].values, float)):
-            j = int(np.argmin(np.abs(np.asarray(orders) - q)))
-            meas = np.full(centre.size, -np.inf)
-            np.maximum.at(meas, idx, tracked[jt])
-            meas[~np.isfinite(meas)] = np.nan
-            pred = np.interp(centre, grid, pred_amp[:, j])
-            ok = np.isfinite(meas) & (pred >= 0.05 * pred_amp[:, j].max()) & (pred > 0)
-            ratio[ok, j] = np.clip(meas[ok] / pred[ok], 0.0, 10.0)
-        at = np.empty((centre.size, len(orders), len(cols)), complex)
-        for k, c in enumerate(cols):
-            for j in range(len(orders)):
-                sc = pred_stress[:, j, c]
-                at[:, j, k] = np.interp(centre, grid, sc.real) + 1j * np.interp(centre, grid,
-                                                                                 sc.imag)
-        total = _superpose(ratio[:, :, None] * at, orders)
-        basis = (f"record channel {channel} at {response.attrs.get('node', '')}, "
-                 f"{lo:.0f}–{hi:.0f} rpm: measured/predicted order amplitude × model stress "
-                 "per section, superposed over the cycle")
-        checks.extend(check_torsional_stress(
-            centre, total, limits, sections=[names[c] for c in cols],
-            operating_range_rpm=operating_range_rpm, name="measured torsional stress",
-            basis=basis, covered_rpm=(lo, hi)))
-        if getattr(system, "engine", None) is not None and load is not None and \
-                hasattr(limits, "misfire_operation"):
-            try:
-                sgrid = np.linspace(lo, hi, 240)
-                mis, _ = _misfire_stress(system, sgrid, orders, load, [names[c] for c in cols])
-                checks.extend(check_torsional_stress(
-                    sgrid, mis, limits, sections=[names[c] for c in cols], misfire=True,
-                    operating_range_rpm=operating_range_rpm,
-                    name="predicted torsional stress, one cylinder misfiring",
-                    basis=(f"model, worst single misfiring cylinder (gas torque removed), "
-                           f"{lo:.0f}–{hi:.0f} rpm, run's load law"),
-                    required=bool(limits.misfire_operation), covered_rpm=(lo, hi)))
-            except (ModelError, AnalysisError) as exc:
-                # never dropped silently: a stated case that could not be computed is listed
-                # as not assessed (inconclusive; counts only when the model requires it)
-                log.warning("misfire case not computed: %s", exc)
-                checks.append(not_assessed(
-                    "predicted torsional stress, one cylinder misfiring",
-                    f"the misfire case could not be computed ({exc})",
-                    basis=f"model, {lo:.0f}–{hi:.0f} rpm",
-                    required=bool(limits.misfire_operation)))
-    checks.extend(_severity_checks(rec, system, machine_class, standard))
-    return checks
-
-
-def _engine_power_and_mounting(system):
-    """(rated power W or None, resilient mounting or None, rated speed rpm or None)."""
-    engine = getattr(system, "engine", None)
-    if engine is None:
-        return None, None, None
-    rated = getattr(engine, "rated_speed_rpm", None)
-    power = None
-    imep = (getattr(engine, "combustion", None) or {})
-    imep = imep.get("imep") if isinstance(imep, dict) else getattr(imep, "imep", None)
-    bore, stroke = getattr(engine, "bore", None), getattr(engine, "stroke", None)
-    if stroke is None and getattr(engine, "crank_radius", None) is not None:
-        stroke = 2.0 * engine.crank_radius
-    if None not in (imep, bore, stroke, rated):
-        # P = p_mi V_d z n / (60 i), i = 2 revolutions per cycle for a 4-stroke (indicated)
-        swept = np.pi / 4.0 * bore**2 * stroke * engine.n_cylinders
-        power = imep * swept * rated / 60.0 / (getattr(engine, "cycle", 4) / 2.0)
-    resilient = None
-    source = getattr(engine, "source", None)
-    if source:
-        try:
-            from crankbench.predict.mounts import MountedEngine
-
-            MountedEngine.from_toml(source)
-            resilient = True
-        except (ValueError, OSError, KeyError):
-            resilient = None
-    return power, resilient, rated
-
-
-def _severity_checks(rec, system, machine_class, standard):
-    """Vibration severity of each vibrograph channel: ISO 10816-6 (class from the model's
-    power and mounting) by default for engines, ISO 10816-1 on request."""
-    from .limits import check_vibration_severity, reciprocating_class, vibration_severity
-
-    out = []
-    reason = ""
-    std = standard
-    vib = getattr(getattr(system, "limits", None), "vibration", None) or {}
-    cls = machine_class
-    if std is None:
-        std = vib.get("standard", "ISO 10816-6")
-    if cls is None:
-        cls = vib.get("machine_class")
-    if std == "ISO 10816-6" and cls is None:
-        power, resilient, rated = _engine_power_and_mounting(system)
-        cls, reason = reciprocating_class(power_w=power, rated_speed_rpm=rated,
-                                          resilient=resilient)
-    elif std == "ISO 10816-1" and cls is None:
-        cls, reason = "III", "class III (default)"
-    for name in rec.data_vars:
-        v = rec[name]
-        q = v.attrs.get("quantity")
-        if q in ("velocity", "acceleration") and v.ndim == 1 and "sample_rate" in v.attrs:
-            from .speedref import speed_reference
-
-            try:
-                rpm = speed_reference(rec, str(name))
-            except (AnalysisError, RecordError):
-                rpm = None
-            fs = float(v.attrs["sample_rate"])
-            # ISO 10816-6: 2–1000 Hz; ISO 10816-1: 10–1000 Hz (2 Hz at 600 rpm or below)
-            low = 2.0 if std == "ISO 10816-6" or (rpm is not None and np.nanmax(rpm) <= 600) \
-                else 10.0
-            band = (low, min(1000.0, 0.45 * fs))
-            window = min(1.0, v.size / fs)
-            sev = vibration_severity(np.asarray(v.values, float), fs=fs, speed_rpm=rpm, quantity=q,
-                                     band_hz=band, window_s=window)
-            loc = f" ({v.attrs['location']})" if v.attrs.get("location") else ""
-            basis = (f"channel {name}{loc}, {q}, velocity rms {band[0]:g}–{band[1]:g} Hz in "
-                     f"{window:g} s windows")
-            bounds = None
-            if vib.get("boundaries_mm_s") is not None:
-                from .limits import ZoneBoundaries
-
-                b = [float(x) * 1e-3 for x in vib["boundaries_mm_s"]]
-                bounds = ZoneBoundaries(*b, machine_class=str(cls or ""),
-                                        source=vib.get("source", "model [limits.vibration]"))
-            out.append(check_vibration_severity(
-                sev, machine_class=cls, boundaries=bounds, standard=std,
-                name=f"vibration severity {name}{loc}", basis=basis, class_reason=reason))
-    return out
 
 
 def load_from_record_file(path):

@@ -4,54 +4,78 @@ A time record ``x(t)`` taken while the shaft turns at ``rpm(t)`` is re-sampled a
 increments of shaft angle, so that an order ``o`` (a component ``cos(o φ)``) becomes a fixed
 frequency of ``o`` cycles per revolution whatever the speed does. Steps:
 
-1. shaft angle ``φ(t) = ∫ 2π rpm/60 dt`` (trapezoidal rule, exact for a speed linear between
-   samples; φ = 0 at the first sample);
-2. anti-alias low-pass in time, chunk by chunk: a linear-phase Kaiser FIR (100 dB) passing
-   orders ≤ ``samples_per_rev/4`` at the chunk's top speed (ripple ≈ 1e-5) and stopping
-   orders ≥ ``3/4 samples_per_rev`` at its lowest speed; the record ends, where the filter is
-   incomplete, are trimmed (half the filter length each) rather than padded;
+1. shaft angle ``φ(t)``: either given per sample (the encoder angle from the pulse edges,
+   :func:`analysis.speedref.speed_reference` attaches it), or ``∫ 2π rpm/60 dt`` by the
+   trapezoidal rule (exact for a speed linear between samples; φ = 0 at the first sample);
+2. anti-alias low-pass, chunk by chunk, applied in the frequency domain: one real FFT of the
+   chunk, multiplied by the response of a Kaiser-windowed ideal low-pass (100 dB; impulse
+   response of finite length ``±T``, ``T = β/(π Δf)``), passing orders ≤ ``samples_per_rev/4``
+   at the chunk's top speed (ripple ≈ 1e-5) and stopping orders ≥ ``3/4 samples_per_rev`` at
+   its lowest speed; the inverse FFT keeps only the bins below the output rate's Nyquist
+   frequency, so the filtered chunk comes out decimated (by a fractional factor, ≥ 4 samples
+   per period of the stop edge) for the cost of about one FFT of the chunk (lengths
+   ``2^a 5^b 3^c``, the chunk read with real samples up to that length rather than zero
+   padded). The ``T·fs`` samples at either end of a chunk
+   window, where the filter is incomplete, are never used: chunks are read with that margin,
+   and the record ends are trimmed rather than padded;
 3. the times of the constant-angle samples from the inverse of φ(t);
-4. interpolation of ``x`` at those times: ``"linear"``, ``"cubic"`` (4-point Lagrange) or
-   ``"bandlimited"`` (Kaiser-windowed sinc, 16 taps).
+4. interpolation of the filtered signal at those times: ``"bandlimited"`` (default through
+   ``"auto"``: Kaiser-windowed sinc, 16 taps, β = 12.5, weights normalised to a unit sum),
+   ``"cubic"`` (4-point Lagrange) or ``"linear"`` (the last two at the full input rate, no
+   decimation).
 
-Interpolation error for a tone at ``f`` sampled at ``fs`` (``h = 2π f/fs``): linear ≈ h²/8
-(peak, relative), cubic ≈ 3h⁴/128, band-limited < 1e-4 up to 0.4 fs and ≈ 1e-7 below 0.1 fs.
-The bench suite ``orders`` measures these against a closed form.
+Interpolation error for a tone at ``f`` sampled at ``fs`` (``h = 2π f/fs``), peak relative,
+measured by the bench suite ``orders`` against the closed form: linear ≈ h²/8, cubic ≈ 3h⁴/128,
+band-limited ≤ 5e-6 for ``f ≤ fs/4`` (1.7e-3 at 0.3 fs, 0.15 at 0.4 fs — the decimation keeps
+every component the filter passes below ``fs_out/4``); checked at these figures by
+``tests/analysis/test_resample_interp.py``.
 
 Half orders of a four-stroke engine (one cycle = 720°) need no separate grid: the angle samples
-run continuously from the first sample, and an analysis block of an even number of revolutions
-(``revolutions`` in :mod:`analysis.orders`, or ``revolutions_per_cycle=2`` in
+run continuously from the angle reference, and an analysis block of an even number of
+revolutions (``revolutions`` in :mod:`analysis.orders`, or ``revolutions_per_cycle=2`` in
 :func:`analysis.synchronous_average`) puts every half order on a bin.
 
-Long records are processed in chunks of ``chunk`` input samples (overlapped by the filter's
-settling length), so the working memory is bounded whatever the record length.
+One engine serves the in-memory and the streamed paths: :func:`plan_chunks` decides chunks,
+filters and decimation from the speed alone, and :func:`resample_span` turns one span of
+input samples (with its shaft angle) into angle samples. :func:`angle_resample` calls it once
+for the whole record; :mod:`analysis.stream` calls it group by group with the shaft angle
+carried across segments, so both produce the same numbers.
 
 References
 ----------
 K. R. Fyfe and E. D. S. Munck, "Analysis of computed order tracking", Mechanical Systems and
 Signal Processing 11(2), 187–205 (1997).
+J. F. Kaiser, "Nonrecursive digital filter design using the I0-sinh window function", Proc.
+IEEE ISCAS (1974) — the window and its Fourier transform.
 """
 
 from __future__ import annotations
 
+import functools
 import logging
 import math
+from dataclasses import dataclass
 
 import numpy as np
 
-from crankbench.predict._validate import check_finite_array, check_int, check_option, check_positive
-from crankbench.predict.errors import AnalysisError
 from crankbench.predict._deprecate import renamed
+from crankbench.predict._validate import (check_finite_array, check_int, check_option,
+                                          check_positive)
+from crankbench.predict.errors import AnalysisError
 
-__all__ = ["angle_resample", "shaft_angle", "INTERPOLATIONS"]
+__all__ = ["angle_resample", "shaft_angle", "plan_chunks", "resample_span", "ChunkPlan",
+           "INTERPOLATIONS"]
 
 log = logging.getLogger("crankbench")
 
-#: interpolation name -> documented relative peak error for h = 2π f / fs (see module docs)
-INTERPOLATIONS = ("linear", "cubic", "bandlimited")
+#: interpolation names ('auto' = band-limited)
+INTERPOLATIONS = ("auto", "linear", "cubic", "bandlimited")
 
-_SINC_HALF = 8  # band-limited kernel half-width in samples (16 taps)
-_SINC_BETA = 8.0  # Kaiser window shape of the band-limited kernel
+_SINC_HALF = 8        # band-limited kernel half-width in samples (16 taps)
+_SINC_BETA = 12.5     # Kaiser shape of the band-limited kernel (error <= 5e-6 up to fs/4)
+_SINC_PHASES = 512    # fractional positions tabulated (linear between them: < 1e-8)
+_AA_BETA = 0.1102 * (100.0 - 8.7)   # Kaiser beta of the 100 dB anti-alias low-pass
+_TWO_PI = 2.0 * np.pi
 
 
 # ---------------------------------------------------------------------------- input handling
@@ -81,6 +105,9 @@ def _as_signal(x, fs, name: str = "x"):
     if fs is None:
         raise AnalysisError(f"fs is required for a plain array {name}; give the sample rate in Hz")
     fs = check_positive(fs, "fs", error=AnalysisError)
+    if np.ndim(x) == 1 and np.shape(x)[0] == 0:
+        raise AnalysisError(f"{label} holds no samples (zero-length channel); order analysis "
+                            "needs a record of at least a few revolutions")
     values = check_finite_array(x, label, ndim=1, min_length=8, error=AnalysisError)
     return values, fs, units, label
 
@@ -96,6 +123,8 @@ def _as_rpm(rpm, n: int, fs: float | None = None) -> np.ndarray:
     if arr is None or arr.ndim == 0:
         value = check_positive(rpm if arr is None else float(arr), "rpm", error=AnalysisError)
         return np.full(n, value)
+    if arr.ndim == 1 and arr.shape[0] == 0:
+        raise AnalysisError("speed_rpm holds no samples (zero-length speed channel)")
     arr = check_finite_array(arr, "rpm", ndim=1, error=AnalysisError)
     if arr.shape[0] != n:
         raise AnalysisError(f"rpm has {arr.shape[0]} samples but the signal has {n}; "
@@ -108,6 +137,21 @@ def _as_rpm(rpm, n: int, fs: float | None = None) -> np.ndarray:
                             f"{len(bad)} sample(s) <= 0 (min {float(arr.min()):.6g} rpm), first "
                             f"at sample {i}{when(i)}, last at sample {j}{when(j)}; trim the "
                             "record to the running span")
+    return arr
+
+
+def _as_angle(angle, n: int) -> np.ndarray | None:
+    """A shaft angle per sample (rad, increasing), or None."""
+    if angle is None:
+        return None
+    if hasattr(angle, "values") and hasattr(angle, "dims"):
+        angle = angle.values
+    arr = check_finite_array(angle, "shaft_angle", ndim=1, error=AnalysisError)
+    if arr.shape[0] != n:
+        raise AnalysisError(f"shaft_angle has {arr.shape[0]} samples but the signal has {n}; "
+                            "give the angle (rad) at every signal sample")
+    if np.any(np.diff(arr) <= 0):
+        raise AnalysisError("shaft_angle must increase at every sample (shaft turning one way)")
     return arr
 
 
@@ -133,14 +177,42 @@ def shaft_angle(speed_rpm: np.ndarray, fs: float) -> np.ndarray:
     >>> round(float(phi[-1] / (2 * np.pi)), 12)
     1.0
     """
-    omega = np.asarray(speed_rpm, dtype=float) * (2.0 * np.pi / 60.0)
-    phi = np.empty_like(omega)
-    phi[0] = 0.0
-    np.cumsum(0.5 * (omega[1:] + omega[:-1]) / fs, out=phi[1:])
-    return phi
+    return integrate_angle(np.asarray(speed_rpm, dtype=float), fs, 0.0)
+
+
+def integrate_angle(speed_rpm: np.ndarray, fs: float, start: float) -> np.ndarray:
+    """Trapezoidal shaft angle (rad) over a span of samples, ``start`` at its first sample.
+
+    The running sum is sequential, so integrating a record in consecutive spans (each starting
+    from the previous span's value at the shared sample) gives the whole-record angle exactly.
+
+    Examples
+    --------
+    >>> whole = integrate_angle(np.array([60.0, 120.0, 180.0]), 10.0, 0.0)
+    >>> part = integrate_angle(np.array([120.0, 180.0]), 10.0, float(whole[1]))
+    >>> bool(part[-1] == whole[-1])
+    True
+    """
+    from ._kernels import integrate_speed
+
+    return integrate_speed(speed_rpm, fs, start)    # one pass compiled, else cumsum
 
 
 # ---------------------------------------------------------------------------- interpolation
+
+
+@functools.lru_cache(maxsize=1)
+def _sinc_table() -> np.ndarray:
+    """Kaiser-windowed sinc weights for fractional positions ``p/_SINC_PHASES`` (rows), taps at
+    offsets ``-_SINC_HALF+1 … _SINC_HALF`` (columns), each row normalised to a unit sum."""
+    from scipy import special
+
+    mu = np.arange(_SINC_PHASES + 1) / _SINC_PHASES
+    offsets = np.arange(-_SINC_HALF + 1, _SINC_HALF + 1)
+    d = mu[:, None] - offsets[None, :]
+    w = np.sinc(d) * special.i0(_SINC_BETA * np.sqrt(np.clip(1.0 - (d / _SINC_HALF) ** 2,
+                                                              0.0, None)))
+    return w / w.sum(axis=1, keepdims=True)
 
 
 def _interp(x: np.ndarray, u: np.ndarray, method: str) -> np.ndarray:
@@ -158,65 +230,371 @@ def _interp(x: np.ndarray, u: np.ndarray, method: str) -> np.ndarray:
         fm1, f1, f2 = f + 1.0, f - 1.0, f - 2.0
         return (-xm * f * f1 * f2 / 6.0 + x0 * fm1 * f1 * f2 / 2.0
                 - x1 * fm1 * f * f2 / 2.0 + x2 * fm1 * f * f1 / 6.0)
-    # band-limited: Kaiser-windowed sinc over 2*_SINC_HALF taps
-    i0 = np.floor(u).astype(np.int64)
-    offsets = np.arange(-_SINC_HALF + 1, _SINC_HALF + 1)
-    idx = i0[:, None] + offsets[None, :]
-    d = u[:, None] - idx
-    w = np.sinc(d) * np.i0(_SINC_BETA * np.sqrt(np.clip(1.0 - (d / _SINC_HALF) ** 2, 0.0, None)))
-    w /= np.i0(_SINC_BETA)
-    np.clip(idx, 0, n - 1, out=idx)
-    return np.einsum("ij,ij->i", w, x[idx])
+    # band-limited: tabulated normalised Kaiser-windowed sinc, linear between table rows
+    table = _sinc_table()
+    from ._kernels import sinc_interp
+
+    fast = sinc_interp(x, u, table, _SINC_HALF, _SINC_PHASES)
+    if fast is not None:
+        return fast
+    i0 = np.clip(np.floor(u).astype(np.int64), _SINC_HALF - 1, n - 1 - _SINC_HALF)
+    pos = (u - i0) * _SINC_PHASES
+    row = np.clip(pos.astype(np.int64), 0, _SINC_PHASES - 1)
+    frac = (pos - row)[:, None]
+    w = table[row]
+    w += (table[row + 1] - w) * frac
+    from numpy.lib.stride_tricks import sliding_window_view
+
+    windows = sliding_window_view(x, 2 * _SINC_HALF)
+    return np.einsum("ij,ij->i", w, windows[i0 - (_SINC_HALF - 1)])
 
 
-def _antialias_taps(samples_per_rev: int, rpm_min: float, rpm_max: float, fs: float,
-                    n: int | None = None):
-    """Linear-phase FIR low-pass protecting orders <= samples_per_rev/4 from aliasing.
+# ---------------------------------------------------------------------------- anti-alias filter
 
-    Pass band up to ``samples_per_rev/4`` orders at the chunk's top speed, stop band from
-    ``3 samples_per_rev/4`` orders at its lowest speed (content between 1/2 and 3/4 of the
-    angle sample rate aliases only above ``samples_per_rev/4``). Kaiser design, 100 dB, so the
-    pass-band ripple is about 1e-5. Returns ``None`` when no alias can reach the pass band.
+
+@functools.lru_cache(maxsize=1)
+def _kaiser_step():
+    """Cumulative integral ``C(v)`` of the Fourier transform of the Kaiser window (β =
+    ``_AA_BETA``, half-length 1) over ``v`` (cycles per half-length), normalised to C(∞) = 1.
+
+    The transform is ``(2/I0(β)) sinh(√(β² − (2πv)²))/√(β² − (2πv)²)`` (sin for 2π|v| > β);
+    a Kaiser-windowed ideal low-pass of cut-off ``f_c`` then has the response
+    ``H(f) = C((f + f_c)T) − C((f − f_c)T)`` (``T`` the half-length in s).
     """
-    from scipy import signal
+    from scipy import special
 
-    f_pass = samples_per_rev / 4 * rpm_max / 60.0
-    f_stop = 3 * samples_per_rev / 4 * rpm_min / 60.0
-    if f_stop >= 0.5 * fs:
-        return None
-    if f_stop <= f_pass * 1.05:
-        raise AnalysisError(
-            f"speed varies too much within one chunk ({rpm_min:.6g}..{rpm_max:.6g} rpm) for "
-            f"samples_per_rev={samples_per_rev}; raise samples_per_rev or lower chunk")
-    numtaps, beta = signal.kaiserord(100.0, (f_stop - f_pass) / (0.5 * fs))
-    if n is not None and numtaps > n:  # check before designing: the filter could be huge
-        raise AnalysisError(
-            f"the anti-alias filter for {rpm_min:.6g}..{rpm_max:.6g} rpm at fs = {fs:.6g} Hz needs "
-            f"{numtaps} taps, more than the {n} samples of the record: the speed is far too low "
-            "for this sample rate (is rpm in rpm, not rad/s or Hz?) or the record too short")
-    numtaps |= 1  # odd: integer group delay, so the filtered signal stays on the sample grid
-    return signal.firwin(numtaps, 0.5 * (f_pass + f_stop), window=("kaiser", beta), fs=fs)
+    beta = _AA_BETA
+    v = np.linspace(-6.0, 6.0, 12001)   # beyond |v| = 6 (main lobe β/2π ≈ 1.6) C is 0 or 1
+    z2 = beta ** 2 - (_TWO_PI * v) ** 2
+    root = np.sqrt(np.abs(z2))
+    with np.errstate(invalid="ignore", divide="ignore"):
+        core = np.where(z2 > 0, np.sinh(root) / root, np.sin(root) / root)
+    core[root < 1e-12] = 1.0
+    w = 2.0 / special.i0(beta) * core
+    c = np.concatenate([[0.0], np.cumsum(0.5 * (w[1:] + w[:-1]) * np.diff(v))])
+    return v, c / c[-1]          # the transform is even: C(0) = 1/2 by symmetry
 
 
-def _chunk_bounds(speed: np.ndarray, chunk: int) -> np.ndarray:
-    """Chunk limits of at most ``chunk`` samples, split until speed varies < 2:1 in each."""
-    n = speed.shape[0]
+def _lowpass_gain(f: np.ndarray, f_pass: float, f_stop: float) -> np.ndarray:
+    """Response of the Kaiser-windowed low-pass passing ``f_pass`` and stopping ``f_stop``."""
+    v, c = _kaiser_step()
+    f_cut = 0.5 * (f_pass + f_stop)
+    half = _aa_half_length(f_pass, f_stop)
+    return np.interp((f + f_cut) * half, v, c) - np.interp((f - f_cut) * half, v, c)
+
+
+def _aa_half_length(f_pass: float, f_stop: float) -> float:
+    """Half-length ``T`` (s) of the anti-alias impulse response: β/(π (f_stop − f_pass))."""
+    return _AA_BETA / (np.pi * (f_stop - f_pass))
+
+
+@functools.lru_cache(maxsize=256)
+def _good_size(n: int) -> int:
+    """Smallest ``2^a 5^b 3^c ≥ n`` with ``b ≤ 2``, ``c ≤ 1``: transform lengths the FFT does
+    fastest (measured: 102 400 points cost 0.66× of 101 250 = 2·3⁴·5⁴)."""
+    best = 1 << int(np.ceil(np.log2(max(n, 1))))
+    for odd in (1, 3, 5, 15, 25, 75):
+        size = odd << max(0, int(np.ceil(np.log2(max(n, 1) / odd))))
+        while size // 2 >= n and size % 2 == 0:
+            size //= 2
+        if n <= size < best:
+            best = size
+    return best
+
+
+def _fft_lowpass(data: np.ndarray, fs: float, f_pass: float, f_stop: float, nfft: int,
+                 n_out: int):
+    """Low-pass ``data`` in the frequency domain (transform length ``nfft``) and return it at
+    ``n_out`` samples: output sample ``m`` is the filtered signal at input position
+    ``m · nfft/n_out`` (keeping only the bins below the output's Nyquist frequency, where the
+    filter has already reached its stop band).
+
+    Circular convolution with an impulse response of half-length ``T``: the first and last
+    ``ceil(T fs)`` samples are incomplete (the caller never uses them)."""
+    from scipy import fft
+
+    spectrum = fft.rfft(data, nfft)
+    keep = n_out // 2 + 1
+    # the response is 1 below the transition band and 0 above it: interpolate only there
+    half = _aa_half_length(f_pass, f_stop)
+    f_cut = 0.5 * (f_pass + f_stop)
+    reach = 6.0 / half                        # the tabulated step is flat beyond |v| = 6
+    lo = int(np.clip(np.floor((f_cut - reach) * nfft / fs), 0, keep))
+    hi = int(np.clip(np.ceil((f_cut + reach) * nfft / fs) + 1, lo, keep))
+    out = spectrum[:keep]
+    out[hi:] = 0.0
+    out[lo:hi] *= _lowpass_gain(np.arange(lo, hi) * (fs / nfft), f_pass, f_stop)
+    if lo > 0:                                # below the band: the tabulated 1 - C(-v) ≈ 1
+        out[:lo] *= _lowpass_gain(np.array([0.0]), f_pass, f_stop)[0]
+    return fft.irfft(out, n_out) * (n_out / nfft)
+
+
+# ---------------------------------------------------------------------------- chunk plan
+
+
+@dataclass(frozen=True)
+class ChunkPlan:
+    """How a record is resampled, decided from its speed alone (no signal samples read).
+
+    Attributes
+    ----------
+    n : int
+        Input samples.
+    fs : float
+        Input sample rate, Hz.
+    samples_per_rev : int
+    interpolation : str
+        Resolved interpolation ('linear', 'cubic' or 'bandlimited').
+    bounds : ndarray
+        Chunk limits (input sample indices), ``len = chunks + 1``.
+    bands : tuple
+        Per chunk ``(f_pass, f_stop)`` of the anti-alias filter, Hz, or None (not needed).
+    windows : tuple of (int, int)
+        Per chunk: input samples ``[a, b)`` read — the chunk with the filter's and the
+        interpolation's margins, extended where the record allows to the transform length.
+    lengths : tuple of (int, int)
+        Per chunk: the transform length and the length of the filtered output (its rate is
+        ``fs · out/transform``: a fractional decimation), or (0, 0) without a filter.
+    filter_half : tuple of int
+        Per chunk: samples at either end of a read window left incomplete by the filter.
+    reach : tuple of int
+        Per chunk: input samples the interpolation reaches beyond an output position.
+    """
+
+    n: int
+    fs: float
+    samples_per_rev: int
+    interpolation: str
+    bounds: np.ndarray
+    bands: tuple
+    windows: tuple
+    lengths: tuple
+    filter_half: tuple
+    reach: tuple
+
+    @property
+    def chunks(self) -> int:
+        return len(self.bands)
+
+    @property
+    def decimation(self) -> tuple:
+        """Per chunk: input samples per filtered sample (1 without a filter)."""
+        return tuple(1.0 if m == 0 else t / m for t, m in self.lengths)
+
+    def window(self, k: int) -> tuple[int, int]:
+        """Input samples ``[a, b)`` read to produce the output of chunk ``k``."""
+        return self.windows[k]
+
+    def usable(self) -> tuple[int, int]:
+        """First and last input positions whose filtered, interpolated value is complete."""
+        first = self.filter_half[0] + self.reach[0]
+        last = self.n - 1 - self.filter_half[-1] - self.reach[-1]
+        return first, last
+
+
+def _split_chunks(speed, n: int, chunk: int):
+    """Chunk limits of at most ``chunk`` samples, split until speed varies < 2:1 in each, and
+    the (min, max) speed of each. ``speed(a, b)`` returns the speed (rpm) of samples a..b-1."""
     n_chunks = max(1, int(math.ceil(n / chunk)))
     pending = [int(v) for v in np.round(np.linspace(0, n, n_chunks + 1))]
     out = [pending[0]]
-    for b in pending[1:]:
-        a = out[-1]
-        stack = [b]
+    ranges = []
+    for b0 in pending[1:]:
+        a0 = out[-1]
+        sp = speed(a0, b0)
+        if sp.min() <= 0:
+            raise AnalysisError(f"rpm must be > 0 throughout; found {float(sp.min()):.6g} rpm "
+                                f"between samples {a0} and {b0}")
+        a = a0
+        stack = [b0]
         while stack:
             b = stack[-1]
-            seg = speed[a:b]
+            seg = sp[a - a0:b - a0]
             if seg.max() <= 2.0 * seg.min() or b - a <= 256:
                 out.append(b)
+                ranges.append((float(seg.min()), float(seg.max())))
                 stack.pop()
                 a = b
             else:
                 stack.append((a + b) // 2)
-    return np.asarray(out, dtype=np.int64)
+    return np.asarray(out, dtype=np.int64), ranges
+
+
+def plan_chunks(speed_rpm, *, n: int, fs: float, samples_per_rev: int = 64,
+                interpolation: str = "auto", antialias: bool = True,
+                chunk: int = 1 << 18) -> ChunkPlan:
+    """Decide chunks, anti-alias filters and decimation of a resampling from the speed.
+
+    Parameters
+    ----------
+    speed_rpm : callable or ndarray
+        ``speed_rpm(a, b)`` → speed (rpm) of input samples ``a..b-1``; or the whole speed
+        array.
+    n : int
+        Input samples.
+    fs : float
+        Input sample rate, Hz.
+    samples_per_rev, interpolation, antialias, chunk
+        As in :func:`angle_resample`.
+
+    Returns
+    -------
+    ChunkPlan
+
+    Examples
+    --------
+    >>> plan = plan_chunks(np.linspace(1000.0, 3000.0, 200_000), n=200_000, fs=20_000.0)
+    >>> plan.chunks, [round(q, 2) for q in plan.decimation], plan.interpolation
+    (2, [6.25, 2.67], 'bandlimited')
+    """
+    if callable(speed_rpm):
+        speed = speed_rpm
+    else:
+        arr = np.asarray(speed_rpm, dtype=float)
+        speed = lambda a, b: arr[a:b]          # noqa: E731 - a span reader
+    samples_per_rev = check_int(samples_per_rev, "samples_per_rev", minimum=4,
+                                error=AnalysisError)
+    interpolation = check_option(interpolation, "interpolation", INTERPOLATIONS,
+                                 error=AnalysisError)
+    method = "bandlimited" if interpolation == "auto" else interpolation
+    chunk = check_int(chunk, "chunk", minimum=1024, error=AnalysisError)
+    bounds, ranges = _split_chunks(speed, n, chunk)
+    top = max(r[1] for r in ranges)
+    per_rev = 60.0 * fs / top
+    if per_rev < 2.0:
+        raise AnalysisError(
+            f"rpm up to {top:.6g} at fs = {fs:.6g} Hz leaves {per_rev:.3g} time samples per "
+            "revolution (at least 2 needed): check the speed units (rpm expected) and the "
+            "sample rate")
+    bands, windows, lengths, halves, reach = [], [], [], [], []
+    for k, (lo, hi) in enumerate(ranges):
+        f_pass = samples_per_rev / 4 * hi / 60.0
+        f_stop = 3 * samples_per_rev / 4 * lo / 60.0
+        c0, c1 = int(bounds[k]), int(bounds[k + 1])
+        if not antialias or f_stop >= 0.5 * fs:
+            bands.append(None)
+            lengths.append((0, 0))
+            halves.append(0)
+            step = (_SINC_HALF + 2) if method == "bandlimited" else 4
+            reach.append(step)
+            windows.append((max(0, c0 - step), min(n, c1 + step)))
+            continue
+        if f_stop <= f_pass * 1.05:   # pragma: no cover - the 2:1 split prevents it
+            raise AnalysisError(
+                f"speed varies too much within one chunk ({lo:.6g}..{hi:.6g} rpm) for "
+                f"samples_per_rev={samples_per_rev}; raise samples_per_rev or lower chunk")
+        half = int(math.ceil(_aa_half_length(f_pass, f_stop) * fs)) + 1
+        if 2 * half + 1 > n:
+            raise AnalysisError(
+                f"the anti-alias filter for {lo:.6g}..{hi:.6g} rpm at fs = {fs:.6g} Hz "
+                f"spans {2 * half + 1} samples, more than the {n} samples of the record: "
+                "the speed is far too low for this sample rate (is rpm in rpm, not rad/s "
+                "or Hz?) or the record too short")
+        # the filtered output at (at least) 4 samples per period of the stop edge for the
+        # band-limited kernel (its documented error holds up to a quarter of its rate); at the
+        # input rate for cubic/linear, whose error is documented there
+        ratio = max(1.0, fs / (4.0 * f_stop)) if method == "bandlimited" else 1.0
+        step = int(math.ceil((_SINC_HALF + 2) * ratio)) + 1
+        a = max(0, c0 - half - step)
+        b = min(n, c1 + half + step)
+        size = _good_size(b - a)
+        b = min(n, a + size)                  # read real samples rather than pad, if any
+        out = size if ratio == 1.0 else min(size, _good_size(int(math.ceil(size / ratio))))
+        bands.append((f_pass, f_stop))
+        windows.append((a, b))
+        lengths.append((size, out))
+        halves.append(half)
+        reach.append(step)
+    return ChunkPlan(n=n, fs=float(fs), samples_per_rev=samples_per_rev, interpolation=method,
+                     bounds=bounds, bands=tuple(bands), windows=tuple(windows),
+                     lengths=tuple(lengths), filter_half=tuple(halves), reach=tuple(reach))
+
+
+def angle_range(plan: ChunkPlan, phi_first: float, phi_last: float) -> tuple[int, int]:
+    """Indices ``j0, j1`` of the first and last angle samples ``j · 2π/samples_per_rev`` whose
+    interpolation is complete, given the shaft angle at the first and last usable positions."""
+    dphi = _TWO_PI / plan.samples_per_rev
+    return int(np.ceil(phi_first / dphi)), int(np.floor(phi_last / dphi))
+
+
+def resample_span(plan: ChunkPlan, ks, values: np.ndarray, start: int, phi: np.ndarray,
+                  speed_rpm: np.ndarray, j_first: int, j_last: int, *, last: bool):
+    """Angle samples produced by chunks ``ks`` from one span of input samples.
+
+    Parameters
+    ----------
+    plan : ChunkPlan
+    ks : sequence of int
+        Consecutive chunk indices.
+    values, phi, speed_rpm : ndarray
+        Input samples, shaft angle (rad) and speed (rpm) of input samples ``start …``; they
+        must cover the read windows of ``ks`` (:meth:`ChunkPlan.window`).
+    start : int
+        Input index of ``values[0]``.
+    j_first, j_last : int
+        Angle-sample index range still to produce (the caller carries ``j_first``).
+    last : bool
+        The span holds the final chunk (all remaining angle samples up to ``j_last``).
+
+    Returns
+    -------
+    (values, time, rpm, angle) : tuple of ndarray
+        Resampled values, time of each angle sample (s from the first input sample), speed
+        there (rpm) and the angle (rad).
+    """
+    fs = plan.fs
+    dphi = _TWO_PI / plan.samples_per_rev
+    stop = int(plan.bounds[ks[-1] + 1])
+    top = j_last if last else min(j_last, int(np.floor(phi[-1] / dphi)))
+    grid = np.arange(j_first, top + 1) * dphi
+    from ._kernels import lerp, positions
+
+    u_out = positions(phi, grid, start)
+    if not last:
+        keep = int(np.searchsorted(u_out, stop, side="left"))
+        grid, u_out = grid[:keep], u_out[:keep]
+    out = np.empty(grid.shape[0])
+    for k in ks:
+        c0, c1 = int(plan.bounds[k]), int(plan.bounds[k + 1])
+        lo = int(np.searchsorted(u_out, c0, side="left"))
+        hi = int(np.searchsorted(u_out, c1, side="left")) if c1 < plan.n else grid.shape[0]
+        if hi <= lo:
+            continue
+        a, b = plan.window(k)
+        data = values[a - start:b - start]
+        band = plan.bands[k]
+        scale = 1.0
+        if band is not None:
+            nfft, n_out = plan.lengths[k]
+            data = _fft_lowpass(data, fs, band[0], band[1], nfft, n_out)
+            scale = n_out / nfft
+        out[lo:hi] = _interp(data, (u_out[lo:hi] - a) * scale, plan.interpolation)
+    rpm_out = lerp(speed_rpm, u_out, start)
+    return out, u_out / fs, rpm_out, grid
+
+
+def resample_arrays(values: np.ndarray, fs: float, speed_rpm: np.ndarray, *,
+                    samples_per_rev: int = 64, interpolation: str = "auto",
+                    antialias: bool = True, chunk: int = 1 << 18, angle=None, label="x"):
+    """:func:`angle_resample` on plain arrays: ``(values, time, rpm, angle, plan)``."""
+    n = values.shape[0]
+    speed = speed_rpm
+    plan = plan_chunks(speed, n=n, fs=fs, samples_per_rev=samples_per_rev,
+                       interpolation=interpolation, antialias=antialias, chunk=chunk)
+    phi = shaft_angle(speed, fs) if angle is None else angle
+    first, last = plan.usable()
+    if last <= first:
+        raise AnalysisError(f"{label}: record of {n} samples is shorter than the anti-alias "
+                            f"filter ({2 * max(plan.filter_half) + 1} samples); pass "
+                            "antialias=False or a longer record")
+    j0, j1 = angle_range(plan, phi[first], phi[last])
+    if j1 - j0 < 3:
+        raise AnalysisError(f"{label}: the record covers only "
+                            f"{(phi[-1] - phi[0]) / _TWO_PI:.3g} revolutions; need at least a "
+                            "few angle samples")
+    out, t_out, rpm_out, grid = resample_span(plan, range(plan.chunks), values, 0, phi, speed,
+                                              j0, j1, last=True)
+    return out, t_out, rpm_out, grid, plan
 
 
 # ---------------------------------------------------------------------------- public
@@ -224,8 +602,8 @@ def _chunk_bounds(speed: np.ndarray, chunk: int) -> np.ndarray:
 
 @renamed(rpm="speed_rpm")
 def angle_resample(x, *, fs=None, speed_rpm, samples_per_rev: int = 64,
-                   interpolation: str = "cubic",
-                   antialias: bool = True, chunk: int = 1 << 18):
+                   interpolation: str = "auto", antialias: bool = True, chunk: int = 1 << 18,
+                   shaft_angle=None):
     """Resample a signal at constant increments of shaft angle (computed order tracking).
 
     Parameters
@@ -236,22 +614,28 @@ def angle_resample(x, *, fs=None, speed_rpm, samples_per_rev: int = 64,
         Sample rate, Hz (required for a plain array).
     speed_rpm : float or array_like
         Shaft speed, rpm, one value per sample of ``x`` (a scalar for a steady speed); > 0.
+        A DataArray from :func:`analysis.speedref.speed_reference` may carry the encoder
+        angle as a ``shaft_angle`` coordinate, which is then used (see ``shaft_angle``).
     samples_per_rev : int
         Angle samples per revolution (the angle-domain "sample rate"); orders up to
         ``samples_per_rev/4`` are passed unattenuated by the anti-alias filter.
-    interpolation : {'linear', 'cubic', 'bandlimited'}
-        Interpolation of ``x`` at the constant-angle instants (errors in the module docs).
+    interpolation : {'auto', 'bandlimited', 'cubic', 'linear'}
+        Interpolation at the constant-angle instants (errors in the module docs); 'auto' is
+        the band-limited kernel on the decimated, filtered signal.
     antialias : bool
         Low-pass the signal below the angle-domain Nyquist order of the chunk's lowest speed.
     chunk : int
         Input samples processed at a time (bounds memory).
+    shaft_angle : array_like, optional
+        Shaft angle (rad, increasing) at every sample, e.g. from the encoder edges; default
+        the integral of the speed from the first sample.
 
     Returns
     -------
     xarray.DataArray
-        Dims ``("angle",)``; coordinate ``angle`` (rad, shaft angle from the first sample),
-        with ``time`` (s) and ``rpm`` along it. Attrs: ``units``, ``samples_per_rev``,
-        ``interpolation``, ``antialias``, ``method``.
+        Dims ``("angle",)``; coordinate ``angle`` (rad, shaft angle), with ``time`` (s) and
+        ``rpm`` along it. Attrs: ``units``, ``samples_per_rev``, ``interpolation``,
+        ``antialias``, ``decimation``, ``angle_reference``, ``method``.
 
     References
     ----------
@@ -262,71 +646,45 @@ def angle_resample(x, *, fs=None, speed_rpm, samples_per_rev: int = 64,
     >>> fs = 5000.0
     >>> t = np.arange(20000) / fs
     >>> rpm = 600 + 300 * t                       # run-up 600 -> 1800 rpm
-    >>> phi = shaft_angle(rpm, fs)
+    >>> phi = integrate_angle(rpm, fs, 0.0)
     >>> y = angle_resample(np.cos(3 * phi), fs=fs, speed_rpm=rpm, samples_per_rev=32)
     >>> err = np.abs(y.values - np.cos(3 * y.angle.values)).max()
-    >>> bool(err < 1e-4)
+    >>> bool(err < 1e-5)
     True
     """
     values, fs, units, label = _as_signal(x, fs)
     n = values.shape[0]
+    angle, reference = _angle_input(shaft_angle, speed_rpm, n)
     speed = _as_rpm(speed_rpm, n, fs)
-    samples_per_rev = check_int(samples_per_rev, "samples_per_rev", minimum=4, error=AnalysisError)
-    interpolation = check_option(interpolation, "interpolation", INTERPOLATIONS,
-                                 error=AnalysisError)
-    chunk = check_int(chunk, "chunk", minimum=1024, error=AnalysisError)
-    filtered_any = False
-    phi = shaft_angle(speed, fs)
-    t = np.arange(n) / fs
-    dphi = 2.0 * np.pi / samples_per_rev
-    bounds = _chunk_bounds(speed, chunk)
-    per_rev = 60.0 * fs / float(speed.max())
-    if per_rev < 2.0:
-        raise AnalysisError(
-            f"rpm up to {float(speed.max()):.6g} at fs = {fs:.6g} Hz leaves {per_rev:.3g} time "
-            "samples per revolution (at least 2 needed): check the speed units (rpm expected) "
-            "and the sample rate")
-    taps = [_antialias_taps(samples_per_rev, speed[a:b].min(), speed[a:b].max(), fs, n)
-            if antialias else None for a, b in zip(bounds[:-1], bounds[1:])]
-    half = [0 if h is None else h.shape[0] // 2 for h in taps]
-    margin = _SINC_HALF + 2
-    # the filter needs `half` samples on either side: trim the record ends (no edge transients)
-    u_first, u_last = half[0] + margin, n - 1 - half[-1] - margin
-    if u_last <= u_first:
-        raise AnalysisError(f"{label}: record of {n} samples is shorter than the anti-alias "
-                            f"filter ({2 * max(half) + 1} taps); pass antialias=False or a longer record")
-    j0 = int(np.ceil(phi[u_first] / dphi))
-    j1 = int(np.floor(phi[u_last] / dphi))
-    if j1 - j0 < 3:
-        raise AnalysisError(f"{label}: the record covers only {phi[-1] / (2 * np.pi):.3g} "
-                            "revolutions; need at least a few angle samples")
-    grid = np.arange(j0, j1 + 1) * dphi
-    t_out = np.interp(grid, phi, t)
-    u_out = t_out * fs
-    out = np.empty(grid.shape[0])
-    for (start, stop), h, hl in zip(zip(bounds[:-1], bounds[1:]), taps, half):
-        lo = int(np.searchsorted(u_out, start, side="left"))
-        hi = int(np.searchsorted(u_out, stop, side="left")) if stop < n else grid.shape[0]
-        if hi <= lo:
-            continue
-        a, b = max(0, start - hl - margin), min(n, stop + hl + margin)
-        if h is None:
-            segment, offset = values[a:b], a
-        else:
-            from scipy import signal
-
-            segment, offset = signal.oaconvolve(values[a:b], h, mode="valid"), a + hl
-        out[lo:hi] = _interp(segment, u_out[lo:hi] - offset, interpolation)
-        filtered_any = filtered_any or h is not None
+    out, t_out, rpm_out, grid, plan = resample_arrays(
+        values, fs, speed, samples_per_rev=samples_per_rev, interpolation=interpolation,
+        antialias=antialias, chunk=chunk, angle=angle, label=label)
     import xarray as xr
 
     coords = {"angle": ("angle", grid, {"units": "rad", "long_name": "shaft angle"}),
               "time": ("angle", t_out, {"units": "s"}),
-              "rpm": ("angle", np.interp(t_out, t, speed), {"units": "rpm"})}
+              "rpm": ("angle", rpm_out, {"units": "rpm"})}
     log.debug("angle_resample %s: %d -> %d samples (%d/rev, %s)", label, n, grid.shape[0],
-              samples_per_rev, interpolation)
+              plan.samples_per_rev, plan.interpolation)
+    filtered = any(b is not None for b in plan.bands)
     return xr.DataArray(out, dims=("angle",), coords=coords, name=label,
-                        attrs={"units": units, "samples_per_rev": samples_per_rev,
-                               "interpolation": interpolation,
-                               "antialias": "kaiser FIR 100 dB, linear phase" if filtered_any else "none",
+                        attrs={"units": units, "samples_per_rev": plan.samples_per_rev,
+                               "interpolation": plan.interpolation,
+                               "antialias": ("kaiser low-pass 100 dB, zero phase (FFT)"
+                                             if filtered else "none"),
+                               "decimation": list(plan.decimation),
+                               "angle_reference": reference,
                                "method": "computed order tracking (angle-domain resampling)"})
+
+
+def _angle_input(shaft_angle, speed_rpm, n):
+    """The shaft angle to resample on and what its zero is: an explicit array, the
+    ``shaft_angle`` coordinate of a speed DataArray, or None (integrated speed)."""
+    if shaft_angle is None and hasattr(speed_rpm, "coords") and "shaft_angle" in speed_rpm.coords:
+        coord = speed_rpm.coords["shaft_angle"]
+        return (_as_angle(coord.values, n),
+                str(coord.attrs.get("reference", "encoder angle from the pulse edges")))
+    if shaft_angle is not None:
+        attrs = getattr(shaft_angle, "attrs", {}) or {}
+        return _as_angle(shaft_angle, n), str(attrs.get("reference", "given shaft angle"))
+    return None, "shaft angle 0 at the first sample (speed-reference integration)"

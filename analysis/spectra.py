@@ -253,7 +253,7 @@ def _time_highpass(values, fs, highpass_hz):
 
 
 def integrate(x, *, fs=None, times: int = 1, highpass_hz: float = 2.0, method: str = "fft",
-              taper: float = 0.0):
+              taper: float = 0.0, trend: str = "auto"):
     """Integrate a signal once or twice (acceleration → velocity → displacement) without drift.
 
     Parameters
@@ -273,11 +273,17 @@ def integrate(x, *, fs=None, times: int = 1, highpass_hz: float = 2.0, method: s
     taper : float
         fft method: cosine taper length at each end, s (limits end leakage of records not
         holding whole periods).
+    trend : {'auto', 'keep', 'remove', 'none'}
+        fft method: a ramp (an IAS channel's changing mean speed) is taken out as a quadratic
+        before the transform, which would wrap it into end spikes, and integrated exactly;
+        'auto' does so when the channel ramps (module docs) and then drops its integral when
+        ``highpass_hz`` asks for drift removal (keeps it otherwise); 'keep'/'remove' decide
+        explicitly; 'none' transforms the samples as they are.
 
     Returns
     -------
     xarray.DataArray
-        Over ``time`` with units and the parameters in attrs.
+        Over ``time`` with units and the parameters in attrs (``trend``: what was done).
 
     Examples
     --------
@@ -290,11 +296,11 @@ def integrate(x, *, fs=None, times: int = 1, highpass_hz: float = 2.0, method: s
     (True, 'fft integral x1')
     """
     return _calculus(x, fs, check_int(times, "times", minimum=1, error=AnalysisError),
-                     -1, highpass_hz, method, taper)
+                     -1, highpass_hz, method, taper, trend)
 
 
 def differentiate(x, *, fs=None, times: int = 1, method: str = "fft", highpass_hz=None,
-                  taper: float = 0.0):
+                  taper: float = 0.0, trend: str = "auto"):
     """Differentiate a signal (displacement → velocity → acceleration).
 
     Parameters
@@ -312,10 +318,17 @@ def differentiate(x, *, fs=None, times: int = 1, method: str = "fft", highpass_h
         Remove components below this frequency as well.
     taper : float
         fft method: end taper, s.
+    trend : {'auto', 'keep', 'remove', 'none'}
+        fft method: a ramp (an encoder angle's rotation, a changing mean) is taken out as a
+        quadratic before the transform (the rest is transformed as an even extension) and
+        differentiated exactly, then added back ('auto' and
+        'keep'; 'remove' drops it); a wrapped angle channel (quantity 'angle', jumps of 2π) is
+        unwrapped first. 'none': the samples as they are.
 
     Returns
     -------
     xarray.DataArray
+        The derivative; for an encoder angle (rad) the shaft speed (rad/s) including its mean.
 
     Examples
     --------
@@ -326,12 +339,13 @@ def differentiate(x, *, fs=None, times: int = 1, method: str = "fft", highpass_h
     1.0
     """
     return _calculus(x, fs, check_int(times, "times", minimum=1, error=AnalysisError),
-                     +1, highpass_hz, method, taper)
+                     +1, highpass_hz, method, taper, trend)
 
 
-def _calculus(x, fs, times, sign, highpass_hz, method, taper):
+def _calculus(x, fs, times, sign, highpass_hz, method, taper, trend="auto"):
     values, fs, units, label = _as_signal(x, fs)
     method = check_option(method, "method", ("fft", "time"), error=AnalysisError)
+    trend = check_option(trend, "trend", ("auto", "keep", "remove", "none"), error=AnalysisError)
     if highpass_hz is not None:
         highpass_hz = check_positive(highpass_hz, "highpass_hz", error=AnalysisError)
         if highpass_hz >= 0.5 * fs:
@@ -342,8 +356,26 @@ def _calculus(x, fs, times, sign, highpass_hz, method, taper):
         table = _INTEGRAL_UNITS if sign < 0 else _DERIVATIVE_UNITS
         out_units = table.get(out_units, (f"{out_units}*s" if sign < 0 else f"{out_units}/s")
                               if out_units else "")
+    done = "none"
+    if trend != "none" and _wrapped_angle(values, getattr(x, "attrs", {}) or {}, units):
+        values = np.unwrap(values)
+        done = "unwrapped"
     if method == "fft":
-        result = _fft_operator(values, fs, sign * times, highpass_hz, taper)
+        poly, ramp = _ramp(values, fs)
+        if trend in ("keep", "remove") or (trend == "auto" and ramp):
+            keep = trend == "keep" or (trend == "auto" and (sign > 0 or highpass_hz is None))
+            t = np.arange(values.shape[0]) / fs
+            # the rest, mirrored (an even extension has no jump at the ends to wrap)
+            rest = values - poly(t)
+            result = _fft_operator(np.concatenate([rest, rest[::-1]]), fs, sign * times,
+                                   highpass_hz, taper)[:values.shape[0]]
+            op = poly.deriv(times) if sign > 0 else poly.integ(times)
+            if keep:
+                result = result + op(t)
+            done = (done + ", " if done != "none" else "") + (
+                f"quadratic trend {'transformed exactly and kept' if keep else 'removed'}")
+        else:
+            result = _fft_operator(values, fs, sign * times, highpass_hz, taper)
     else:
         result = values.copy()
         for _ in range(times):
@@ -361,4 +393,33 @@ def _calculus(x, fs, times, sign, highpass_hz, method, taper):
     what = "integral" if sign < 0 else "derivative"
     return _wrap(result, x, fs, out_units, f"{label} {what}",
                  {"method": f"{method} {what} x{times}", "highpass_hz":
-                  float("nan") if highpass_hz is None else highpass_hz, "taper_s": taper})
+                  float("nan") if highpass_hz is None else highpass_hz, "taper_s": taper,
+                  "trend": done})
+
+
+def _ramp(values, fs):
+    """Least-squares quadratic of the samples (a numpy Polynomial in time, s) and whether it is
+    a ramp the FFT would wrap: the jump between the record's ends exceeds ten times the spread
+    of what the quadratic leaves, or the quadratic explains 90 % of the variance."""
+    from numpy.polynomial import Polynomial
+
+    n = values.shape[0]
+    t = np.arange(n) / fs
+    poly = Polynomial.fit(t, values, 2).convert()
+    resid = values - poly(t)
+    spread = float(np.std(resid))
+    total = float(np.var(values))
+    jump = abs(float(values[-1] - values[0]))
+    ramp = (jump > 10.0 * spread and jump > 1e-12 * max(abs(values).max(), 1e-300)) or \
+        (total > 0 and 1.0 - spread ** 2 / total >= 0.9)
+    return poly, bool(ramp)
+
+
+def _wrapped_angle(values, attrs, units) -> bool:
+    """An angle channel wrapped into one turn (jumps of about 2π between samples)."""
+    if attrs.get("quantity") != "angle" and units != "rad":
+        return False
+    if values.shape[0] < 4 or np.ptp(values) > 2.0 * np.pi * 1.01:
+        return False
+    jumps = np.abs(np.diff(values)) > np.pi
+    return bool(jumps.sum() >= 2)

@@ -18,7 +18,13 @@ speed and the time axis). The functions here take a Record opened lazily by
   of ``revolutions`` that need them are complete (the overlap in the angle domain is one block);
 * VKF: overlapping segments with ``vkf_overlap`` / B_min seconds (default 8 decay lengths of
   the filter) on either side; only each segment's interior is kept, and the envelope phase is
-  referred to the shaft angle from the record start.
+  referred to the shaft angle from the record start;
+* a pulse train (the speed source, or any wheel with a gap or mark in the record) gives the
+  shaft angle per span as :func:`analysis.speedref.speed_reference` gives it in memory: the
+  edges' mean rotation (:func:`analysis.trend.mean_rotation`, each span read with its reach as
+  margin), phases referred to TDC of cylinder 1; a ``speed_rpm`` from ``speed_reference``
+  brings its ``shaft_angle`` coordinate along (``tests/analysis/test_stream.py``: streamed COT
+  equals in-memory to 1e-9 on a vibrating 60-2 wheel).
 
 Error: COT streamed equals the in-memory result to rounding (bit-identical in
 ``tests/analysis/test_stream.py``: 800 000 samples, 4 resampling chunks, 30 s segments, read
@@ -97,6 +103,9 @@ class SpanSpeed:
             self._rpm = np.asarray(speed_rpm,
                                    float) if not np.isscalar(speed_rpm) else float(speed_rpm)
         self._t_in, self._omega = t_in, omega
+        self.angle = None            # optional angle(a, b) -> shaft angle (rad) of the span
+        self.angle_reference = ("shaft angle 0 at the first sample of the record "
+                                "(speed-reference integration)")
 
     def __call__(self, a: int, b: int) -> np.ndarray:
         if self._rpm is not None:
@@ -113,7 +122,8 @@ class SpanSpeed:
 
 
 def _speed_for(record, channel, var, *, speed_rpm, speed_channel) -> SpanSpeed:
-    from .speedref import _is_pulses, _pulse_speed, _times, find_speed_channel
+    from .speedref import _is_pulses, _pulse_reference_channel, _pulse_speed, _times
+    from .speedref import find_speed_channel
 
     n, fs = var.shape[0], float(var.attrs["sample_rate"])
     t0 = _first_time(record, var)
@@ -121,7 +131,15 @@ def _speed_for(record, channel, var, *, speed_rpm, speed_channel) -> SpanSpeed:
         if not np.isscalar(speed_rpm) and np.shape(speed_rpm)[0] != n:
             raise AnalysisError(f"speed_rpm has {np.shape(speed_rpm)[0]} samples but channel {channel!r} has "
                                 f"{n}; give one speed per sample, a constant, or speed_channel")
-        return SpanSpeed(n, fs, t0, speed_rpm=speed_rpm)
+        speed = SpanSpeed(n, fs, t0, speed_rpm=speed_rpm.data if hasattr(speed_rpm, "coords")
+                          else speed_rpm)
+        coords = getattr(speed_rpm, "coords", {})
+        if "shaft_angle" in coords:              # speed_reference's angle, as in memory
+            angle = speed_rpm["shaft_angle"].data
+            speed.angle = lambda a, b: np.asarray(angle[a:b], float)
+            speed.angle_reference = str(speed_rpm["shaft_angle"].attrs.get(
+                "reference", speed_rpm.attrs.get("angle_reference", "")))
+        return speed
     name = speed_channel or find_speed_channel(record, channel)
     if name not in record.data_vars:
         raise RecordError(f"record has no speed channel {name!r}")
@@ -144,7 +162,44 @@ def _speed_for(record, channel, var, *, speed_rpm, speed_channel) -> SpanSpeed:
     t_in, omega = np.asarray(t_in)[good], np.asarray(omega)[good]
     if t_in.shape[0] == 0:
         raise AnalysisError(f"speed source {name!r} holds no usable speed values")
-    return SpanSpeed(n, fs, t0, t_in=t_in, omega=omega)
+    speed = SpanSpeed(n, fs, t0, t_in=t_in, omega=omega)
+    pulse = name if _is_pulses(sv) else _pulse_reference_channel(record, exclude=name)
+    if pulse is not None and omega.min() > 0:
+        _attach_pulse_angle(speed, record[pulse], pulse)
+    return speed
+
+
+def _attach_pulse_angle(speed: SpanSpeed, pv, name: str) -> None:
+    """The shaft angle per span from a pulse train's edges, as
+    :func:`analysis.speedref.speed_reference` gives it for the whole channel (the edges' mean
+    rotation, :func:`analysis.trend.mean_rotation`, each span read with its reach as margin),
+    and the phase reference (TDC where the wheel has a gap or mark)."""
+    from crankbench.predict.errors import AnalysisError as _AE
+
+    from .speedref import _pulse_angle_function
+    from .trend import MEAN_ROTATION_REACH_REVOLUTIONS, mean_rotation
+
+    edges = np.asarray(pv.values, float)
+    n, fs, t0 = speed.n, speed.fs, speed.t0
+    if edges.size <= 8 or edges[0] > t0 + (n - 1) / fs or edges[-1] < t0:
+        return
+    try:
+        at, reference = _pulse_angle_function(pv, name)
+    except _AE as exc:                         # an undecodable wheel: integrate instead
+        log.warning("pulse train %r gives no angle (%s); phases from the integrated speed",
+                    name, exc)
+        return
+    ends = (float(at(np.array([t0]))[0]), float(at(np.array([t0 + (n - 1) / fs]))[0]))
+    low = float(speed._omega.min()) * 60.0 / _TWO_PI
+    margin = int(np.ceil(1.2 * MEAN_ROTATION_REACH_REVOLUTIONS * 60.0 / low * fs)) + 2
+
+    def angle(a, b):
+        ra, rb = max(0, a - margin), min(n, b + margin)
+        t = t0 + np.arange(ra, rb) / fs
+        return mean_rotation(at(t), speed(ra, rb), fs, ends=ends)[a - ra:b - ra]
+
+    speed.angle = angle
+    speed.angle_reference = reference
 
 
 def _first_time(record, var) -> float:
@@ -186,147 +241,113 @@ def _channel(record, channel):
 # ---------------------------------------------------------------------------- COT stream
 
 
-def _chunk_plan(speed: SpanSpeed, chunk: int):
-    """Chunk bounds of ``resample._chunk_bounds`` computed span by span, and the rpm range
-    (cached on ``speed``: one pass over the speed per chunk size)."""
+def _chunk_plan(speed: SpanSpeed, chunk: int, samples_per_rev: int = 64,
+                interpolation: str = "auto"):
+    """The resampling plan of :func:`analysis.resample.plan_chunks`, computed span by span
+    (cached on ``speed``: one pass over the speed per setting)."""
+    from .resample import plan_chunks
+
     cache = speed.__dict__.setdefault("_plans", {})
+    key = (chunk, samples_per_rev, interpolation)
+    if key not in cache:
+        cache[key] = plan_chunks(speed, n=speed.n, fs=speed.fs, samples_per_rev=samples_per_rev,
+                                 interpolation=interpolation, chunk=chunk)
+    return cache[key]
+
+
+def _speed_top(speed: SpanSpeed, chunk: int) -> float:
+    """Highest speed of the record (rpm), one pass over the speed (cached)."""
+    cache = speed.__dict__.setdefault("_top", {})
     if chunk not in cache:
-        cache[chunk] = _plan(speed, chunk)
+        cache[chunk] = max(float(speed(a, min(speed.n, a + chunk)).max())
+                           for a in range(0, speed.n, chunk))
     return cache[chunk]
 
 
-def _plan(speed: SpanSpeed, chunk: int):
-    n = speed.n
-    n_chunks = max(1, int(math.ceil(n / chunk)))
-    pending = [int(v) for v in np.round(np.linspace(0, n, n_chunks + 1))]
-    out = [pending[0]]
-    lo, hi = np.inf, -np.inf
-    ranges = []
-    for b0 in pending[1:]:
-        a0 = out[-1]
-        sp = speed(a0, b0)
-        lo, hi = min(lo, float(sp.min())), max(hi, float(sp.max()))
-        if sp.min() <= 0:
-            raise AnalysisError(f"rpm must be > 0 throughout; found {float(sp.min()):.6g} rpm "
-                                f"between samples {a0} and {b0}")
-        a = a0
-        stack = [b0]
-        while stack:
-            b = stack[-1]
-            seg = sp[a - a0:b - a0]
-            if seg.max() <= 2.0 * seg.min() or b - a <= 256:
-                out.append(b)
-                ranges.append((float(seg.min()), float(seg.max())))
-                stack.pop()
-                a = b
-            else:
-                stack.append((a + b) // 2)
-    return np.asarray(out, np.int64), ranges, lo, hi
+class _AngleCarry:
+    """The shaft angle of consecutive spans: integrated speed carried across spans (the same
+    sequential sum as :func:`analysis.resample.shaft_angle` of the whole record), or the
+    encoder angle evaluated per span."""
+
+    def __init__(self, speed: SpanSpeed):
+        self.speed = speed
+        self.pos, self.phi = 0, 0.0          # the angle at sample `pos`
+
+    def __call__(self, a: int, b: int) -> np.ndarray:
+        """Angle (rad) of samples a..b-1, a >= the previous call's a."""
+        from .resample import integrate_angle
+
+        if self.speed.angle is not None:
+            return self.speed.angle(a, b)
+        if a < self.pos:
+            raise AnalysisError(f"internal: angle asked from sample {a}, already past {self.pos}")
+        phi = integrate_angle(self.speed(self.pos, b), self.speed.fs, self.phi)[a - self.pos:]
+        return phi
+
+    def advance(self, to: int, phi_span: np.ndarray, span_start: int) -> None:
+        """Carry the angle to sample ``to`` (inside the span just computed)."""
+        if self.speed.angle is None:
+            self.phi, self.pos = float(phi_span[to - span_start]), to
 
 
 def _angle_samples(read, speed: SpanSpeed, *, samples_per_rev, interpolation, chunk,
                    segment, label):
-    """Yield ``(values, t_rel, rpm, angle)`` arrays of consecutive angle samples, exactly as
-    :func:`analysis.resample.angle_resample` computes them, one group of chunks at a time."""
-    from scipy import signal
+    """Yield ``(values, t_rel, rpm, angle)`` arrays of consecutive angle samples, computed by
+    :func:`analysis.resample.resample_span` (the in-memory engine) one group of chunks at a
+    time."""
+    from .resample import angle_range, resample_span
 
-    from .resample import _SINC_HALF, _antialias_taps, _interp
-
-    n, fs = speed.n, speed.fs
-    bounds, ranges, _, rmax = _chunk_plan(speed, chunk)
-    per_rev = 60.0 * fs / rmax
-    if per_rev < 2.0:
-        raise AnalysisError(f"rpm up to {rmax:.6g} at fs = {fs:.6g} Hz leaves {per_rev:.3g} time "
-                            "samples per revolution (at least 2 needed)")
-    taps = [_antialias_taps(samples_per_rev, r0, r1, fs, n) for r0, r1 in ranges]
-    half = [0 if h is None else h.shape[0] // 2 for h in taps]
-    margin = _SINC_HALF + 2
-    u_first, u_last = half[0] + margin, n - 1 - half[-1] - margin
-    if u_last <= u_first:
+    n = speed.n
+    plan = _chunk_plan(speed, chunk, samples_per_rev, interpolation)
+    first, last_u = plan.usable()
+    if last_u <= first:
         raise AnalysisError(f"{label}: record of {n} samples is shorter than the anti-alias "
-                            f"filter ({2 * max(half) + 1} taps)")
-    dphi = _TWO_PI / samples_per_rev
-    # first pass: shaft angle at u_first and u_last (sequential sum, as shaft_angle does)
-    phi_carry = 0.0          # phi at sample `pos`
-    pos = 0
-    phi_at = {}
-    targets = sorted({u_first, u_last})
+                            f"filter ({2 * max(plan.filter_half) + 1} samples)")
+    # first pass: the shaft angle at the first and last usable samples
+    carry = _AngleCarry(speed)
     step = max(chunk, 1 << 16)
-    while pos < n - 1 and len(phi_at) < len(targets):
+    phi_at = {}
+    pos = 0
+    while len(phi_at) < 2 and pos < n:
         b = min(n, pos + step + 1)
-        omega = speed(pos, b) * (_TWO_PI / 60.0)
-        inc = 0.5 * (omega[1:] + omega[:-1]) / fs
-        phi = np.cumsum(np.concatenate(([phi_carry], inc)))
-        for u in targets:
+        phi = carry(pos, b)
+        for u in (first, last_u):
             if pos <= u < b:
                 phi_at[u] = float(phi[u - pos])
-        phi_carry, pos = float(phi[-1]), b - 1
-    j0 = int(np.ceil(phi_at[u_first] / dphi))
-    j1 = int(np.floor(phi_at[u_last] / dphi))
+        carry.advance(b - 1, phi, pos)
+        pos = b - 1
+        if b == n:
+            break
+    j0, j1 = angle_range(plan, phi_at[first], phi_at[last_u])
     if j1 - j0 < 3:
         raise AnalysisError(f"{label}: the record covers too few revolutions")
-    # second pass: chunk groups
+    # second pass: groups of chunks of about `segment` samples
     groups, cur, size = [], [], 0
-    for k in range(len(taps)):
+    for k in range(plan.chunks):
         cur.append(k)
-        size += int(bounds[k + 1] - bounds[k])
+        size += int(plan.bounds[k + 1] - plan.bounds[k])
         if size >= segment:
             groups.append(cur)
             cur, size = [], 0
     if cur:
         groups.append(cur)
-    windows = []
-    for g in groups:
-        s0, s1 = int(bounds[g[0]]), int(bounds[g[-1] + 1])
-        hmax = max(half[k] for k in g)
-        windows.append((max(0, s0 - hmax - margin), min(n, s1 + hmax + margin)))
-    phi_carry, pos = 0.0, 0     # phi at sample pos (pos advances with the groups)
+    windows = [(plan.window(g[0])[0], plan.window(g[-1])[1]) for g in groups]
+    carry = _AngleCarry(speed)
     next_j = j0
     for gi, g in enumerate(groups):
-        s1 = int(bounds[g[-1] + 1])
         ra, rb = windows[gi]
-        values = read(ra, rb)
-        # shaft angle over [pos .. rb) (pos <= ra): continue the sequential sum
-        omega = speed(pos, rb) * (_TWO_PI / 60.0)
-        inc = 0.5 * (omega[1:] + omega[:-1]) / fs
-        phi = np.cumsum(np.concatenate(([phi_carry], inc)))[ra - pos:]
-        sp = omega[ra - pos:] * (60.0 / _TWO_PI)
-        t = np.arange(ra, rb) / fs
-        # angle samples whose time falls in [s0, s1) (the last group takes all up to j1)
-        last = g[-1] == len(taps) - 1
-        top = j1 if last else min(j1, int(np.floor(phi[-1] / dphi)))
-        js = np.arange(next_j, top + 1)
-        grid = js * dphi
-        t_out = np.interp(grid, phi, t)
-        u_out = t_out * fs
+        last = g[-1] == plan.chunks - 1
+        phi = carry(ra, rb)
+        out, t_out, rpm_out, grid = resample_span(plan, g, read(ra, rb), ra, phi,
+                                                  speed(ra, rb), next_j, j1, last=last)
+        if grid.shape[0]:
+            next_j = int(round(grid[-1] / (_TWO_PI / samples_per_rev))) + 1
         if not last:
-            keep = int(np.searchsorted(u_out, s1, side="left"))
-            js, grid, t_out, u_out = js[:keep], grid[:keep], t_out[:keep], u_out[:keep]
-        out = np.empty(grid.shape[0])
-        for k in g:
-            start, stop = int(bounds[k]), int(bounds[k + 1])
-            lo = int(np.searchsorted(u_out, start, side="left"))
-            hi = (int(np.searchsorted(u_out, stop, side="left")) if stop < n
-                  else grid.shape[0])
-            if hi <= lo:
-                continue
-            a, b = max(0, start - half[k] - margin), min(n, stop + half[k] + margin)
-            if taps[k] is None:
-                seg, offset = values[a - ra:b - ra], a
-            else:
-                seg = signal.oaconvolve(values[a - ra:b - ra], taps[k], mode="valid")
-                offset = a + half[k]
-            out[lo:hi] = _interp(seg, u_out[lo:hi] - offset, interpolation)
-        rpm_out = np.interp(t_out, t, sp)
-        if js.shape[0]:
-            next_j = int(js[-1]) + 1
-        # carry the shaft angle to the start of the next group's read window
-        if not last:
-            nxt_ra = windows[gi + 1][0]
-            if not ra <= nxt_ra < rb:
+            nxt = windows[gi + 1][0]
+            if not ra <= nxt < rb:
                 raise AnalysisError(f"{label}: internal: segment windows do not overlap "
-                                    f"({ra}..{rb} then {nxt_ra}); raise segment_seconds")
-            phi_carry, pos = float(phi[nxt_ra - ra]), nxt_ra
+                                    f"({ra}..{rb} then {nxt}); raise segment_seconds")
+            carry.advance(nxt, phi, ra)
         yield out, t_out, rpm_out, grid
 
 
@@ -356,13 +377,56 @@ class _Framer:
         return out
 
 
-def _cot_blocks(record, channel, *, orders, speed_rpm, speed_channel, samples_per_rev, revolutions,
-                overlap, window, interpolation, segment_seconds, chunk, per_frames):
-    """Run the streamed angle resampling and call ``per_frames(frames, phi0, t, r)``."""
-    from .orders import get_window
-
+def _prepare(record, channel, *, speed_rpm, speed_channel, chunk, trend, segment_seconds,
+             orders=None):
+    """Channel, speed, detrending reader and segment length of a streamed analysis."""
     var = _channel(record, channel)
     label = str(channel)
+    segment_seconds = check_positive(segment_seconds, "segment_seconds", error=AnalysisError)
+    chunk = check_int(chunk, "chunk", minimum=1024, error=AnalysisError)
+    speed = _speed_for(record, channel, var, speed_rpm=speed_rpm, speed_channel=speed_channel)
+    if orders is not None:          # before any work: the top order below the Nyquist frequency
+        top = float(np.max(orders)) * _speed_top(speed, chunk) / 60.0
+        if top >= 0.5 * speed.fs:
+            raise AnalysisError(f"order {np.max(orders):g} reaches {top:.6g} Hz, above the "
+                                f"Nyquist frequency {0.5 * speed.fs:.6g} Hz of {label}")
+    segment = max(chunk, int(round(segment_seconds * speed.fs)))
+    reader = _detrending_reader(var, speed, chunk, trend, segment)
+    return var, label, speed, segment, reader
+
+
+def _detrending_reader(var, speed, chunk, trend, segment):
+    """The channel reader with its trend removed (:class:`analysis.trend.SpanTrend`)."""
+    from .trend import SpanTrend
+
+    raw = _reader(var)
+    n = speed.n
+    # shaft angle at the record's ends and the lowest speed: one pass over the speed
+    carry = _AngleCarry(speed)
+    low = np.inf
+    first = last = None
+    step = max(chunk, 1 << 16)
+    pos = 0
+    while True:
+        b = min(n, pos + step + 1)
+        phi = carry(pos, b)
+        low = min(low, float(speed(pos, b).min()))
+        if first is None:
+            first = float(phi[0])
+        if b == n:
+            last = float(phi[-1])
+            break
+        carry.advance(b - 1, phi, pos)
+        pos = b - 1
+    span = SpanTrend(raw, speed, lambda: _AngleCarry(speed), n=n, fs=speed.fs,
+                     ends=(first, last), low_rpm=low, kind=trend)
+    span.fit(segment)
+    return span
+
+
+def _blocks(speed, reader, *, label, samples_per_rev, revolutions, overlap, interpolation,
+            chunk, segment, per_frames):
+    """Run the streamed angle resampling and call ``per_frames(frames, phi0, t, r, span)``."""
     samples_per_rev = check_int(samples_per_rev, "samples_per_rev", minimum=4,
                                 error=AnalysisError)
     revolutions = check_int(revolutions, "revolutions", minimum=1, error=AnalysisError)
@@ -371,49 +435,45 @@ def _cot_blocks(record, channel, *, orders, speed_rpm, speed_channel, samples_pe
     from .resample import INTERPOLATIONS
 
     check_option(interpolation, "interpolation", INTERPOLATIONS, error=AnalysisError)
-    segment_seconds = check_positive(segment_seconds, "segment_seconds", error=AnalysisError)
-    chunk = check_int(chunk, "chunk", minimum=1024, error=AnalysisError)
-    speed = _speed_for(record, channel, var, speed_rpm=speed_rpm, speed_channel=speed_channel)
-    if orders is not None:          # before any work: the top order below the Nyquist frequency
-        top = float(np.max(orders)) * _chunk_plan(speed, chunk)[3] / 60.0
-        if top >= 0.5 * speed.fs:
-            raise AnalysisError(f"order {np.max(orders):g} reaches {top:.6g} Hz, above the "
-                                f"Nyquist frequency {0.5 * speed.fs:.6g} Hz of {label}")
-    segment = max(chunk, int(round(segment_seconds * speed.fs)))
     length = samples_per_rev * revolutions
     hop = max(1, int(round(length * (1.0 - overlap))))
-    w = get_window(window, length)
     framer = _Framer(length, hop)
     n_blocks = 0
-    for arrays in _angle_samples(_reader(var), speed, samples_per_rev=samples_per_rev,
+    for arrays in _angle_samples(reader, speed, samples_per_rev=samples_per_rev,
                                  interpolation=interpolation, chunk=chunk, segment=segment,
                                  label=label):
         got = framer.push(arrays)
         if got is None:
             continue
         _, local, (y, t, r, ang) = got
-        centre = local + length / 2.0 - 0.5
         idx = np.arange(y.shape[0])
-        tc = np.interp(centre, idx, t) + speed.t0
-        rc = np.interp(centre, idx, r)
+        tc = np.interp(local + length / 2.0 - 0.5, idx, t) + speed.t0
+        rc = np.interp(local + length / 2.0 - 0.5, idx, r)
+        dur = np.interp(local + length - 1.0, idx, t) - t[local]
         for i in range(0, local.shape[0], 256):
             sl = local[i:i + 256]
             frames = y[sl[:, None] + np.arange(length)[None, :]]
-            per_frames(frames, ang[sl], tc[i:i + 256], rc[i:i + 256])
+            per_frames(frames, ang[sl], tc[i:i + 256], rc[i:i + 256], dur[i:i + 256])
         n_blocks += local.shape[0]
     if n_blocks == 0:
         raise AnalysisError(f"{label}: the record covers fewer revolutions than one block of "
                             f"revolutions={revolutions}; lower revolutions")
-    return var, speed, w, length
+
+
+def _coarse_speed(speed: SpanSpeed, points: int = 20000) -> np.ndarray:
+    """The speed at about ``points`` samples spread over the record (sweep-rate estimate)."""
+    step = max(1, speed.n // points)
+    return np.concatenate([speed(a, min(speed.n, a + 1)) for a in range(0, speed.n, step)]), \
+        speed.fs / step
 
 
 @renamed(rpm="speed_rpm")
 def order_track_stream(record, channel: str, *, orders, speed_rpm=None, speed_channel=None,
                        segment_seconds: float = 20.0, amplitude: str = "peak",
-                       method: str = "cot", samples_per_rev: int = 64, revolutions: int = 16,
-                       overlap: float = 0.5, window="hann", interpolation: str = "cubic",
+                       method: str = "auto", samples_per_rev=None, revolutions=None,
+                       overlap: float = 0.5, window="hann", interpolation: str = "auto",
                        chunk: int = 1 << 18, bandwidth_hz=None, bandwidth_orders=None,
-                       filter_order: int = 2, vkf_overlap: float = 8.0):
+                       filter_order: int = 2, vkf_overlap: float = 8.0, trend: str = "auto"):
     """:func:`analysis.order_track` of a (lazy) Record channel, segment by segment.
 
     Parameters
@@ -423,7 +483,7 @@ def order_track_stream(record, channel: str, *, orders, speed_rpm=None, speed_ch
     channel : str
         Channel to analyse (needs ``sample_rate``).
     orders : sequence of float
-        Orders to track.
+        Orders to track, each once.
     speed_rpm : float or array_like, optional
         Speed per sample (rpm) or a constant; default: from ``speed_channel`` (a
         ``rotational_speed`` channel on its own clock, or a pulse train), found in the record
@@ -432,9 +492,13 @@ def order_track_stream(record, channel: str, *, orders, speed_rpm=None, speed_ch
         Name of the speed source.
     segment_seconds : float
         Length of record read at a time, s (memory ≈ a few × ``segment_seconds · fs`` × 8 B).
-    amplitude, method, samples_per_rev, revolutions, overlap, window, interpolation, chunk
+    amplitude, samples_per_rev, revolutions, overlap, window, interpolation, chunk, trend
         As in :func:`analysis.order_track` / :func:`analysis.resample.angle_resample`
         (``chunk`` must equal the in-memory one for identical results; default the same).
+    method : {'auto', 'cot', 'vkf'}
+        'auto' is COT with the block length chosen from the sweep rate and the order spacing
+        (:func:`analysis.orders.cot_settings`): the adaptive Vold–Kalman default of the
+        in-memory tracker needs the whole record.
     bandwidth_hz, bandwidth_orders, filter_order
         VKF parameters (:func:`analysis.vkf.vold_kalman`).
     vkf_overlap : float
@@ -456,69 +520,59 @@ def order_track_stream(record, channel: str, *, orders, speed_rpm=None, speed_ch
     >>> fs = 2000.0
     >>> t = np.arange(int(6 * fs)) / fs
     >>> rpm = 1200.0 + 60.0 * t
-    >>> rec = make_record({"acc": dict(data=0.5 * np.cos(2 * shaft_angle(rpm, fs)),
+    >>> rec = make_record({"acc": dict(data=0.5 * np.cos(2 * shaft_angle(rpm, fs)) + 3.0,
     ...                                sample_rate=fs, units="m/s^2")})
     >>> res = order_track_stream(rec.chunk({"time": 3000}), "acc", orders=[2], speed_rpm=rpm,
     ...                          revolutions=8, segment_seconds=1.0, chunk=2048)
-    >>> round(float(res.amplitude.mean()), 4)
-    0.5
+    >>> round(float(res.amplitude.mean()), 4), round(float(res["mean"].mean()), 4)
+    (0.5, 3.0)
     """
-    from .orders import _METHODS, _check_orders, _track_dataset, amplitude_factor
+    from .orders import (_METHODS, BlockFit, _check_orders, _cot_dataset, amplitude_factor,
+                         cot_settings)
 
     method = check_option(method, "method", _METHODS, error=AnalysisError)
     factor = amplitude_factor(amplitude)
     orders = _check_orders(orders)
-    if method == "vkf":
-        return _vkf_stream(record, channel, orders=orders, speed_rpm=speed_rpm,
-                           speed_channel=speed_channel,
-                           segment_seconds=segment_seconds, amplitude=amplitude,
-                           bandwidth_hz=bandwidth_hz, bandwidth_orders=bandwidth_orders,
-                           filter_order=filter_order, vkf_overlap=vkf_overlap)
-    spr = check_int(samples_per_rev, "samples_per_rev", minimum=4, error=AnalysisError)
+    var, label, speed, segment, reader = _prepare(
+        record, channel, speed_rpm=speed_rpm, speed_channel=speed_channel, chunk=chunk,
+        trend=trend, segment_seconds=segment_seconds, orders=orders)
+    if method == "vkf" or (method == "auto" and (bandwidth_hz is not None
+                                                 or bandwidth_orders is not None)):
+        return _vkf_stream(var, label, speed, reader, orders=orders, segment=segment,
+                           amplitude=amplitude, bandwidth_hz=bandwidth_hz,
+                           bandwidth_orders=bandwidth_orders, filter_order=filter_order,
+                           vkf_overlap=vkf_overlap, trend_info=reader.info)
+    coarse, coarse_fs = _coarse_speed(speed)
+    revolutions, spr = cot_settings(coarse, coarse_fs, orders, revolutions=revolutions,
+                                    samples_per_rev=samples_per_rev)
     if orders.max() > spr / 4 + 1e-12:
         raise AnalysisError(f"order {orders.max():g} exceeds samples_per_rev/4 = {spr / 4:g} "
                             f"(the anti-alias pass band); use samples_per_rev >= "
                             f"{int(np.ceil(4 * orders.max()))}")
-    from scipy import fft
+    fitter = BlockFit(orders, spr, revolutions, window)
+    fitter.check_spacing()
+    parts = {"coef": [], "mean": [], "floor": [], "t": [], "r": [], "span": []}
 
-    from .orders import _scale_spectrum, get_window
+    def per_frames(frames, phi0, t, r, span):
+        coef, mean, floor = fitter.fit(frames, phi0)
+        for key, value in zip(("coef", "mean", "floor", "t", "r", "span"),
+                              (coef, mean, floor, t, r, span)):
+            parts[key].append(value)
 
-    length = spr * int(revolutions)
-    w = get_window(window, length)
-    local = _TWO_PI * np.arange(length) / spr
-    kernel = (w[:, None] * np.exp(-1j * np.outer(local, orders))) * (2.0 / w.sum())
-    band = slice(1, min(length // 2, int(spr / 4.0 * int(revolutions))) + 1)
-    parts = {"coef": [], "floor": [], "t": [], "r": []}
-
-    def per_frames(frames, phi0, t, r):
-        c = (frames @ kernel) * np.exp(-1j * np.outer(phi0, orders))
-        power = _scale_spectrum(fft.rfft(frames * w, axis=1), w, "power", 1.0)[:, band]
-        parts["coef"].append(c)
-        parts["floor"].append(np.median(power, axis=1) / np.log(2.0))
-        parts["t"].append(t)
-        parts["r"].append(r)
-
-    var, speed, w, length = _cot_blocks(
-        record, channel, orders=orders, speed_rpm=speed_rpm, speed_channel=speed_channel,
-        samples_per_rev=spr, revolutions=revolutions, overlap=overlap, window=window,
-        interpolation=interpolation, segment_seconds=segment_seconds, chunk=chunk,
-        per_frames=per_frames)
-    coef = np.concatenate(parts["coef"])
-    floor = np.concatenate(parts["floor"])
-    enbw = float(length * np.sum(w ** 2) / np.sum(w) ** 2)
-    units = str(var.attrs.get("units", ""))
-    ds = _track_dataset(np.abs(coef).T * factor, np.angle(coef).T, orders,
-                        np.concatenate(parts["t"]), np.concatenate(parts["r"]), units, channel)
-    ds["amplitude_noise"] = ("time", np.sqrt(floor * enbw) * factor,
-                             {"units": units, "long_name":
-                              "1-sigma amplitude error from the broadband noise floor"})
-    ds.attrs.update({"method": "computed order tracking (angle resampling + block DFT at order)",
-                     "amplitude_convention": amplitude, "window": str(window),
-                     "samples_per_rev": spr, "revolutions": int(revolutions),
-                     "resolution_orders": 1.0 / int(revolutions), "overlap": overlap,
-                     "interpolation": interpolation, "enbw_bins": enbw,
+    _blocks(speed, reader, label=label, samples_per_rev=spr, revolutions=revolutions,
+            overlap=overlap, interpolation=interpolation, chunk=chunk, segment=segment,
+            per_frames=per_frames)
+    cat = {k: np.concatenate(v) for k, v in parts.items()}
+    context = {"factor": factor, "units": str(var.attrs.get("units", "")), "label": label,
+               "reference": speed.angle_reference}
+    plan = _chunk_plan(speed, chunk, spr, interpolation)
+    ds = _cot_dataset(cat["coef"], cat["mean"], cat["floor"], fitter, cat["t"], cat["r"],
+                      cat["span"], context, overlap=overlap, interpolation=plan.interpolation,
+                      plan=plan)
+    ds.attrs.update({"amplitude_convention": amplitude, "trend": reader.info["removed"],
+                     "trend_kind": reader.info["kind"],
                      "streamed_segment_seconds": float(segment_seconds)})
-    log.info("order_track_stream %s: %d blocks from %d samples", channel, coef.shape[0],
+    log.info("order_track_stream %s: %d blocks from %d samples", channel, cat["coef"].shape[0],
              speed.n)
     return ds
 
@@ -528,12 +582,12 @@ def order_map_stream(record, channel: str, *, speed_rpm=None, speed_channel=None
                      segment_seconds: float = 20.0, samples_per_rev: int = 64,
                      revolutions: int = 16, overlap: float = 0.5, window="hann",
                      amplitude: str = "peak", scaling: str = "amplitude", max_order=None,
-                     interpolation: str = "cubic", chunk: int = 1 << 18):
+                     interpolation: str = "auto", chunk: int = 1 << 18, trend: str = "auto"):
     """:func:`analysis.order_map` (time × order) of a (lazy) Record channel, segment by segment.
 
-    Parameters are those of :func:`analysis.order_map` plus ``record``, ``channel``, ``rpm``,
+    Parameters are those of :func:`analysis.order_map` plus ``record``, ``channel``,
     ``speed_channel``, ``segment_seconds`` and ``chunk`` as in :func:`order_track_stream`
-    (no ``rpm_bins``: bin the result with ``groupby_bins`` on its ``rpm`` coordinate).
+    (no ``speed_bins_rpm``: bin the result with ``groupby_bins`` on its ``rpm`` coordinate).
 
     Returns
     -------
@@ -553,9 +607,9 @@ def order_map_stream(record, channel: str, *, speed_rpm=None, speed_channel=None
     0.7
     """
     import xarray as xr
-    from scipy import fft
 
-    from .orders import _scale_spectrum, amplitude_factor, get_window
+    from .orders import amplitude_factor
+    from .ordermap import MapSpectra
 
     scaling = check_option(scaling, "scaling", ("amplitude", "power"), error=AnalysisError)
     factor = amplitude_factor(amplitude)
@@ -564,30 +618,33 @@ def order_map_stream(record, channel: str, *, speed_rpm=None, speed_channel=None
                                                              error=AnalysisError)
     if top > spr / 2 + 1e-12:
         raise AnalysisError(f"max_order {top:g} exceeds samples_per_rev/2 = {spr / 2:g}")
+    var, label, speed, segment, reader = _prepare(
+        record, channel, speed_rpm=speed_rpm, speed_channel=speed_channel, chunk=chunk,
+        trend=trend, segment_seconds=segment_seconds)
     length = spr * int(revolutions)
     n_orders = min(length // 2 + 1, int(np.floor(top * int(revolutions))) + 1)
-    w = get_window(window, length)
+    spectra = MapSpectra(length, window, scaling, factor, n_orders)
     parts = {"v": [], "t": [], "r": []}
 
-    def per_frames(frames, phi0, t, r):
-        X = fft.rfft(frames * w, axis=1)[:, :n_orders]
-        parts["v"].append(_scale_spectrum(X, w, scaling, factor))
+    def per_frames(frames, phi0, t, r, span):
+        parts["v"].append(spectra(frames))
         parts["t"].append(t)
         parts["r"].append(r)
 
-    var, _, w, length = _cot_blocks(
-        record, channel, orders=None, speed_rpm=speed_rpm, speed_channel=speed_channel,
-        samples_per_rev=spr, revolutions=revolutions, overlap=overlap, window=window,
-        interpolation=interpolation, segment_seconds=segment_seconds, chunk=chunk,
-        per_frames=per_frames)
+    _blocks(speed, reader, label=label, samples_per_rev=spr, revolutions=revolutions,
+            overlap=overlap, interpolation=interpolation, chunk=chunk, segment=segment,
+            per_frames=per_frames)
     units = str(var.attrs.get("units", ""))
     out_units = units if scaling == "amplitude" else (f"({units})^2" if units else "1")
-    attrs = {"units": out_units, "method": "order map (angle resampling + block rfft)",
+    plan = _chunk_plan(speed, chunk, spr, interpolation)
+    attrs = {"units": out_units, "method": "order map (angle resampling + block rfft, block "
+                                           "trend removed; order 0 = block mean)",
              "scaling": scaling, "amplitude_convention": amplitude if scaling == "amplitude"
              else "mean-square per bin", "window": str(window), "samples_per_rev": spr,
              "revolutions": int(revolutions), "resolution_orders": 1.0 / int(revolutions),
-             "overlap": overlap, "interpolation": interpolation,
-             "enbw_bins": float(length * np.sum(w ** 2) / np.sum(w) ** 2),
+             "overlap": overlap, "interpolation": plan.interpolation,
+             "enbw_bins": spectra.enbw, "trend": reader.info["removed"],
+             "phase_reference": speed.angle_reference,
              "streamed_segment_seconds": float(segment_seconds)}
     return xr.DataArray(np.concatenate(parts["v"]), dims=("time", "order"),
                         name=f"{channel} order map",
@@ -601,17 +658,14 @@ def order_map_stream(record, channel: str, *, speed_rpm=None, speed_channel=None
 # ---------------------------------------------------------------------------- VKF stream
 
 
-def _vkf_stream(record, channel, *, orders, speed_rpm, speed_channel, segment_seconds, amplitude,
-                bandwidth_hz, bandwidth_orders, filter_order, vkf_overlap):
+def _vkf_stream(var, label, speed, reader, *, orders, segment, amplitude, bandwidth_hz,
+                bandwidth_orders, filter_order, vkf_overlap, trend_info):
     from .orders import _track_dataset, amplitude_factor
     from .vkf import vold_kalman
 
-    var = _channel(record, channel)
-    speed = _speed_for(record, channel, var, speed_rpm=speed_rpm, speed_channel=speed_channel)
     vkf_overlap = check_positive(vkf_overlap, "vkf_overlap", error=AnalysisError)
     n, fs = speed.n, speed.fs
-    read = _reader(var)
-    seg = max(1024, int(round(segment_seconds * fs)))
+    seg = segment
     # smallest bandwidth over the record (Hz): constant, or proportional to the lowest speed
     if bandwidth_hz is not None:
         b_min = float(np.min(bandwidth_hz))
@@ -621,36 +675,43 @@ def _vkf_stream(record, channel, *, orders, speed_rpm, speed_channel, segment_se
         b_min = bo * lo / 60.0
     pad = int(math.ceil(vkf_overlap / b_min * fs))
     factor = amplitude_factor(amplitude)
-    env, times, rpms = [], [], []
-    phi_carry, pos = 0.0, 0
+    env, times, rpms, means, unc = [], [], [], [], []
+    carry = _AngleCarry(speed)
     attrs = {}
     for a in range(0, n, seg):
         b = min(n, a + seg)
         ra, rb = max(0, a - pad), min(n, b + pad)
-        sp = speed(ra, rb)
-        # shaft angle at ra from the record start (carried sequential sum)
-        if ra > pos:
-            om = speed(pos, ra + 1) * (_TWO_PI / 60.0)
-            phi_carry = float(np.cumsum(np.concatenate(([phi_carry],
-                                                        0.5 * (om[1:] + om[:-1]) / fs)))[-1])
-            pos = ra
-        res = vold_kalman(read(ra, rb), fs=fs, speed_rpm=sp, orders=orders,
-                          bandwidth_hz=bandwidth_hz,
-                          bandwidth_orders=bandwidth_orders, filter_order=filter_order)
+        phi = carry(ra, rb)
+        res = vold_kalman(reader(ra, rb), fs=fs, speed_rpm=speed(ra, rb), orders=orders,
+                          bandwidth_hz=bandwidth_hz, bandwidth_orders=bandwidth_orders,
+                          filter_order=filter_order, shaft_angle=phi)
         tr = res["time"].values + ra / fs          # s from the channel's first sample
         sel = (tr >= a / fs) & (tr < b / fs) if b < n else tr >= a / fs
-        e = res["envelope"].values[:, sel]
-        env.append(e * np.exp(-1j * orders * phi_carry)[:, None])
+        env.append(res["envelope"].values[:, sel])
         times.append(speed.t0 + tr[sel])
         rpms.append(res["rpm"].values[sel])
+        means.append(res["mean"].values[sel])
+        unc.append(res["amplitude_uncertainty"].values[:, sel])
         attrs = dict(res.attrs)
+        if b < n:
+            nxt = max(0, b - pad)
+            if nxt < ra:            # pragma: no cover - windows advance by a whole segment
+                raise AnalysisError(f"{label}: internal: VKF windows do not advance")
+            carry.advance(nxt, phi, ra)
     e = np.concatenate(env, axis=1)
+    units = str(var.attrs.get("units", ""))
     ds = _track_dataset(np.abs(e) * factor, np.angle(e), orders, np.concatenate(times),
-                        np.concatenate(rpms), str(var.attrs.get("units", "")), channel)
+                        np.concatenate(rpms), units, label)
+    ds["mean"] = ("time", np.concatenate(means), {"units": units, "long_name":
+                                                  "order 0: trend envelope (the channel's mean)"})
+    ds["amplitude_uncertainty"] = (("order", "time"), np.concatenate(unc, axis=1) * factor,
+                                   {"units": units, "long_name": "1-sigma amplitude noise and "
+                                    "estimated envelope smearing"})
     ds.attrs.update(attrs)
-    ds.attrs.update({"amplitude_convention": amplitude,
-                     "streamed_segment_seconds": float(segment_seconds),
-                     "streamed_overlap_s": pad / fs})
+    ds.attrs["phase_reference"] = speed.angle_reference
+    ds.attrs.update({"amplitude_convention": amplitude, "trend": trend_info["removed"],
+                     "trend_kind": trend_info["kind"],
+                     "streamed_segment_seconds": seg / fs, "streamed_overlap_s": pad / fs})
     return ds
 
 

@@ -1,34 +1,45 @@
 """Vold–Kalman order tracking: the envelopes of several orders solved jointly.
 
 Model (second-generation VKF, real form): the signal is a sum of orders with slowly varying
-complex envelopes ``A_k(t)``,
+complex envelopes ``A_k(t)`` and a slowly varying real trend ``c(t)`` (order 0: the channel's
+mean, a speed channel's mean speed, a sensor's drift),
 
-    x(t) = Σ_k Re{A_k(t) e^{i o_k φ_k(t)}} + noise,
+    x(t) = c(t) + Σ_k Re{A_k(t) e^{i o_k φ_k(t)}} + noise,
 
-and the envelopes minimise ``Σ_n (x_n − model_n)² + Σ_k r_k² Σ_n |∇^p A_k(n)|²`` (``p`` =
-``filter_order``: first or second differences). The normal equations couple the 2K real
-unknowns of one sample with each other and with ``p`` neighbours only, so the matrix is banded
-(half-bandwidth ``2Kp``) and is solved by a banded Cholesky factorisation with one step of
-iterative refinement — O(N K² p²) work, O(N K p) memory, stable for very narrow bandwidths.
-Solving all orders together is what keeps crossing orders from corrupting each other.
+and the envelopes minimise ``Σ_n (x_n − model_n)² + Σ_k r_k² Σ_n |∇^p A_k(n)|²`` (plus the same
+smoothness term for ``c``; ``p`` = ``filter_order``: first or second differences). The trend is
+solved with the orders, so it cannot leak into a low order. Each envelope is a cubic B-spline
+with knots every ``m`` samples (``m = 1``: one value per sample, the classical form). The normal
+equations couple the ``2K + 1`` unknowns of one knot with each other and with ``max(p, 3)``
+neighbouring knots only, so the matrix is banded (half-bandwidth ``(2K+1)·max(p, 3) + 2K``)
+and is solved by a banded Cholesky factorisation with one step of iterative refinement:
+assembly O(N K²), factorisation O((N/m) K³ ·max(p,3)²) — linear in the samples. The data part of
+the matrix is assembled by grouping the samples of each knot interval (one matrix product of
+the ``(2K+1)(2K+2)/2`` basis products with the spline weights), not by scattering each sample.
 
-Bandwidth: for a stationary order the envelope filter is ``|H(ν)|² = 1/(1 + r² (2 sin(π ν/fs))^{2p})``
-(``ν`` the offset from the order), so ``r = (2 sin(π B/(2 fs)))^{−p}`` puts the −3 dB points at
-``±B/2``: ``B`` (``bandwidth_hz``) is the full −3 dB bandwidth around the order. With
-``bandwidth_orders`` it is ``B(t) = bandwidth_orders · rpm(t)/60`` (constant width in orders);
-give one value per order for a bandwidth proportional to the order.
+Bandwidth: for a stationary order the envelope filter is
+``H(ν) = 1/(1 + 2r²(2 sin(π ν/fs))^{2p})`` (``ν`` the offset from the order; the data term of the
+real form sees half of ``|A|²``); :func:`vkf_weight` sets ``r`` so that ``|H| = 1/√2`` at
+``ν = ±B/2``: ``B`` (``bandwidth_hz``) is the full −3 dB bandwidth around the order. With
+``bandwidth_orders`` it is ``B(t) = bandwidth_orders · rpm(t)/60``; a 2-D ``bandwidth_hz``
+(orders × samples) gives each order its own bandwidth against time (:mod:`analysis.autotrack`
+widens it around sharp peaks).
 
-Errors: an envelope varying at rate ν is attenuated by ``|H(ν)|`` (choose ``B`` above the
-envelope's own bandwidth — for a resonance crossing, about the resonance's half-power
-bandwidth or more); noise enters with the equivalent noise bandwidth
-``ENBW = (B/2)(π/p)/sin(π/2p)``, giving an amplitude standard deviation
-``σ_A ≈ sqrt(N0 · ENBW)`` (``N0`` the one-sided noise density, estimated from the residual and
-reported in ``attrs['amplitude_std_estimate']``).
+Errors: noise enters with the equivalent noise bandwidth ``ENBW = ∫|H|²dν`` (:func:`enbw_hz`:
+``(B/2) c^{−1/2p} · 2(2p − 1)/(2p) · π/(2p sin(π/2p))`` with ``c = √2 − 1``, i.e. 1.22 B for
+``p = 1`` and 1.04 B for ``p = 2``), giving an amplitude standard deviation
+``σ_A = sqrt(N0 · ENBW)`` (``N0`` the one-sided noise density near the order, estimated from the
+residual). An envelope varying faster than the bandwidth is smeared: for ``p = 2`` the bias of
+a resonance-shaped (Lorentzian) envelope of half-power crossing time ``T`` is about
+``159/(π T B)^4`` of its peak; estimated from the solved envelope's second derivative
+(``T² = 8|A|/|A''|`` at a Lorentzian peak) and reported with the noise in
+``amplitude_uncertainty``.
 
-Implementation: the record is first low-passed and decimated (linear-phase Kaiser FIR, 100 dB)
-to about four times the highest order frequency, then solved in overlapping blocks whose
-overlap covers the filter's memory (``6/B`` seconds each side), so memory is bounded for long
-records. The record ends (half the decimation filter) are trimmed.
+Implementation: the record is first low-passed and decimated in the frequency domain (the
+anti-alias filter of :mod:`analysis.resample`, 100 dB) to about four times the highest order
+frequency, then solved in overlapping blocks whose overlap covers the filter's memory
+(``6/B`` seconds each side), so memory is bounded for long records. The record ends (the
+decimation filter's half-length) are trimmed.
 
 References
 ----------
@@ -42,23 +53,26 @@ shaft-speed information", MSSP 20 (2006) — multi-order (joint) formulation.
 
 from __future__ import annotations
 
+import functools
 import logging
 import math
 
 import numpy as np
 
+from crankbench.predict._deprecate import renamed
 from crankbench.predict._validate import check_int, check_option, check_positive
 from crankbench.predict.errors import AnalysisError
-from crankbench.predict._deprecate import renamed
 from crankbench.predict._threads import single_threaded_blas
 
-from .resample import _as_rpm, _as_signal, shaft_angle
+from .resample import _as_angle, _as_rpm, _as_signal, _fft_lowpass
+from .resample import shaft_angle as _integrate_speed
 
-__all__ = ["vold_kalman", "vkf_weight", "enbw_hz"]
+__all__ = ["vold_kalman", "vkf_weight", "enbw_hz", "smearing_constant"]
 
 log = logging.getLogger("crankbench")
 
 _DIFF = {1: np.array([-1.0, 1.0]), 2: np.array([1.0, -2.0, 1.0])}
+_TWO_PI = 2.0 * np.pi
 
 
 def vkf_weight(bandwidth_hz, fs: float, filter_order: int):
@@ -102,12 +116,13 @@ def enbw_hz(bandwidth_hz, filter_order: int):
     """Equivalent noise bandwidth ``∫|H(ν)|² dν`` (Hz, two-sided around the order) of the VKF.
 
     With ``H = 1/(1 + c (2ν/B)^{2p})``, ``c = √2 − 1``:
-    ``ENBW = (B/2) c^{−1/2p} · 2 (2p − 1)/(2p) · π/(2p sin(π/2p))``.
+    ``ENBW = (B/2) c^{−1/2p} · 2 (2p − 1)/(2p) · π/(2p sin(π/2p))`` — 1.2203 B for ``p = 1``,
+    1.0384 B for ``p = 2`` (``tests/analysis/test_vkf.py`` integrates the discrete response).
 
     Examples
     --------
-    >>> round(float(enbw_hz(2.0, 1)), 6)
-    2.440662
+    >>> round(float(enbw_hz(2.0, 1)), 6), round(float(enbw_hz(1.0, 2)), 4)
+    (2.440662, 1.0384)
     """
     p = filter_order
     n = 2 * p
@@ -115,26 +130,46 @@ def enbw_hz(bandwidth_hz, filter_order: int):
     return 0.5 * np.asarray(bandwidth_hz, float) * (np.sqrt(2.0) - 1.0) ** (-1.0 / n) * integral
 
 
+def smearing_constant(filter_order: int) -> float:
+    """``K_p`` of the smearing bias of a Lorentzian envelope, ``bias ≈ K_p/(π T B)^{2p}``.
+
+    ``1 − H(ν) ≈ c (2ν/B)^{2p}`` near the order and the complex envelope of a resonance crossed
+    in the half-power time ``T`` has the one-sided spectrum ``πT e^{−πTν}``, whose moment
+    ``E[ν^{2p}] = (2p)!/(πT)^{2p}``; so ``K_p = c 2^{2p} (2p)!`` (3.31 for ``p = 1``, 159 for
+    ``p = 2``).
+
+    Examples
+    --------
+    >>> round(smearing_constant(2), 1)
+    159.1
+    """
+    c = np.sqrt(2.0) - 1.0
+    return float(c * 2.0 ** (2 * filter_order) * math.factorial(2 * filter_order))
+
+
 def _decimate(values: np.ndarray, fs: float, f_max: float):
-    """Low-pass and decimate so that ``f_max`` stays flat (ripple ≈ 1e-5).
+    """Low-pass and decimate (in the frequency domain) so that ``f_max`` stays flat (ripple
+    ≈ 1e-5, 100 dB above ``fs_new/2``).
 
     Returns (decimated values, input index of each output sample, new rate)."""
     q = int(max(1, math.floor(fs / (4.0 * f_max))))
     if q == 1:
         return values, np.arange(values.shape[0]), fs
-    from scipy import signal
+    from .resample import _aa_half_length
 
     fs_new = fs / q
-    f_stop = fs_new - f_max  # aliases of f >= f_stop fall at >= f_max ... keep them out
-    numtaps, beta = signal.kaiserord(100.0, (f_stop - f_max) / (0.5 * fs))
-    numtaps |= 1
-    if values.shape[0] <= numtaps + 4 * q:  # before designing: the filter could be huge
+    f_stop = 0.5 * fs_new
+    half = int(math.ceil(_aa_half_length(f_max, f_stop) * fs)) + 1
+    if values.shape[0] <= 2 * half + 4 * q:
         return values, np.arange(values.shape[0]), fs
-    h = signal.firwin(numtaps, 0.5 * (f_max + f_stop), window=("kaiser", beta), fs=fs)
-    half = numtaps // 2
-    filtered = signal.oaconvolve(values, h, mode="valid")[::q]
-    index = half + q * np.arange(filtered.shape[0])
-    return filtered, index, fs_new
+    from .resample import _good_size
+
+    n_out = _good_size(-(-values.shape[0] // q))
+    filtered = _fft_lowpass(values, fs, f_max, f_stop, q * n_out, n_out)
+    first = -(-half // q)                          # first complete output
+    last = (values.shape[0] - 1 - half) // q        # last complete output
+    index = q * np.arange(first, last + 1)
+    return filtered[first:last + 1], index, fs_new
 
 
 def _spline_weights(n: int, m: int):
@@ -156,39 +191,80 @@ def _spline_weights(n: int, m: int):
     return q, w, int(q[-1]) + 4
 
 
+@functools.lru_cache(maxsize=32)
+def _layout(m: int, s: int, u: int):
+    """Where each (slot a, slot b, column j, column jj) product goes in upper banded storage
+    of ``m`` unknowns per knot and ``s`` knots per sample: for slot pairs a ≤ b, the row
+    ``u − d`` and column offset of every entry, with the index of its symmetric column pair."""
+    pairs = [(j, jj) for j in range(m) for jj in range(j, m)]
+    pair_index = {pr: i for i, pr in enumerate(pairs)}
+    slot_pairs = [(a, b) for a in range(s) for b in range(a, s)]
+    rows, col_off, src_slot, src_pair = [], [], [], []
+    for ia, (a, b) in enumerate(slot_pairs):
+        for j in range(m):
+            for jj in range(m):
+                d = (b - a) * m + (jj - j)
+                if d < 0 or (a == b and jj < j):
+                    continue
+                rows.append(u - d)
+                col_off.append(b * m + jj)
+                src_slot.append(ia)
+                src_pair.append(pair_index[(min(j, jj), max(j, jj))])
+    return (np.array(pairs), slot_pairs, np.array(rows), np.array(col_off),
+            np.array(src_slot), np.array(src_pair))
+
+
 def _assemble(basis, x, q, w, n_coef, weights, p):
     """Banded upper form of A = CᵀC + Σ_k r_k² D_pᵀ D_p and the right side Cᵀx.
 
-    ``basis``: (N, 2K) columns cos θ_k, −sin θ_k; ``q, w``: envelope representation
-    (:func:`_spline_weights`); ``weights``: (n_coef − p, K) squared weights per difference row.
-    Unknown (coefficient c, j) has flat index 2K c + j (j = 2k real, 2k+1 imaginary part).
+    ``basis``: (N, m) columns; ``q, w``: envelope representation (:func:`_spline_weights`; the
+    knots are uniform, so samples of one knot interval share their weight pattern);
+    ``weights``: (n_coef − p, m) squared weights per difference row and column. Unknown
+    (coefficient c, j) has flat index m c + j. Work: one product of the ``m(m+1)/2`` basis
+    products per sample with the ``s(s+1)/2`` weight products per position in a knot interval.
     """
-    m = basis.shape[1]
+    n, m = basis.shape
     s = w.shape[1]
     u = m * max(p, s - 1) + m - 1
     size = n_coef * m
-    ab = np.zeros((u + 1, size))
-    for a in range(s):
-        for b in range(a, s):
-            wab = w[:, a] * w[:, b]
-            for j in range(m):
-                for jj in range(m):
-                    d = (b - a) * m + (jj - j)
-                    if d < 0:
-                        continue
-                    col = (q + b) * m + jj
-                    ab[u - d] += np.bincount(col, wab * basis[:, j] * basis[:, jj], minlength=size)
+    pairs, slot_pairs, rows, col_off, src_slot, src_pair = _layout(m, s, u)
+    prod = basis[:, pairs[:, 0]] * basis[:, pairs[:, 1]]            # (N, P)
+    groups = int(q[-1]) + 1
+    if s > 1:
+        span = int(np.max(np.bincount(q)))
+        # sample i sits at position i - span*q_i of its knot interval (uniform knots): lay the
+        # products out as (position, interval, pair) and sum each interval with the spline
+        # weights of every position in one matrix product
+        pos = np.arange(n) - span * q
+        lay = np.zeros((span, groups, prod.shape[1]))
+        lay[pos, q] = prod
+        wpat = np.zeros((len(slot_pairs), span))
+        wpat[:, pos[:span]] = np.stack([w[:span, a] * w[:span, b] for a, b in slot_pairs])
+        sums = (wpat @ lay.reshape(span, -1)).reshape(len(slot_pairs), groups, -1)
+        lay_x = np.zeros((span, groups, m))
+        lay_x[pos, q] = basis * x[:, None]
+        wv = np.zeros((s, span))
+        wv[:, pos[:span]] = w[:span].T
+        rsum = (wv @ lay_x.reshape(span, -1)).reshape(s, groups, m)
+    else:
+        sums = prod[None]                                            # (1, N, P)
+        rsum = (basis * x[:, None])[None]                            # (1, N, m)
+    # scatter: entry (row, g m + col_off) gets sums[src_slot, g, src_pair]
+    g = np.arange(groups)
+    flat_cols = (g[:, None] * m + col_off[None, :]).ravel()
+    flat_rows = np.broadcast_to(rows, (groups, rows.shape[0])).ravel()
+    vals = sums[src_slot, :, src_pair].T.ravel()
+    ab = np.bincount(flat_rows * size + flat_cols, weights=vals,
+                     minlength=(u + 1) * size).reshape(u + 1, size)
     c = _DIFF[p]
-    w2 = np.repeat(weights, 2, axis=1)                      # (n_coef - p, m)
-    rows = np.arange(weights.shape[0])
+    rowsd = np.arange(weights.shape[0])
     for a in range(p + 1):
         for b in range(a, p + 1):
-            cols = ((rows[:, None] + b) * m + np.arange(m)[None, :]).ravel()
-            ab[u - (b - a) * m, cols] += c[a] * c[b] * w2.ravel()
-    rhs = np.zeros(size)
-    for a in range(s):
-        for j in range(m):
-            rhs += np.bincount((q + a) * m + j, w[:, a] * basis[:, j] * x, minlength=size)
+            cols = ((rowsd[:, None] + b) * m + np.arange(m)[None, :]).ravel()
+            ab[u - (b - a) * m, cols] += c[a] * c[b] * weights.ravel()
+    rhs = np.bincount(((g[None, :, None] + np.arange(s)[:, None, None]) * m
+                       + np.arange(m)[None, None, :]).ravel(), weights=rsum.ravel(),
+                      minlength=size)
     return ab, rhs
 
 
@@ -202,16 +278,22 @@ def _banded_matvec(ab, z, u):
     return y
 
 
-def _solve_block(x, phase, knot_weights, p, m):
-    """Solve one block; ``knot_weights``: (n_coef - p, K) r² per difference row of the knots."""
+def _solve_block(x, phase, knot_weights, p, m, trend):
+    """Solve one block; ``knot_weights``: (n_coef - p, K [+1]) r² per difference row."""
     from scipy.linalg import cho_solve_banded, cholesky_banded
 
     n, k = phase.shape
-    basis = np.empty((n, 2 * k))
-    basis[:, 0::2] = np.cos(phase)
-    basis[:, 1::2] = -np.sin(phase)
+    cols = 2 * k + (1 if trend else 0)
+    basis = np.empty((n, cols))
+    basis[:, 0:2 * k:2] = np.cos(phase)
+    basis[:, 1:2 * k:2] = -np.sin(phase)
+    if trend:
+        basis[:, -1] = 1.0
     q, w, n_coef = _spline_weights(n, m)
-    ab, rhs = _assemble(basis, x, q, w, n_coef, knot_weights, p)
+    col_w = np.repeat(knot_weights[:, :k], 2, axis=1)
+    if trend:
+        col_w = np.concatenate([col_w, knot_weights[:, k:]], axis=1)
+    ab, rhs = _assemble(basis, x, q, w, n_coef, col_w, p)
     u = ab.shape[0] - 1
     # factor in LAPACK's lower band form (dpbtrf 'L'): same matrix, and OpenBLAS's threaded
     # upper-form path can be ~100x slower on a busy machine
@@ -225,21 +307,59 @@ def _solve_block(x, phase, knot_weights, p, m):
                             "too narrow for float64 at this sample rate (widen bandwidth)") from None
     z = cho_solve_banded((factor, True), rhs, check_finite=False)
     z += cho_solve_banded((factor, True), rhs - _banded_matvec(ab, z, u), check_finite=False)
-    coef = z.reshape(n_coef, 2 * k)
-    cplx = coef[:, 0::2] + 1j * coef[:, 1::2]               # (n_coef, K)
+    coef = z.reshape(n_coef, cols)
+    cplx = coef[:, 0:2 * k:2] + 1j * coef[:, 1:2 * k:2]          # (n_coef, K)
     env = np.zeros((n, k), dtype=complex)
+    mean = np.zeros(n)
     for a in range(w.shape[1]):
         env += w[:, a:a + 1] * cplx[q + a]
-    model = np.real(env * np.exp(1j * phase)).sum(axis=1)
-    return env, model
+        if trend:
+            mean += w[:, a] * coef[q + a, -1]
+    model = np.real(env * np.exp(1j * phase)).sum(axis=1) + mean
+    return env, mean, model
+
+
+def _bandwidths(bandwidth_hz, bandwidth_orders, orders, speeds, n):
+    """Bandwidth in Hz against time: ``(at, top, low, kind)`` with ``at(index)`` the (len,
+    K) bandwidths at those samples, ``top``/``low`` the largest/smallest per order, and a
+    description (the full (K, N) array is never built for a constant or speed-proportional
+    bandwidth)."""
+    k = orders.shape[0]
+    if bandwidth_hz is not None and bandwidth_orders is not None:
+        raise AnalysisError("give bandwidth_hz or bandwidth_orders, not both")
+    if bandwidth_hz is None and bandwidth_orders is None:
+        bandwidth_orders = 0.1
+    if bandwidth_hz is not None:
+        arr = np.asarray(bandwidth_hz, float)
+        if arr.ndim == 2:
+            if arr.shape != (k, n):
+                raise AnalysisError(f"a 2-D bandwidth_hz must have shape (len(orders), len(x)) "
+                                    f"= ({k}, {n}), got {arr.shape}")
+            if not np.isfinite(arr).all() or arr.min() <= 0:
+                raise AnalysisError("bandwidth_hz must be finite and > 0")
+            return (lambda idx: arr[:, idx].T, arr.max(axis=1), arr.min(axis=1),
+                    f"per order against time, {arr.min():.4g}..{arr.max():.4g} Hz")
+        bw = np.broadcast_to(arr, (k,)).copy()
+        for i, b in enumerate(bw):
+            check_positive(b, f"bandwidth_hz[{i}]", error=AnalysisError)
+        return (lambda idx: np.broadcast_to(bw, (np.size(idx), k)).copy(), bw, bw,
+                f"{bw.tolist()} Hz (constant)")
+    bo = np.broadcast_to(np.asarray(bandwidth_orders, float), (k,)).copy()
+    for i, b in enumerate(bo):
+        check_positive(b, f"bandwidth_orders[{i}]", error=AnalysisError)
+    return (lambda idx: (bo[:, None] * speeds[:, idx] / 60.0).T if speeds.shape[0] == k
+            else bo[None, :] * speeds[0, idx][:, None] / 60.0,
+            bo * speeds.max(axis=1) / 60.0, bo * speeds.min(axis=1) / 60.0,
+            f"{bo.tolist()} orders (∝ speed)")
 
 
 @renamed(rpm="speed_rpm")
 @single_threaded_blas  # banded solves per block: BLAS threads only cost (issue 21)
 def vold_kalman(x, *, fs=None, speed_rpm, orders, bandwidth_hz=None, bandwidth_orders=None,
                 filter_order: int = 2, decimate: bool = True, block: int = 1 << 15,
-                knots_per_bandwidth: float | None = 40.0):
-    """Vold–Kalman filter: complex envelopes of several orders, solved jointly.
+                knots_per_bandwidth: float | None = 40.0, shaft_angle=None,
+                trend: bool = True):
+    """Vold–Kalman filter: complex envelopes of several orders (and the trend), solved jointly.
 
     Parameters
     ----------
@@ -252,8 +372,9 @@ def vold_kalman(x, *, fs=None, speed_rpm, orders, bandwidth_hz=None, bandwidth_o
         (orders of different shafts, which may cross).
     orders : sequence of float
         Orders to extract (per revolution of their shaft).
-    bandwidth_hz : float or sequence, optional
-        Full −3 dB bandwidth around each order, Hz (constant).
+    bandwidth_hz : float, sequence or array (K, N), optional
+        Full −3 dB bandwidth around each order, Hz: constant, one per order, or one per order
+        and sample.
     bandwidth_orders : float or sequence, optional
         Bandwidth in orders (Hz = value · rpm/60, following the speed); one value per order for a
         bandwidth proportional to the order. Default ``0.1`` if neither is given.
@@ -269,14 +390,23 @@ def vold_kalman(x, *, fs=None, speed_rpm, orders, bandwidth_hz=None, bandwidth_o
         ``1/(knots_per_bandwidth · B)`` seconds (never closer than one sample); this keeps the
         solve well conditioned for narrow bandwidths. ``None`` solves one envelope value per
         sample (the classical form; ill-conditioned when ``B/fs`` ≲ 1e-4).
+    shaft_angle : array_like, optional
+        Shaft angle per sample (rad; 1-D speed only), e.g. the encoder angle; default the
+        integrated speed.
+    trend : bool
+        Solve an order-0 envelope (the channel's mean and drift) with the orders; its −3 dB
+        bandwidth is a quarter of the lowest order's frequency at the lowest speed.
 
     Returns
     -------
     xarray.Dataset
         ``envelope`` (complex, units of ``x``; peak amplitude ``|A|`` and phase ``arg A`` of
         ``Re{A e^{i o φ}}``) and ``reconstruction`` (order ``o`` as a time signal) over
-        (``order``, ``time``), ``rpm`` along time, and ``residual``. Attrs: method, bandwidth,
-        filter order, solve rate, ``amplitude_std_estimate`` (noise part of the error).
+        (``order``, ``time``); ``mean`` (the order-0 envelope), ``residual``;
+        ``amplitude_uncertainty`` and ``amplitude_noise`` (order, time): 1-σ noise plus the
+        estimated smearing, and the noise part alone; ``rpm`` along time. Attrs: method,
+        bandwidth, filter order, solve rate, ``amplitude_std_estimate`` (noise part, mean per
+        order).
 
     References
     ----------
@@ -287,12 +417,12 @@ def vold_kalman(x, *, fs=None, speed_rpm, orders, bandwidth_hz=None, bandwidth_o
     >>> fs = 2000.0
     >>> t = np.arange(int(6 * fs)) / fs
     >>> rpm = 600 + 200 * t
-    >>> phi = shaft_angle(rpm, fs)
-    >>> x = 1.0 * np.cos(2 * phi) + 0.2 * np.cos(3 * phi)
+    >>> phi = _integrate_speed(rpm, fs)
+    >>> x = 1.0 * np.cos(2 * phi) + 0.2 * np.cos(3 * phi) + 5.0
     >>> res = vold_kalman(x, fs=fs, speed_rpm=rpm, orders=[2, 3], bandwidth_hz=2.0)
     >>> amp = np.abs(res.envelope.isel(time=slice(200, -200)))
-    >>> np.round(amp.mean("time").values, 4)
-    array([1. , 0.2])
+    >>> np.round(amp.mean("time").values, 4), round(float(res["mean"].mean()), 4)
+    (array([1. , 0.2]), 5.0)
     """
     values, fs, units, label = _as_signal(x, fs)
     n = values.shape[0]
@@ -304,31 +434,24 @@ def vold_kalman(x, *, fs=None, speed_rpm, orders, bandwidth_hz=None, bandwidth_o
     check_option(p, "filter_order", (1, 2), error=AnalysisError)
     block = check_int(block, "block", minimum=256, error=AnalysisError)
     rpm_arr = np.asarray(speed_rpm.values if hasattr(speed_rpm, "dims") else speed_rpm, dtype=float)
+    angle = None
     if rpm_arr.ndim == 2:
         if rpm_arr.shape != (k, n):
             raise AnalysisError(f"a 2-D rpm must have shape (len(orders), len(x)) = ({k}, {n}), "
                                 f"got {rpm_arr.shape}")
         speeds = np.stack([_as_rpm(r, n, fs) for r in rpm_arr])
+        single = None
     else:
-        speeds = np.tile(_as_rpm(speed_rpm, n, fs), (k, 1))
-    if bandwidth_hz is not None and bandwidth_orders is not None:
-        raise AnalysisError("give bandwidth_hz or bandwidth_orders, not both")
-    if bandwidth_hz is None and bandwidth_orders is None:
-        bandwidth_orders = 0.1
-    if bandwidth_hz is not None:
-        bw = np.broadcast_to(np.asarray(bandwidth_hz, float), (k,)).copy()
-        for i, b in enumerate(bw):
-            check_positive(b, f"bandwidth_hz[{i}]", error=AnalysisError)
-        bw_t = np.repeat(bw[:, None], n, axis=1)
-        kind = f"{bw.tolist()} Hz (constant)"
-    else:
-        bo = np.broadcast_to(np.asarray(bandwidth_orders, float), (k,)).copy()
-        for i, b in enumerate(bo):
-            check_positive(b, f"bandwidth_orders[{i}]", error=AnalysisError)
-        bw_t = bo[:, None] * speeds / 60.0
-        kind = f"{bo.tolist()} orders (∝ speed)"
-    phis = np.stack([shaft_angle(s, fs) for s in speeds]) * orders[:, None]
-    f_max = float((orders[:, None] * speeds / 60.0 + bw_t).max())
+        single = _as_rpm(speed_rpm, n, fs)
+        speeds = None
+        angle = _as_angle(shaft_angle, n)
+        if angle is None and hasattr(speed_rpm, "coords") and "shaft_angle" in speed_rpm.coords:
+            angle = _as_angle(speed_rpm.coords["shaft_angle"].values, n)
+    speed_at = (lambda i: single if i is None else single[i]) if speeds is None else None
+    top_speed = single.max() if speeds is None else speeds.max(axis=1)
+    bw_at, bw_top, bw_low, kind = _bandwidths(bandwidth_hz, bandwidth_orders, orders,
+                                              single[None, :] if speeds is None else speeds, n)
+    f_max = float(np.max(orders * top_speed / 60.0 + bw_top))
     if f_max >= 0.5 * fs:
         raise AnalysisError(f"the highest order frequency {f_max:.6g} Hz is above the Nyquist "
                             f"frequency {0.5 * fs:.6g} Hz of {label}")
@@ -337,19 +460,38 @@ def vold_kalman(x, *, fs=None, speed_rpm, orders, bandwidth_hz=None, bandwidth_o
     else:
         xd, index, fs_d = values, np.arange(n), fs
     nd = xd.shape[0]
-    phase = phis[:, index].T                                   # (Nd, K)
-    bw_d = bw_t[:, index].T
+    if speeds is None:
+        phi = _integrate_speed(single, fs) if angle is None else angle
+        phase = np.outer(phi[index], orders)                      # (Nd, K)
+        rpm_d = speed_at(index)
+        low_speed = float(rpm_d.min())
+    else:
+        phase = np.stack([_integrate_speed(s, fs)[index] for s in speeds], axis=1) * orders
+        rpm_d = speeds[0, index]
+        low_speed = float(speeds[:, index].min())
+    bw_d = bw_at(index)                                        # (Nd, K)
     if (bw_d >= fs_d).any():
         raise AnalysisError(f"bandwidth up to {bw_d.max():.6g} Hz is too wide for the solve rate "
                             f"{fs_d:.6g} Hz")
+    # trend bandwidth: its response at the lowest order frequency is 1e-3 (joint solve: the
+    # order's own response changes by < 1e-3 there)
+    # (and no wider than the widest order band: the trend need not follow faster than they do)
+    b_trend = min(2.0 * float(orders.min()) * low_speed / 60.0 / (
+        1e3 / (np.sqrt(2.0) - 1.0)) ** (1.0 / (2 * p)), float(bw_d.max()))
+    if trend:
+        bw_all = np.concatenate([bw_d, np.full((nd, 1), b_trend)], axis=1)
+    else:
+        bw_all = bw_d
     # envelope knots every m samples (cubic B-spline) when the band is narrow: keeps the normal
     # equations well conditioned (condition ~ r² m^(-2p)) at no visible cost, the knot
     # spacing being below 1/(knots_per_bandwidth · B)
-    m = 1 if knots_per_bandwidth is None else max(1, int(fs_d / (knots_per_bandwidth * bw_d.max())))
-    overlap = int(math.ceil(6.0 * fs_d / bw_d.min()))
+    m = 1 if knots_per_bandwidth is None else max(1, int(fs_d / (knots_per_bandwidth
+                                                                  * bw_all.max())))
+    overlap = int(math.ceil(6.0 * fs_d / bw_all.min()))
     overlap = m * int(math.ceil(overlap / m))
     block = m * max(1, int(math.ceil(block / m)))
     env = np.empty((nd, k), dtype=complex)
+    mean = np.zeros(nd)
     model = np.empty(nd)
     for start in range(0, nd, block):
         stop = min(nd, start + block)
@@ -359,37 +501,135 @@ def vold_kalman(x, *, fs=None, speed_rpm, orders, bandwidth_hz=None, bandwidth_o
         n_coef = b - a if m == 1 else (b - a - 1) // m + 4
         at_knots = np.clip(a + (np.arange(n_coef - p) + 0.5 * p - (0 if m == 1 else 1)) * m,
                            a, b - 1).astype(np.int64)
-        r2 = vkf_weight(bw_d[at_knots], fs_d, p) ** 2 * float(m) ** (1 - 2 * p)
-        e, mdl = _solve_block(xd[a:b], phase[a:b], r2, p, m)
+        r2 = vkf_weight(bw_all[at_knots], fs_d, p) ** 2 * float(m) ** (1 - 2 * p)
+        e, mn, mdl = _solve_block(xd[a:b], phase[a:b], r2, p, m, trend)
         env[start:stop] = e[start - a: stop - a]
+        mean[start:stop] = mn[start - a: stop - a]
         model[start:stop] = mdl[start - a: stop - a]
     residual = xd - model
-    # one-sided noise density near the orders (the decimation filter shapes the band above)
-    from scipy.signal import welch
-
-    freq, psd = welch(residual, fs_d, nperseg=min(4096, nd))
-    band = psd[(freq > 0) & (freq <= f_max)]
-    n0 = float(np.median(band)) if band.size else 2.0 * float(np.mean(residual ** 2)) / fs_d
-    std = np.sqrt(n0 * enbw_hz(bw_d.mean(axis=0), p))
+    noise, smear = _uncertainty(env, residual, fs_d, orders, rpm_d if speeds is None
+                                else speeds[:, index].T, bw_d, p, f_max)
     t = index / fs
     import xarray as xr
 
     recon = np.real(env * np.exp(1j * phase)).T
+    std = np.sqrt(np.mean(noise ** 2, axis=0))
     ds = xr.Dataset(
         {"envelope": (("order", "time"), env.T, {"units": units, "long_name":
                                                   "complex envelope A of Re{A exp(i o phi)}"}),
          "reconstruction": (("order", "time"), recon, {"units": units}),
-         "residual": (("time",), residual, {"units": units})},
+         "mean": (("time",), mean, {"units": units, "long_name":
+                                    "order 0: trend envelope (the channel's mean)"}),
+         "residual": (("time",), residual, {"units": units}),
+         "amplitude_noise": (("order", "time"), noise.T, {"units": units, "long_name":
+                                                          "1-sigma amplitude noise"}),
+         "amplitude_uncertainty": (("order", "time"), np.hypot(noise, smear).T,
+                                   {"units": units, "long_name": "1-sigma amplitude noise and "
+                                    "estimated envelope smearing"})},
         coords={"order": ("order", orders, {"units": "1"}),
                 "time": ("time", t, {"units": "s"}),
-                "rpm": ("time", speeds[0, index], {"units": "rpm"})},
-        attrs={"method": "Vold-Kalman filter (joint, banded Cholesky)",
+                "rpm": ("time", rpm_d, {"units": "rpm"})},
+        attrs={"method": "Vold-Kalman filter (joint with an order-0 trend, banded Cholesky)"
+                         if trend else "Vold-Kalman filter (joint, banded Cholesky)",
                "channel": label, "bandwidth": kind, "filter_order": p,
-               "bandwidth_hz_min": float(bw_t.min()),
+               "bandwidth_hz_min": float(np.min(bw_low)), "bandwidth_hz_max": float(np.max(bw_top)),
+               "trend_bandwidth_hz": b_trend if trend else float("nan"),
                "solve_rate_hz": fs_d, "decimation": int(round(fs / fs_d)),
                "block_samples": block, "overlap_samples": overlap, "knot_spacing_samples": m,
                "amplitude_std_estimate": std.tolist(),
-               "error_note": "noise part sqrt(N0*ENBW); envelope changes faster than the "
-                             "bandwidth are attenuated by |H|"})
+               "error_note": "amplitude_uncertainty = noise sqrt(N0*ENBW) and the smearing of "
+                             "the envelope estimated from its second derivative "
+                             f"(K_p/(pi T B)^(2p), K_p = {smearing_constant(p):.4g})"})
     log.debug("vold_kalman %s: %d orders, %d samples at %.6g Hz", label, k, nd, fs_d)
     return ds
+
+
+def _uncertainty(env, residual, fs_d, orders, rpm_d, bw_d, p, f_pass):
+    """(noise, smearing) per sample and order, both 1-σ-like amplitudes in signal units.
+
+    Noise: ``sqrt(N0 · ENBW)`` with ``N0`` the residual's one-sided density beside each order,
+    local in time and frequency: short-time spectra of the residual (frames of at least 2 s),
+    median over the bins within ±max(8 B, 20 bins) of the order's frequency outside its own
+    notch (±2 B): the lower quartile divided by ln(4/3) (quartile of an exponential variable),
+    robust to the lines of orders not tracked that pass by (up to three quarters of the
+    bins). Smearing: for a Lorentzian envelope of
+    half-power crossing time ``T`` the relative peak loss is ``K_p/(πTB)^{2p}``; ``T`` follows
+    from the solved envelope as ``T² = 8|A|/|A''|``, i.e. loss
+    ``K_p (|A''|/(8|A|))^p/(πB)^{2p}``, with the noise part of ``|A''|²`` removed first."""
+    nd, k = env.shape
+    f_ord = orders[None, :] * (rpm_d if rpm_d.ndim == 2 else rpm_d[:, None]) / 60.0
+    n0 = _local_noise(residual, fs_d, f_ord, bw_d, f_pass)
+    noise = np.sqrt(n0 * enbw_hz(bw_d, p))
+    if nd < 8:
+        return noise, np.zeros_like(noise)
+    dt = 1.0 / fs_d
+    d2 = np.zeros_like(env)
+    d2[1:-1] = (env[2:] - 2.0 * env[1:-1] + env[:-2]) / dt ** 2
+    d2[0], d2[-1] = d2[1], d2[-2]
+    # noise part of |A''|²: N0 ∫ (2 sin(πν/fs)·fs)^4 |H(ν)|² dν over the solve band
+    nu = np.linspace(-0.5 * fs_d, 0.5 * fs_d, 4097)
+    gain4 = (2.0 * np.sin(np.pi * nu / fs_d) * fs_d) ** 4
+    out = np.zeros_like(noise)
+    amp = np.abs(env)
+    for j in range(k):
+        bw = bw_d[:, j]
+        # the integral scales as B^5 for p = 2 (B^3 for p = 1 within the band): evaluate at the
+        # median bandwidth and scale
+        b0 = float(np.median(bw))
+        r = vkf_weight(b0, fs_d, p)
+        h2 = (1.0 / (1.0 + 2.0 * r ** 2 * (2.0 * np.sin(np.pi * nu / fs_d)) ** (2 * p))) ** 2
+        per_n0 = np.trapezoid(gain4 * h2, nu) * (bw / b0) ** (5 if p == 2 else 4)
+        # |A''|² averaged over the filter's response time, less ten times its expected
+        # noise part (E|A''_noise|² = 2 N0 ∫ D⁴|H|²): only curvature well above the noise
+        # counts (noise alone would otherwise read as smearing that grows with B)
+        span = max(1, int(round(fs_d / (2.0 * bw.min()))))
+        a2 = _moving_mean(np.abs(d2[:, j]) ** 2, span) - 10.0 * 2.0 * n0[:, j] * per_n0
+        a2 = np.maximum(a2, 0.0)
+        ratio = np.sqrt(a2) / np.maximum(amp[:, j], 1e-300)
+        loss = smearing_constant(p) * (ratio / 8.0) ** p / (np.pi * bw) ** (2 * p)
+        out[:, j] = np.minimum(loss, 1.0) * amp[:, j]
+    return noise, out
+
+
+def _local_noise(residual, fs_d, f_ord, bw_d, f_pass):
+    """One-sided noise density (units²/Hz) of the residual beside each order, per sample."""
+    nd, k = f_ord.shape
+    length = int(2 ** np.ceil(np.log2(max(64.0, 2.0 * fs_d))))
+    length = min(length, int(2 ** np.floor(np.log2(max(64, nd)))))
+    hop = length // 2
+    starts = np.arange(0, max(1, nd - length + 1), hop)
+    win = np.hanning(length + 1)[:length]
+    frames = residual[starts[:, None] + np.arange(min(length, nd))[None, :]]
+    if frames.shape[1] < length:                       # a record shorter than one frame
+        win = np.hanning(frames.shape[1] + 1)[:frames.shape[1]]
+    spec = np.abs(np.fft.rfft(frames * win, axis=1)) ** 2 * (2.0 / (fs_d * np.sum(win ** 2)))
+    freq = np.fft.rfftfreq(frames.shape[1], 1.0 / fs_d)
+    df = float(freq[1]) if freq.shape[0] > 1 else fs_d
+    centre = starts + 0.5 * frames.shape[1]
+    flat = (freq > 0) & (freq <= f_pass)
+    out = np.empty((nd, k))
+    for j in range(k):
+        b = float(np.median(bw_d[:, j]))
+        reach = max(8.0 * b, 20.0 * df)
+        level = np.empty(starts.shape[0])
+        f_frame = np.interp(centre, np.arange(nd), f_ord[:, j])
+        for i, f0 in enumerate(f_frame):
+            near = flat & (np.abs(freq - f0) <= reach) & (np.abs(freq - f0) > 2.0 * b)
+            if near.sum() < 5:
+                near = flat
+            # lower quartile of an exponential variable: ln(4/3) of its mean (robust to up to
+            # three quarters of the bins holding lines of orders not tracked)
+            level[i] = (float(np.percentile(spec[i, near], 25.0)) / np.log(4.0 / 3.0)
+                        if near.any() else 0.0)
+        out[:, j] = np.interp(np.arange(nd), centre, level)
+    return out
+
+
+def _moving_mean(x, length):
+    if length <= 1 or x.shape[0] <= length:
+        return x
+    c = np.concatenate([[0.0], np.cumsum(x)])
+    out = (c[length:] - c[:-length]) / length
+    pad_a = (length - 1) // 2
+    return np.concatenate([np.full(pad_a, out[0]), out,
+                           np.full(x.shape[0] - out.shape[0] - pad_a, out[-1])])

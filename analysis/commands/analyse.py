@@ -1,8 +1,12 @@
 """``crankbench analyse RECORD --channel NAME --orders 0.5,1,1.5``: order analysis of a record.
 
-Reads the record (``measure.read``), takes the shaft speed from its speed channel or pulse train
-(``analysis.speedref``), tracks the requested orders (COT or Vold–Kalman) and prints, per order,
-the largest amplitude, the speed where it occurs and the mean amplitude. ``--json`` prints the
+Reads the record (``measure.read``), takes the shaft speed (and the encoder angle) from its speed
+channel, pulse train, encoder angle or IAS channel (``analysis.speedref``), tracks the requested
+orders (by default with settings chosen from the record, ``analysis.autotrack``; or COT or
+Vold–Kalman) and prints, per order, the largest amplitude, the speed where it occurs and the mean
+amplitude, then the settings chosen and why (sweep rate or 'steady', the channel's trend, the
+phase reference, the largest uncertainty per order); a constant-speed record also gets its
+steady-state order table (amplitude and phase ± 1 σ). ``--json`` prints the
 same plus the parameters used and the tracks (at most ``--json-points`` points per order).
 ``--plot DIR`` writes ``order_map.png``, ``campbell.png`` and ``order_tracks.png`` atomically;
 existing files are kept unless ``--overwrite``.
@@ -37,20 +41,22 @@ def configure(parser) -> None:
     parser.add_argument("--channel", required=True, help="channel to analyse")
     add_list(parser, "--orders", item=positive_order, metavar="Q", required=True,
              help="orders to track, e.g. 0.5,1,1.5")
-    parser.add_argument("--method", choices=("cot", "vkf"), default="cot",
-                        help="computed order tracking (default) or Vold-Kalman filter")
+    parser.add_argument("--method", choices=("auto", "cot", "vkf"), default="auto",
+                        help="auto (default: settings chosen from the record, printed), computed "
+                             "order tracking or Vold-Kalman filter")
     parser.add_argument("--amplitude", choices=("peak", "rms", "peak-to-peak"), default="peak",
                         help="amplitude convention (default peak)")
     parser.add_argument("--speed-channel", default=None,
                         help="speed source (rotational_speed channel or pulse train); "
                              "default: found in the record")
-    parser.add_argument("--revolutions", type=integer(low=1, high=4096), default=16,
+    parser.add_argument("--revolutions", type=integer(low=1, high=4096), default=None,
                         help="COT/map block length in revolutions, 1..4096 (order resolution "
-                             "1/N)")
+                             "1/N); default: chosen from the sweep rate and the order spacing "
+                             "(COT), 16 (map)")
     parser.add_argument("--samples-per-rev", type=integer(low=8, high=MAX_SAMPLES_PER_REV),
-                        default=64,
+                        default=None,
                         help=f"angle samples per revolution, 8..{MAX_SAMPLES_PER_REV} (orders "
-                             "up to N/4)")
+                             "up to N/4; default 64, more for orders above 16)")
     parser.add_argument("--bandwidth-hz", type=number(low=0.0, strict_low=True), default=None,
                         help="VKF -3 dB bandwidth, Hz")
     parser.add_argument("--bandwidth-orders", type=number(low=0.0, high=2.0, strict_low=True),
@@ -79,11 +85,12 @@ def check_args(args) -> None:
     from crankbench.predict.errors import ConfigError
 
     top = max(args.orders)
-    if args.method == "cot" or args.plot:
-        if top > args.samples_per_rev / 4:
+    spr = args.samples_per_rev        # None: chosen for the orders (64, more above order 16)
+    if spr is not None and (args.method != "vkf" or args.plot):
+        if top > spr / 4:
             need = 1 << int(np.ceil(np.log2(4 * top)))
             raise ConfigError(f"--orders {top:g} exceeds --samples-per-rev/4 = "
-                              f"{args.samples_per_rev / 4:g} (the anti-alias pass band); use "
+                              f"{spr / 4:g} (the anti-alias pass band); use "
                               f"--samples-per-rev {max(need, 8)} or more")
     if args.method == "cot":
         used = [f for f, v in (("--bandwidth-hz", args.bandwidth_hz),
@@ -105,7 +112,7 @@ def check_size(args, record, channel) -> None:
 
     n = float(record[channel].shape[0])
     k = len(args.orders)
-    if args.method == "vkf":
+    if args.method in ("vkf", "auto"):
         # the joint Vold-Kalman solve holds a banded system of about 2·filter order + 1
         # bands per order pair: ~ n (2 k)^2 (2 p + 1) float64
         nbytes = 8.0 * n * (2 * k) ** 2 * (2 * args.filter_order + 1) + 48.0 * n * k
@@ -113,14 +120,65 @@ def check_size(args, record, channel) -> None:
         hint = "track fewer --orders at once, or use --method cot"
     else:
         fs = float(record[channel].attrs.get("sample_rate") or 1.0)
+        spr = args.samples_per_rev or max(64, 1 << int(np.ceil(np.log2(4 * max(args.orders)))))
         # the angle-domain signal: at most as many samples per revolution as asked, over the
         # record's revolutions; bounded above by the record length times the upsampling
         revs_bound = n / fs * 2e5 / 60.0              # never above 200 000 rpm
-        angle = min(revs_bound * args.samples_per_rev, max(n, 1.0) * args.samples_per_rev)
+        angle = min(revs_bound * spr, max(n, 1.0) * spr)
         nbytes = 8.0 * angle * 4 + 48.0 * n
-        what = f"--samples-per-rev {args.samples_per_rev} on {n:.3g} samples"
+        what = f"--samples-per-rev {spr} on {n:.3g} samples"
         hint = "lower --samples-per-rev"
     check_allocation(nbytes, what=what, hint=hint, error=ConfigError)
+
+
+def _settings_text(tracks, rpm) -> list:
+    """What was chosen and why: the tracker's settings, the sweep rate (or 'steady'), the
+    channel's trend and the phase reference, one line each."""
+    import numpy as np
+
+    from crankbench.analysis.autotrack import steady_speed, sweep_rate
+
+    lines = []
+    if rpm is not None:
+        fs = float(rpm.attrs.get("sample_rate", 0) or 0) or (
+            1.0 / float(np.median(np.diff(rpm[rpm.dims[0]].values))) if rpm.size > 1 else 1.0)
+        lines.append("speed: steady (no sweep)" if steady_speed(rpm.values, fs) else
+                     f"sweep rate: {sweep_rate(rpm.values, fs):.4g} rpm/s (median)")
+    for key in ("auto_settings", "trend", "phase_reference"):
+        if tracks.attrs.get(key):
+            lines.append(f"{key.replace('_', ' ')}: {tracks.attrs[key]}")
+    if "amplitude_uncertainty" in tracks:
+        unc = np.nanmax(tracks["amplitude_uncertainty"].values, axis=1)
+        lines.append("largest 1-sigma uncertainty (noise and smearing): " + ", ".join(
+            f"order {o:g}: {u:.3g}" for o, u in zip(tracks["order"].values, unc)))
+    return lines
+
+
+def _steady_table(channel, rpm, args):
+    """The steady-state order table of a constant-speed record, else None."""
+    import numpy as np
+
+    from crankbench.analysis.autotrack import steady_speed
+    from crankbench.analysis.steady import steady_orders
+    from crankbench.predict.errors import AnalysisError
+
+    fs = float(channel.attrs["sample_rate"])
+    if not steady_speed(np.asarray(rpm.values, float), fs):
+        return None
+    try:
+        return steady_orders(channel, speed_rpm=rpm, orders=args.orders,
+                             amplitude=args.amplitude)
+    except AnalysisError as exc:
+        log.info("no steady-state table: %s", exc)
+        return None
+
+
+def _map_spr(args) -> int:
+    """Angle samples per revolution of the order map: as given, else 64 or the power of two
+    that keeps every requested order below a quarter of it (as the trackers choose)."""
+    if args.samples_per_rev:
+        return int(args.samples_per_rev)
+    return max(64, 1 << int(np.ceil(np.log2(4 * max(args.orders)))))
 
 
 def _summary(tracks):
@@ -130,11 +188,16 @@ def _summary(tracks):
     rows = []
     for o in tracks["order"].values:
         amp = tracks["amplitude"].sel(order=o).values
-        i = int(np.argmax(amp))
+        if not np.isfinite(amp).any():       # (results NaN where the filter is unsettled)
+            rows.append({"order": float(o), "max_amplitude": float("nan"),
+                         "speed_rpm_at_max": float("nan"), "time_s_at_max": float("nan"),
+                         "mean_amplitude": float("nan")})
+            continue
+        i = int(np.nanargmax(amp))
         rows.append({"order": float(o), "max_amplitude": float(amp[i]),
                      "speed_rpm_at_max": float(tracks["rpm"].values[i]),
                      "time_s_at_max": float(tracks["time"].values[i]),
-                     "mean_amplitude": float(np.mean(amp))})
+                     "mean_amplitude": float(np.nanmean(amp))})
     return pd.DataFrame(rows)
 
 
@@ -187,7 +250,7 @@ def run(args) -> int:
     check_size(args, record, args.channel)
     kwargs = dict(orders=args.orders, amplitude=args.amplitude, method=args.method,
                   samples_per_rev=args.samples_per_rev, revolutions=args.revolutions)
-    if args.method == "vkf":
+    if args.method in ("vkf", "auto"):
         kwargs.update(bandwidth_hz=args.bandwidth_hz, bandwidth_orders=args.bandwidth_orders,
                       filter_order=args.filter_order)
     if streaming:
@@ -202,6 +265,7 @@ def run(args) -> int:
         tracks = order_track(channel, speed_rpm=rpm, **kwargs)
     summary = _summary(tracks)
     units = tracks["amplitude"].attrs.get("units", "")
+    steady = _steady_table(channel, rpm, args) if rpm is not None else None
     if args.json:
         step = max(1, int(np.ceil(tracks.sizes["time"] / max(1, args.json_points))))
         sub = tracks.isel(time=slice(None, None, step))
@@ -210,6 +274,8 @@ def run(args) -> int:
             "amplitude_convention": args.amplitude,
             "parameters": {k: v for k, v in tracks.attrs.items()},
             "summary": summary,
+            "settings": _settings_text(tracks, rpm),
+            "steady_orders": steady,
             "tracks": {"time_s": sub["time"].values, "speed_rpm": sub["rpm"].values,
                        "orders": {f"{o:g}": {"amplitude": sub["amplitude"].sel(order=o).values,
                                              "phase_rad": sub["phase"].sel(order=o).values}
@@ -219,6 +285,12 @@ def run(args) -> int:
     else:
         print_table(summary, title=f"{args.channel} [{units}], {args.amplitude} amplitude, "
                                    f"method {args.method} ({tracks.attrs.get('method', '')})")
+        for line in _settings_text(tracks, rpm):
+            print(line)
+        if steady is not None:
+            print_table(steady, title=f"{args.channel}: steady-state orders (constant speed, "
+                                      f"±1 sigma), phases from "
+                                      f"{steady.attrs.get('phase_reference', '')}")
     if targets:
         import matplotlib
 
@@ -233,8 +305,8 @@ def run(args) -> int:
             from crankbench.analysis.stream import order_map_stream
 
             omap = order_map_stream(record, args.channel, speed_channel=args.speed_channel,
-                                    samples_per_rev=args.samples_per_rev,
-                                    revolutions=args.revolutions, amplitude=args.amplitude)
+                                    samples_per_rev=_map_spr(args),
+                                    revolutions=args.revolutions or 16, amplitude=args.amplitude)
             # the Campbell map needs the channel in memory: low-passed and decimated, streamed
             from crankbench.analysis.stream import decimate_stream
 
@@ -245,8 +317,8 @@ def run(args) -> int:
             log.info("Campbell map of the streamed record at %.6g Hz (decimated by %d)", fs,
                      channel.attrs["decimation"])
         else:
-            omap = order_map(channel, speed_rpm=rpm, samples_per_rev=args.samples_per_rev,
-                             revolutions=args.revolutions, amplitude=args.amplitude)
+            omap = order_map(channel, speed_rpm=rpm, samples_per_rev=_map_spr(args),
+                             revolutions=args.revolutions or 16, amplitude=args.amplitude)
         nperseg = int(2 ** np.clip(np.round(np.log2(fs)), 8, 16))
         top = max(args.orders) * float(np.max(rpm)) / 60.0 * 1.5
         camp = campbell_map(channel, speed_rpm=rpm, nperseg=min(nperseg, channel.shape[0]),

@@ -217,8 +217,13 @@ def build_report(result, *, title=None, parameters=None, record_path=None, model
                                    "drawn.", section=sec)
         except Exception as exc:
             log.warning("mode-shape figure skipped: %s", exc)
-    # the identified resonances are drawn on the order-track figure (in display units)
-    rep.add_resonances(result.resonances, section="Measured resonances", figure=False)
+    steady = getattr(result, "steady_orders", None)
+    if steady is not None:
+        # a constant-speed record: the steady-state orders, not a sweep and its resonances
+        rep.add_steady_orders(steady, section="Steady-state orders")
+    else:
+        # the identified resonances are drawn on the order-track figure (in display units)
+        rep.add_resonances(result.resonances, section="Measured resonances", figure=False)
     lo, hi = result.speed_range_rpm
     rep.add_comparison(result.comparison, figure=figures, amplitude_units=result.units,
                        verdict=result.verdicts[0])

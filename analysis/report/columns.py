@@ -69,6 +69,10 @@ COLUMNS = {
     "measured_max": ("measured max.", "{amp}", "amp"),
     "balanced_by_design": ("balanced by design", "", "bool"),
     "phase_deg": ("phase", "deg", "phase"),
+    "amplitude_uncertainty": ("± amplitude (1σ)", "{amp}", "amp"),
+    "phase_uncertainty_deg": ("± phase (1σ)", "deg", "sig3"),
+    "segment": ("steady segment", "", "int"),
+    "revolutions": ("revolutions", "", "int"),
     "status": ("status", "", "text"),
 }
 

@@ -376,6 +376,22 @@ class Report:
             self.add_figure(resonances.plot(), title=f"{title}: order amplitude against speed",
                             section=sec)
 
+    def add_steady_orders(self, table, *, title: str = "Steady-state order table",
+                          section: str | None = None) -> None:
+        """The steady-state order table of a constant-speed record
+        (:func:`analysis.steady.steady_orders`): amplitude and phase per order and steady
+        segment with their 1-σ uncertainty."""
+        cols = ["segment", "speed_rpm", "revolutions", "order", "amplitude",
+                "amplitude_uncertainty", "phase_deg", "phase_uncertainty_deg"]
+        units = str(table.attrs.get("units", ""))
+        self.add_table(table[[c for c in cols if c in table]], title=title,
+                       section=section or title, amplitude_units=units,
+                       caption=f"Constant-speed record: each order's steady-state amplitude "
+                               f"({table.attrs.get('amplitude_convention', 'peak')}) and phase "
+                               f"over whole revolutions, ±1 σ from the noise beside the orders "
+                               f"(no sweep, so no sweep rate and no resonance crossing). "
+                               f"Phases referred to {table.attrs.get('phase_reference', '')}.")
+
     def add_comparison(self, comparison, *, title: str = "Measurement against prediction",
                        section: str | None = None, figure: bool = True, amplitude_units="",
                        predicted=None, verdict=None) -> None:

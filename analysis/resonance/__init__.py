@@ -27,7 +27,8 @@ a linear sweep (lsim-generated tracks, ``analysis/bench/suite_resonance.py``) th
 fit recovers the critical speed to < 0.03 % and the steady-state amplitude to < 0.1 % for
 η = α/(ζ f_n)² ≤ 20, and to 0.2 % / 1.5 % at η ≈ 65. On a multi-mode point response a weak
 resonance on a large background of other modes is biased by the background (≈ 0.8 % in speed
-for the damper mode of the 6L32 scene at the free end); see ``tests/analysis/test_pipeline.py``.
+and up to 8 % in the sweep-corrected amplitude for the damper mode of the 6L32 scene at the free
+end); see ``tests/analysis/test_pipeline.py``.
 """
 
 from .finder import OrderCurve, Resonance, ResonanceTable, find_resonances

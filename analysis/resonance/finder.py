@@ -144,7 +144,8 @@ class Resonance:
     half_power_complete : bool
         Both half-power points observed.
     snr : float
-        Resonant amplitude / noise standard deviation.
+        Resonant amplitude / noise standard deviation: the track's own ``amplitude_noise``
+        at the peak when it has one, else the scatter of neighbouring points.
     confidence : float
         0..1: fit quality (R² of the modal fit; 0.25 when no SDOF shape could be fitted) ×
         SNR factor (1 − exp(−SNR/10)) × (1 if both half-power points were seen else 0.5).
@@ -160,6 +161,8 @@ class Resonance:
         Estimated shift of the peak by the sweep, rpm.
     sweep_corrected : bool
     method : str
+    merged : int
+        Further detections of the same peak (another sweep, another sample) merged into this.
     """
 
     order: float
@@ -188,6 +191,7 @@ class Resonance:
     sweep_shift_rpm: float
     sweep_corrected: bool
     method: str
+    merged: int = 0
 
 
 @dataclass(frozen=True)
@@ -275,8 +279,25 @@ class ResonanceTable:
 
 
 
+def _track_noise(track, order, n):
+    """The track's own 1-σ amplitude noise for one order (its ``amplitude_noise``, per order
+    or, for a COT track, per block times the order's least-squares noise gain), else None."""
+    if "amplitude_noise" not in track:
+        return None
+    noise = track["amplitude_noise"]
+    if "order" in noise.dims:
+        out = np.asarray(noise.sel(order=order).values, dtype=float)
+    else:
+        out = np.asarray(noise.values, dtype=float)
+        gains = track.attrs.get("noise_gain")
+        if gains is not None and len(gains) == track.sizes.get("order", 0):
+            k = int(np.argmin(np.abs(np.asarray(track["order"].values, float) - order)))
+            out = out * float(gains[k])
+    return out if out.shape[0] == n else None
+
+
 def _track_arrays(track, order):
-    """(rpm, time or None, amplitude, complex or None) for one order of the track."""
+    """(rpm, time or None, amplitude, complex or None, noise or None) for one order."""
     sub = track.sel(order=order)
     amp = np.asarray(sub["amplitude"].values, dtype=float)
     dim = sub["amplitude"].dims[0] if sub["amplitude"].ndim == 1 else None
@@ -298,13 +319,16 @@ def _track_arrays(track, order):
         if units.startswith("deg"):
             ph = np.deg2rad(ph)
         comp = amp * np.exp(1j * ph)
+    noise = _track_noise(track, order, amp.shape[0])
     ok = np.isfinite(rpm) & np.isfinite(amp)
     if comp is not None:
         ok &= np.isfinite(comp)
     if time is not None:
         ok &= np.isfinite(time)
+    if noise is not None:
+        noise = np.where(np.isfinite(noise), noise, 0.0)
     return (rpm[ok], None if time is None else time[ok], amp[ok],
-            None if comp is None else comp[ok])
+            None if comp is None else comp[ok], None if noise is None else noise[ok])
 
 
 @single_threaded_blas  # many tiny least-squares fits: BLAS threads only cost (issue 21)
@@ -452,7 +476,7 @@ def find_resonances(track, *, orders=None, response=None, min_snr=5.0, min_promi
     floor_abs = min_amplitude_fraction * global_max
     found, curves = [], []
     for order in orders:
-        rpm, time, amp, comp = _track_arrays(track, order)
+        rpm, time, amp, comp, track_noise = _track_arrays(track, order)
         if rpm.size < 16:
             log.info("order %g: only %d finite points, skipped", order, rpm.size)
             continue
@@ -471,7 +495,9 @@ def find_resonances(track, *, orders=None, response=None, min_snr=5.0, min_promi
                 t_seg = time[seg]
                 rate_fn = _local_rate(t_seg, r_seg)
             n_bins = int(min(r_seg.size, max_points))
-            x, (a, c) = _bin(r_seg, [amp[seg], None if comp is None else comp[seg]], n_bins)
+            x, (a, c, sig_track) = _bin(r_seg, [amp[seg], None if comp is None else comp[seg],
+                                                None if track_noise is None
+                                                else track_noise[seg]], n_bins)
             if x.size < 16:
                 continue
             # lower envelope of log amplitude: always positive, and a large peak elsewhere
@@ -480,9 +506,15 @@ def find_resonances(track, *, orders=None, response=None, min_snr=5.0, min_promi
             base = np.exp(_baseline(x, np.log(np.maximum(a, floor)), baseline_degree))
             curves.append(OrderCurve(order, k, direction, x, a, base))
             resid = a - base
-            sigma = _robust_noise(resid)
             floor = 1e-9 * max(np.max(np.abs(a)), 1e-300)
-            sigma = max(sigma, floor)
+            # the noise a peak is judged against: the track's own uncertainty where it has one
+            # (a filtered track's noise is correlated over the filter's response, which the
+            # differences between neighbouring points do not see), else the differences
+            sigma = max(_robust_noise(resid), floor)
+            sigma_at = np.full(x.shape[0], sigma)
+            if sig_track is not None:
+                sigma_at = np.maximum(sigma_at, sig_track)
+                sigma = max(sigma, float(np.median(sig_track)))
             peaks, props = find_peaks(resid, prominence=max(min_snr * sigma, floor_abs))
             if peaks.size == 0:
                 continue
@@ -493,12 +525,16 @@ def find_resonances(track, *, orders=None, response=None, min_snr=5.0, min_promi
                 prom = float(props["prominences"][j])
                 if prom < min_prominence * a[i]:
                     continue
-                res = _identify(x, a, c, base, resid, i, p, response, order, sigma, prom,
+                if prom < min_snr * sigma_at[i]:
+                    continue
+                res = _identify(x, a, c, base, resid, i, p, response, order,
+                                max(sigma, float(sigma_at[i])), prom,
                                 max_damping, accepted, rate_fn, direction, k,
                                 sweep_correction, min_damping)
                 if res is None or res.confidence < min_confidence:
                     continue
                 found.append(res)
+    found = _merge_duplicates(found)
     found.sort(key=lambda r: (r.order, r.sweep, r.speed_rpm))
     settings = {"response": response, "min_snr": min_snr, "min_prominence": min_prominence,
                 "max_damping": max_damping, "min_damping": min_damping,
@@ -510,12 +546,52 @@ def find_resonances(track, *, orders=None, response=None, min_snr=5.0, min_promi
     return ResonanceTable(tuple(found), tuple(curves), units, convention, settings)
 
 
+def _merge_duplicates(found):
+    """One resonance per (order, direction, peak): resonances of the same order and sweep
+    direction whose critical speeds lie within the larger half-power half-width (ζ·n) of each
+    other — the same peak seen in two sweeps of a partial or interrupted run-up, or from two
+    samples — are one; the most confident is kept and ``merged`` counts the others (a run-up
+    and a run-down stay separate measurements)."""
+    import dataclasses
+
+    out = []
+    by_order = {}
+    for r in found:
+        by_order.setdefault((r.order, r.direction), []).append(r)
+    for order, group in by_order.items():
+        group = sorted(group, key=lambda r: r.confidence, reverse=True)
+        kept = []
+        for r in group:
+            same = [k for k in kept if abs(k.speed_rpm - r.speed_rpm)
+                    <= max(k.damping_ratio * k.speed_rpm, r.damping_ratio * r.speed_rpm)]
+            if same:
+                i = kept.index(same[0])
+                kept[i] = dataclasses.replace(kept[i], merged=kept[i].merged + 1)
+            else:
+                kept.append(r)
+        out.extend(kept)
+    return out
+
+
+def _stepped(t, rpm) -> bool:
+    """A dwell/stepped test: the speed holds on plateaus and jumps between them (most
+    consecutive points change by less than 2 % of the mean change), so there is no sweep."""
+    d = np.abs(np.diff(rpm[np.argsort(t)]))
+    if d.size < 8 or d.mean() <= 0:
+        return False
+    return bool(np.median(d) < 0.02 * d.mean())
+
+
 def _local_rate(t, rpm):
-    """Callable: local d(rpm)/dt (rpm/s) at a given speed, from a straight-line fit nearby."""
+    """Callable: local d(rpm)/dt (rpm/s) at a given speed, from a straight-line fit nearby
+    (0 on a dwell/stepped test: the response at each step is steady, nothing to correct)."""
     order = np.argsort(t)
     t, rpm = t[order], rpm[order]
+    stepped = _stepped(t, rpm)
 
     def rate(speed_rpm, half_window_rpm):
+        if stepped:
+            return 0.0
         near = np.abs(rpm - speed_rpm) <= max(half_window_rpm, 1e-9)
         if near.sum() < 3:
             i = int(np.argmin(np.abs(rpm - speed_rpm)))

@@ -41,19 +41,30 @@ def test_amplitude_conventions(amplitude, factor):
 
 
 def test_parseval_power_scaling():
-    """Σ of the power spectrum equals the windowed mean square (Parseval), any window."""
+    """Σ of the power spectrum over orders > 0 equals the windowed mean square of the block with
+    its window-weighted trend (constant and slope) removed (Parseval), and order 0 holds the squared
+    block mean; any window. The block is rebuilt here from angle_resample independently."""
     fs = 4096.0
     rng = np.random.default_rng(4)
-    x = rng.normal(size=16384)
+    x = rng.normal(size=16384) + 0.7
+    from scipy.signal import get_window
     for window in ("boxcar", "hann", "flattop"):
         p = order_map(x, fs=fs, speed_rpm=1200.0, revolutions=8, window=window, scaling="power",
                       max_order=32, samples_per_rev=64)
         y = angle_resample(x, fs=fs, speed_rpm=1200.0, samples_per_rev=64)
-        from scipy.signal import get_window
         w = get_window(window, 512)
-        seg = y.values[:512] * w
-        assert p.isel(time=0).sum() == pytest.approx(np.sum(seg ** 2) / np.sum(w ** 2),
-                                                     rel=1e-10)
+        s = np.linspace(-1, 1, 512)
+        basis = np.stack([np.ones(512), s], axis=1)
+        wp = np.clip(w, 0, None)                     # weights: the window, negative lobes cut
+        coef = np.linalg.solve(basis.T @ (basis * wp[:, None]), basis.T @ (wp * y.values[:512]))
+        seg = (y.values[:512] - basis @ coef) * w
+        first = p.isel(time=0)
+        # Parseval over all bins of the detrended block; its own bin 0 (zero for a window
+        # without negative lobes) is replaced by the mean
+        own_dc = np.sum(seg) ** 2 / (512 * np.sum(w ** 2))
+        assert float(first.isel(order=slice(1, None)).sum()) == pytest.approx(
+            np.sum(seg ** 2) / np.sum(w ** 2) - own_dc, rel=1e-10)
+        assert float(first.isel(order=0)) == pytest.approx(coef[0] ** 2, rel=1e-10)
 
 
 def test_order_exactly_between_bins_band_energy():
@@ -130,7 +141,8 @@ def test_errors_name_the_argument():
         order_track(np.zeros(2000), fs=1000.0, speed_rpm=600.0, orders=[1], revolutions=64)
     with pytest.raises(AnalysisError, match=r"order 20 exceeds samples_per_rev/4 = 16 .*"
                                             r"use samples_per_rev >= 80"):
-        order_track(np.zeros(20000), fs=1000.0, speed_rpm=600.0, orders=[1, 20])
+        order_track(np.zeros(20000), fs=1000.0, speed_rpm=600.0, orders=[1, 20],
+                    samples_per_rev=64)
     with pytest.raises(AnalysisError, match=r"order 12 reaches 600 Hz at 3000 rpm, above the "
                                             r"Nyquist frequency 500 Hz"):
         order_track(np.zeros(20000), fs=1000.0, speed_rpm=3000.0, orders=[12])

@@ -1,0 +1,418 @@
+"""Order map, order spectrum, band amplitudes and the rpm–frequency (Campbell) map.
+
+``order_map`` — the order spectrum of each block of revolutions (rfft of the angle-domain
+block): the picture of every order against speed. Its amplitude per bin is the *coherent*
+(peak) amplitude; with ``scaling="power"`` each bin holds mean-square, so that
+:func:`band_amplitude` can sum the energy of an order band (an order between bins loses
+nothing). Each block's weighted mean and slope (the channel's trend: a speed channel's mean, a
+sensor's drift) are removed before its window and rfft and reported as order 0 (the block
+mean), so no trend leaks into low orders. Same resolution trade-off as COT
+(:mod:`analysis.orders`).
+
+References
+----------
+G. Heinzel, A. Rüdiger, R. Schilling, "Spectrum and spectral density estimation by the DFT",
+Max-Planck-Institut report (2002), §9–10 (window normalisation, ENBW, band power).
+"""
+
+from __future__ import annotations
+
+import functools
+import logging
+
+import numpy as np
+
+from crankbench.predict._deprecate import renamed
+from crankbench.predict._validate import (check_finite_array, check_int, check_option,
+                                          check_positive, check_range)
+from crankbench.predict.errors import AnalysisError
+
+from .orders import (_check_order_range, _check_orders, _frame_batches, _frames, _scale_spectrum,
+                     _t0, amplitude_factor, get_window)
+from .resample import _angle_input, _as_rpm, _as_signal, angle_resample, resample_arrays
+
+__all__ = ["order_map", "order_spectrum", "band_amplitude", "campbell_map"]
+
+log = logging.getLogger("crankbench")
+
+
+# ---------------------------------------------------------------------------- order map
+
+
+class MapSpectra:
+    """Order spectra of angle-domain blocks with each block's trend removed first.
+
+    The weighted (window, negative lobes clipped) least-squares constant and slope of each block
+    are subtracted before
+    the window and the rfft; the constant (the block mean) is then put in bin 0 (amplitude:
+    its magnitude; power: its square), so the channel's mean and drift cannot leak into low
+    orders. Shared by :func:`order_map` and :func:`analysis.stream.order_map_stream`.
+    """
+
+    def __init__(self, length: int, window, scaling: str, factor: float, n_orders: int):
+        self.w = w = get_window(window, length)
+        self.length, self.scaling, self.factor, self.n_orders = length, scaling, factor, n_orders
+        s = np.linspace(-1.0, 1.0, length)
+        basis = np.stack([np.ones(length), s], axis=1)
+        weight = np.clip(w, 0.0, None)            # flat-top windows dip below zero
+        gram = basis.T @ (basis * weight[:, None])
+        self.proj = np.ascontiguousarray(np.linalg.solve(gram, (basis * weight[:, None]).T).T)
+        self.basis_t = np.ascontiguousarray(basis.T)
+        self.enbw = float(length * np.sum(w ** 2) / np.sum(w) ** 2)
+
+    def __call__(self, frames: np.ndarray) -> np.ndarray:
+        from scipy import fft
+
+        coef = frames @ self.proj
+        detrended = frames - coef @ self.basis_t
+        detrended *= self.w
+        out = _scale_spectrum(fft.rfft(detrended, axis=1)[:, :self.n_orders], self.w,
+                              self.scaling, self.factor)
+        out[:, 0] = np.abs(coef[:, 0]) if self.scaling == "amplitude" else coef[:, 0] ** 2
+        return out
+
+
+def _map_spectra(length, window, scaling, factor, n_orders):
+    """A cached :class:`MapSpectra` (its window and trend projection are set up once)."""
+    try:
+        return _cached_map_spectra(length, window, scaling, factor, n_orders)
+    except TypeError:                       # an unhashable window spec
+        return MapSpectra(length, window, scaling, factor, n_orders)
+
+
+@functools.lru_cache(maxsize=32)
+def _cached_map_spectra(length, window, scaling, factor, n_orders):
+    return MapSpectra(length, window, scaling, factor, n_orders)
+
+
+@renamed(rpm="speed_rpm", rpm_bins="speed_bins_rpm")
+def order_map(x, *, fs=None, speed_rpm, samples_per_rev: int = 64, revolutions: int = 16,
+              overlap: float = 0.5, window="hann", amplitude: str = "peak",
+              scaling: str = "amplitude", max_order=None, speed_bins_rpm=None,
+              interpolation: str = "auto", trend: str = "auto"):
+    """Order spectrum of each block of revolutions: the order map (time or rpm × order).
+
+    Parameters
+    ----------
+    x, fs, speed_rpm
+        Signal, sample rate (Hz) and shaft speed (rpm per sample) as in :func:`order_track`
+        (a ``shaft_angle`` coordinate of the speed is used for the resampling).
+    samples_per_rev, revolutions, overlap, window, interpolation
+        As in :func:`order_track`; bins are ``1/revolutions`` orders apart.
+    amplitude : {'peak', 'rms', 'peak-to-peak'}
+        Convention when ``scaling='amplitude'``.
+    scaling : {'amplitude', 'power'}
+        ``'amplitude'``: coherent amplitude per bin (exact for an order on a bin);
+        ``'power'``: mean square per bin (units²) so that band sums are exact
+        (:func:`band_amplitude`).
+    max_order : float, optional
+        Highest order kept (default ``samples_per_rev/4``, the anti-alias pass band; at most
+        ``samples_per_rev/2``, the bins above ``samples_per_rev/4`` being in the filter's
+        transition band).
+    speed_bins_rpm : int or array_like, optional
+        Average the blocks in speed bins (count or edges in rpm; power average). The result then
+        has dims (``rpm``, ``order``); otherwise (``time``, ``order``) with ``rpm`` along time.
+    trend : {'auto', 'none', 'angle ramp', 'speed mean'}
+        As in :func:`order_track`; each block's mean and slope are removed in any case and the
+        mean shown at order 0.
+
+    Returns
+    -------
+    xarray.DataArray
+        Order map with units in attrs and the parameters used; order 0 holds the block mean.
+
+    Examples
+    --------
+    >>> fs = 4000.0
+    >>> t = np.arange(int(6 * fs)) / fs
+    >>> rpm = 1200 + 100 * t
+    >>> from crankbench.analysis.resample import shaft_angle
+    >>> x = 0.7 * np.cos(3 * shaft_angle(rpm, fs)) + 2.0
+    >>> m = order_map(x, fs=fs, speed_rpm=rpm, revolutions=8)
+    >>> round(float(m.sel(order=3).mean()), 4), round(float(m.sel(order=0).mean()), 4), m.dims
+    (0.7, 2.0, ('time', 'order'))
+    """
+    scaling = check_option(scaling, "scaling", ("amplitude", "power"), error=AnalysisError)
+    factor = amplitude_factor(amplitude)
+    spr = check_int(samples_per_rev, "samples_per_rev", minimum=4, error=AnalysisError)
+    revolutions = check_int(revolutions, "revolutions", minimum=1, error=AnalysisError)
+    overlap = check_range(overlap, "overlap", 0.0, 1.0, inclusive=(True, False),
+                          error=AnalysisError)
+    top = spr / 4.0 if max_order is None else check_positive(max_order, "max_order",
+                                                             error=AnalysisError)
+    values, fs_, units, label = _as_signal(x, fs)
+    n = values.shape[0]
+    angle, reference = _angle_input(None, speed_rpm, n)
+    speed = _as_rpm(speed_rpm, n, fs_)
+    if max_order is not None:
+        _check_order_range(top, spr, values, fs_, speed, divisor=2)
+    from .resample import shaft_angle
+    from .trend import remove_trend
+
+    phi = shaft_angle(speed, fs_) if angle is None else angle
+    attrs_in = getattr(x, "attrs", {}) or {}
+    values, trend_info = remove_trend(values, fs_, phi=phi, speed_rpm=speed, kind=trend,
+                                      quantity=attrs_in.get("quantity"), units=units)
+    y, t_rel, r_s, ang, plan = resample_arrays(values, fs_, speed, samples_per_rev=spr,
+                                               interpolation=interpolation, angle=phi,
+                                               label=label)
+    length = spr * revolutions
+    starts = _frames(y.shape[0], length, overlap)
+    if starts.shape[0] == 0:
+        raise AnalysisError(
+            f"{label}: the record covers {y.shape[0] / spr:.4g} revolutions, fewer than one "
+            f"block of revolutions={revolutions}; lower revolutions")
+    n_orders = min(length // 2 + 1, int(np.floor(top * revolutions)) + 1)
+    spectra = _map_spectra(length, window, scaling, factor, n_orders)
+    out = np.empty((starts.shape[0], n_orders))
+    for sl in _frame_batches(starts):
+        out[sl] = spectra(y[starts[sl, None] + np.arange(length)[None, :]])
+    values = out
+    order_axis = np.arange(n_orders) / revolutions
+    from .orders import _block_coords
+
+    t, r, _ = _block_coords(t_rel, r_s, starts, length)
+    t = t + _t0(x)
+    out_units = units if scaling == "amplitude" else (f"({units})^2" if units else "1")
+    import xarray as xr
+
+    attrs = {"units": out_units, "method": "order map (angle resampling + block rfft, block "
+                                           "trend removed; order 0 = block mean)",
+             "scaling": scaling, "amplitude_convention": amplitude if scaling == "amplitude"
+             else "mean-square per bin", "window": str(window), "samples_per_rev": spr,
+             "revolutions": revolutions, "resolution_orders": 1.0 / revolutions,
+             "overlap": overlap, "interpolation": plan.interpolation,
+             "enbw_bins": spectra.enbw, "trend": trend_info["removed"],
+             "phase_reference": reference}
+    order_coord = ("order", order_axis, {"units": "1", "long_name": "shaft order"})
+    if speed_bins_rpm is None:
+        # built from Variables: half the cost of xarray's inference from tuples
+        coords = {"time": xr.Variable("time", t, {"units": "s"}),
+                  "rpm": xr.Variable("time", r, {"units": "rpm"}),
+                  "order": xr.Variable(*order_coord)}
+        return xr.DataArray(xr.Variable(("time", "order"), values, attrs), coords=coords,
+                            name=f"{label} order map")
+    edges = (np.linspace(r.min(), r.max() * (1 + 1e-12), int(speed_bins_rpm) + 1)
+             if np.isscalar(speed_bins_rpm) else check_finite_array(speed_bins_rpm,
+                                                                    "speed_bins_rpm", ndim=1,
+                                                              min_length=2, error=AnalysisError))
+    which = np.digitize(r, edges) - 1
+    keep = (which >= 0) & (which < edges.shape[0] - 1)
+    power = values ** 2 if scaling == "amplitude" else values
+    binned = np.full((edges.shape[0] - 1, n_orders), np.nan)
+    counts = np.bincount(which[keep], minlength=edges.shape[0] - 1)
+    for b in np.flatnonzero(counts):
+        binned[b] = power[keep][which[keep] == b].mean(axis=0)
+    if scaling == "amplitude":
+        binned = np.sqrt(binned)
+    filled = counts > 0
+    centres = 0.5 * (edges[1:] + edges[:-1])
+    attrs["rpm_averaging"] = "power mean of the blocks in each speed bin"
+    return xr.DataArray(binned[filled], dims=("rpm", "order"), name=f"{label} order map",
+                        coords={"rpm": ("rpm", centres[filled], {"units": "rpm"}),
+                                "blocks": ("rpm", counts[filled]), "order": order_coord},
+                        attrs=attrs)
+
+
+@renamed(rpm="speed_rpm")
+def order_spectrum(x, *, fs=None, speed_rpm, samples_per_rev: int = 64, revolutions=None,
+                   overlap: float = 0.5, window="hann", amplitude: str = "peak",
+                   scaling: str = "amplitude", max_order=None, interpolation: str = "auto"):
+    """Order spectrum at (nearly) steady speed, averaged over blocks (Welch, power average).
+
+    Parameters
+    ----------
+    x, fs, rpm, samples_per_rev, overlap, window, amplitude, scaling, max_order, interpolation
+        As in :func:`order_map`.
+    revolutions : int, optional
+        Block length in revolutions; default: the whole record in one block.
+
+    Returns
+    -------
+    xarray.DataArray
+        Over ``order``; ``scaling='power'`` gives mean square per bin (band sums via
+        :func:`band_amplitude`), ``'amplitude'`` the coherent amplitude per bin.
+
+    Examples
+    --------
+    >>> fs = 2000.0
+    >>> t = np.arange(int(4 * fs)) / fs
+    >>> from crankbench.analysis.resample import shaft_angle
+    >>> x = 1.5 * np.cos(2 * shaft_angle(np.full(t.size, 1500.0), fs))
+    >>> s = order_spectrum(x, fs=fs, speed_rpm=1500.0, revolutions=20)
+    >>> round(float(s.sel(order=2)), 4)
+    1.5
+    """
+    if revolutions is None:
+        # whole revolutions available after resampling (the anti-alias filter trims the ends)
+        y = angle_resample(x, fs=fs, speed_rpm=speed_rpm, samples_per_rev=samples_per_rev,
+                           interpolation=interpolation)
+        revolutions = max(1, y.shape[0] // int(samples_per_rev))
+    m = order_map(x, fs=fs, speed_rpm=speed_rpm, samples_per_rev=samples_per_rev,
+                  revolutions=revolutions,
+                  overlap=overlap, window=window, amplitude=amplitude, scaling=scaling,
+                  max_order=max_order, interpolation=interpolation)
+    if scaling == "amplitude":
+        out = np.sqrt((m ** 2).mean("time"))
+    else:
+        out = m.mean("time")
+    out.attrs.update(m.attrs)
+    out.attrs["blocks_averaged"] = int(m.sizes["time"])
+    out.attrs["rpm_mean"] = float(m["rpm"].mean())
+    out.name = m.name.replace("order map", "order spectrum")
+    return out
+
+
+def band_amplitude(power, orders, *, half_width, amplitude: str = "peak"):
+    """Amplitude of each order from the energy summed over a band of bins around it.
+
+    Parameters
+    ----------
+    power : xarray.DataArray
+        An order spectrum or map computed with ``scaling='power'`` (dim ``order``).
+    orders : sequence of float
+        Band centres (orders).
+    half_width : float
+        Half-width of each band, orders; it must hold the window's main lobe (for Hann at least
+        2 bins, i.e. ``2/revolutions``; 3 bins leaves < 1e-4 of the energy outside).
+    amplitude : {'peak', 'rms', 'peak-to-peak'}
+
+    Returns
+    -------
+    xarray.DataArray
+        Over ``order`` (plus any other dims of ``power``): ``sqrt(2 Σ P_k)`` × convention.
+
+    References
+    ----------
+    Heinzel et al. (2002) §10: the power in a band of bins of a power spectrum is exact by
+    Parseval's theorem whatever the tone's position between bins.
+
+    Examples
+    --------
+    >>> fs = 2000.0
+    >>> t = np.arange(int(4 * fs)) / fs
+    >>> from crankbench.analysis.resample import shaft_angle
+    >>> x = np.cos(2.025 * shaft_angle(np.full(t.size, 1500.0), fs))   # between bins
+    >>> p = order_spectrum(x, fs=fs, speed_rpm=1500.0, revolutions=20, scaling="power")
+    >>> round(float(band_amplitude(p, [2.025], half_width=0.2)[0]), 4)
+    1.0
+    """
+    if power.attrs.get("scaling") != "power":
+        raise AnalysisError("band_amplitude needs a spectrum or map computed with "
+                            "scaling='power'")
+    factor = amplitude_factor(amplitude)
+    orders = _check_orders(orders)
+    half_width = check_positive(half_width, "half_width", error=AnalysisError)
+    import xarray as xr
+
+    axis = power["order"].values
+    bands = []
+    for o in orders:
+        sel = np.abs(axis - o) <= half_width + 1e-12
+        if not sel.any():
+            raise AnalysisError(f"no bin within half_width={half_width} of order {o}")
+        bands.append(np.sqrt(2.0 * power.isel(order=np.flatnonzero(sel)).sum("order")) * factor)
+    out = xr.concat(bands, dim="order").assign_coords(order=orders)
+    base = str(power.attrs.get("units", "")).removeprefix("(").removesuffix(")^2")
+    out.attrs = {**power.attrs, "units": base, "scaling": "band amplitude",
+                 "band_half_width_orders": half_width, "amplitude_convention": amplitude}
+    return out
+
+
+# ---------------------------------------------------------------------------- Campbell map
+
+
+@renamed(rpm="speed_rpm", rpm_bins="speed_bins_rpm")
+def campbell_map(x, *, fs=None, speed_rpm, nperseg: int = 4096, overlap: float = 0.5, window="hann",
+                 amplitude: str = "peak", max_frequency=None, orders=(0.5, 1, 1.5, 2, 3, 4, 6),
+                 speed_bins_rpm=None):
+    """Rpm–frequency (Campbell / waterfall) map: short-time spectra in the time domain.
+
+    Resonances (fixed frequencies) show as vertical lines and orders as rays through the origin;
+    the order rays to draw are stored in ``attrs['order_lines']`` (see
+    :func:`analysis.plots.plot_campbell`).
+
+    Parameters
+    ----------
+    x, fs, rpm
+        As in :func:`order_track`.
+    nperseg : int
+        Samples per short-time frame (frequency resolution ``fs/nperseg``).
+    overlap : float
+        Fractional frame overlap.
+    window : str
+        scipy window name.
+    amplitude : {'peak', 'rms', 'peak-to-peak'}
+        Coherent amplitude convention per bin.
+    max_frequency : float, optional
+        Highest frequency kept, Hz.
+    orders : sequence of float
+        Order lines recorded in attrs.
+    speed_bins_rpm : int or array_like, optional
+        Power-average the frames in speed bins (dims become (``rpm``, ``frequency``)).
+
+    Returns
+    -------
+    xarray.DataArray
+        Dims (``time``, ``frequency``) with ``rpm`` along time (mean speed of each frame).
+
+    Examples
+    --------
+    >>> fs = 2048.0
+    >>> t = np.arange(int(4 * fs)) / fs
+    >>> x = 0.25 * np.cos(2 * np.pi * 100.0 * t)
+    >>> c = campbell_map(x, fs=fs, speed_rpm=1500.0, nperseg=1024)
+    >>> round(float(c.sel(frequency=100.0).mean()), 4)
+    0.25
+    """
+    values, fs, units, label = _as_signal(x, fs)
+    speed = _as_rpm(speed_rpm, values.shape[0], fs)
+    factor = amplitude_factor(amplitude)
+    nperseg = check_int(nperseg, "nperseg", minimum=8, error=AnalysisError)
+    overlap = check_range(overlap, "overlap", 0.0, 1.0, inclusive=(True, False),
+                          error=AnalysisError)
+    starts = _frames(values.shape[0], nperseg, overlap)
+    if starts.shape[0] == 0:
+        raise AnalysisError(f"{label}: {values.shape[0]} samples is shorter than "
+                            f"nperseg={nperseg}")
+    freq = np.arange(nperseg // 2 + 1) * fs / nperseg
+    n_freq = freq.shape[0] if max_frequency is None else int(np.searchsorted(
+        freq, check_positive(max_frequency, "max_frequency", error=AnalysisError), "right"))
+    w = get_window(window, nperseg)
+    from scipy import fft
+
+    out = np.empty((starts.shape[0], n_freq))
+    for sl in _frame_batches(starts):
+        idx = starts[sl, None] + np.arange(nperseg)[None, :]
+        out[sl] = _scale_spectrum(fft.rfft(values[idx] * w, axis=1)[:, :n_freq], w,
+                                  "amplitude", factor)
+    cs = np.concatenate([[0.0], np.cumsum(speed)])
+    frame_rpm = (cs[starts + nperseg] - cs[starts]) / nperseg
+    t = (starts + nperseg / 2.0 - 0.5) / fs + _t0(x)
+    import xarray as xr
+
+    orders = _check_orders(orders)
+    attrs = {"units": units, "method": "short-time FFT (rpm-frequency map)",
+             "window": str(window), "nperseg": nperseg, "overlap": overlap,
+             "resolution_hz": fs / nperseg, "amplitude_convention": amplitude,
+             "order_lines": orders.tolist()}
+    da = xr.DataArray(out, dims=("time", "frequency"), name=f"{label} campbell",
+                      coords={"time": ("time", t, {"units": "s"}),
+                              "rpm": ("time", frame_rpm, {"units": "rpm"}),
+                              "frequency": ("frequency", freq[:n_freq], {"units": "Hz"})},
+                      attrs=attrs)
+    if speed_bins_rpm is None:
+        return da
+    edges = (np.linspace(frame_rpm.min(), frame_rpm.max() * (1 + 1e-12), int(speed_bins_rpm) + 1)
+             if np.isscalar(speed_bins_rpm) else np.asarray(speed_bins_rpm, float))
+    which = np.digitize(frame_rpm, edges) - 1
+    rows, centres = [], []
+    for b in range(edges.shape[0] - 1):
+        sel = which == b
+        if sel.any():
+            rows.append(np.sqrt((out[sel] ** 2).mean(axis=0)))
+            centres.append(0.5 * (edges[b] + edges[b + 1]))
+    return xr.DataArray(np.array(rows), dims=("rpm", "frequency"), name=da.name,
+                        coords={"rpm": ("rpm", np.array(centres), {"units": "rpm"}),
+                                "frequency": da["frequency"]},
+                        attrs={**attrs, "rpm_averaging": "power mean of frames per speed bin"})

@@ -1,0 +1,154 @@
+"""Order tracks with no option given (issue 13): analytic signals with known truth.
+
+* a Q-resonance crossed by an order: truth the exact envelope of the swept SDOF response
+  (``analysis.bench.suite_orders.sdof_sweep``, ``solve_ivp`` in the rotating frame);
+* a noisy run-up of three orders of known amplitude;
+* channels that carry their trend (an IAS channel its mean speed, an encoder angle its ramp);
+* a constant-speed record (steady-state order table).
+"""
+
+import warnings
+
+import numpy as np
+import pytest
+
+from crankbench.analysis.bench.suite_orders import _peak, sdof_sweep
+from crankbench.analysis.orders import OrderWarning, order_map, order_track
+from crankbench.analysis.resample import shaft_angle
+
+
+@pytest.mark.parametrize("natural_hz, q, order, rate, tol", [
+    (100.0, 20.0, 3.0, 400.0, 0.02),          # the issue's acceptance figures
+    (100.0, 20.0, 3.0, 1000.0, 0.05),
+    (60.0, 20.0, 4.5, 400.0, 0.02),           # other order, frequency, Q
+    (80.0, 10.0, 2.0, 1000.0, 0.05),
+    (100.0, 40.0, 3.0, 400.0, 0.02),
+])
+def test_default_keeps_a_resonance_peak(natural_hz, q, order, rate, tol):
+    """Measured: peak error ≤ 0.6 % in every case (−26.8 % / −54.5 % with the former defaults
+    at 400 / 1000 rpm/s); the stated uncertainty at the true peak covers the error there."""
+    case = sdof_sweep(rate, natural_frequency=natural_hz, q_factor=q, order=order)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", OrderWarning)
+        tr = order_track(case["x"], fs=case["fs"], speed_rpm=case["rpm"], orders=[order])
+    true_peak, _ = _peak(case["rpm"], case["envelope"])
+    amp = tr["amplitude"].values[0]
+    peak, _ = _peak(tr["rpm"].values, amp)
+    assert abs(peak / true_peak - 1) <= tol
+    k = int(np.argmax(np.interp(tr["time"].values, case["t"], case["envelope"])))
+    truth_k = np.interp(tr["time"].values[k], case["t"], case["envelope"])
+    assert abs(amp[k] - truth_k) <= tr["amplitude_uncertainty"].values[0][k]
+    assert "sweep_rate_rpm_per_s" in tr.attrs["auto_settings"]
+
+
+def test_too_fast_a_sweep_warns_with_rate_error_and_setting():
+    """3000 rpm/s through a Q = 20 resonance at order 3 (no bandwidth keeps ~1 %): the warning
+    names the sweep rate, the expected error and the setting; the stated uncertainty at the
+    peak includes the smearing bias, not only the noise."""
+    case = sdof_sweep(3000.0, natural_frequency=100.0, q_factor=20.0, order=3.0)
+    x = case["x"] + np.random.default_rng(1).normal(0.0, 0.5, case["x"].size)
+    with pytest.warns(OrderWarning) as record:
+        tr = order_track(x, fs=case["fs"], speed_rpm=case["rpm"], orders=[3.0])
+    text = " ".join(str(w.message) for w in record)
+    assert "3000 rpm/s" in text and "expected peak error" in text and "bandwidth_hz=" in text
+    unc = tr["amplitude_uncertainty"].values[0]
+    noise_only = float(tr.attrs["amplitude_std_estimate"][0]) if np.ndim(
+        tr.attrs.get("amplitude_std_estimate", np.nan)) else np.nan
+    k = int(np.nanargmax(tr["amplitude"].values[0]))
+    err = abs(tr["amplitude"].values[0][k]
+              - np.interp(tr["time"].values[k], case["t"], case["envelope"]))
+    assert unc[k] >= err
+    if np.isfinite(noise_only):
+        assert unc[k] > noise_only
+
+
+def _runup(fs, noise, seed, duration=20.0):
+    t = np.arange(int(duration * fs)) / fs
+    rpm = 1000.0 + 2000.0 * t / duration
+    phi = shaft_angle(rpm, fs)
+    truth = {1.0: 1.0, 2.0: 0.5, 4.5: 0.25}
+    x = sum(a * np.cos(o * phi + 0.1 * o) for o, a in truth.items())
+    return t, rpm, x + np.random.default_rng(seed).normal(0.0, noise, t.size), truth
+
+
+@pytest.mark.parametrize("seed", [5, 9])
+def test_noisy_runup_defaults_worst_order_within_half_percent(seed):
+    """1000 → 3000 rpm in 20 s, the issue's noise density (0.1 rms at 20 kHz = 0.05 rms at
+    5 kHz): worst order 0.15 % (seed 5) and 0.27 % (seed 9) rms measured with the defaults
+    (target ≤ 0.5 %; the former defaults 0.65–0.8 %). Ends where the filter has not settled are NaN, not wrong."""
+    fs = 5000.0
+    t, rpm, x, truth = _runup(fs, 0.05, seed)
+    tr = order_track(x, fs=fs, speed_rpm=rpm, orders=list(truth))
+    sel = ((tr["time"] > 3.0) & (tr["time"] < 17.0)).values
+    worst = max(float(np.sqrt(np.mean((tr["amplitude"].sel(order=o).values[sel] / a - 1) ** 2)))
+                for o, a in truth.items())
+    assert worst <= 0.005
+    inside = tr["amplitude"].values[:, sel]
+    assert np.isfinite(inside).all()
+
+
+def test_ias_channel_with_its_mean_leaks_nothing_into_low_orders():
+    """An IAS channel (rad/s) of a 1500 → 1800 rpm run: mean speed 157…188 rad/s under 2 rad/s
+    at order 0.5 and 1 rad/s at order 1 (truth by construction). VKF was 2 % / 1.4 % off; COT
+    with 2-revolution blocks read half the mean speed as order 0.5."""
+    fs = 2000.0
+    t = np.arange(int(10 * fs)) / fs
+    rpm = 1500.0 + 30.0 * t
+    phi = shaft_angle(rpm, fs)
+    truth = {0.5: 2.0, 1.0: 1.0}
+    omega = rpm * np.pi / 30.0 + sum(a * np.cos(o * phi + 0.3) for o, a in truth.items())
+    sel = slice(None)
+    for kwargs in ({}, {"method": "vkf", "bandwidth_orders": 0.1},
+                   {"method": "cot", "revolutions": 2}):
+        tr = order_track(omega, fs=fs, speed_rpm=rpm, orders=list(truth), **kwargs)
+        tt = tr["time"].values
+        sel = (tt > 1.5) & (tt < 8.5)
+        for o, a in truth.items():
+            got = tr["amplitude"].sel(order=o).values[sel]
+            assert np.nanmax(np.abs(got / a - 1)) < 0.01, (kwargs, o)
+    m = order_map(omega, fs=fs, speed_rpm=rpm, revolutions=8)
+    inner = ((m["time"] > 1.5) & (m["time"] < 8.5)).values
+    assert np.abs(m.sel(order=0.5).values[inner] / 2.0 - 1).max() < 0.02
+
+
+def test_encoder_angle_with_its_ramp_keeps_the_angular_vibration():
+    """An encoder angle channel (the shaft's rotation, 2π per revolution, plus 2e-3 rad at
+    order 1.5 and 1e-3 rad at order 1/3): the ramp is the shaft angle, not an order (it read
+    1070° at order 1/3)."""
+    fs = 2000.0
+    t = np.arange(int(12 * fs)) / fs
+    rpm = 1200.0 + 20.0 * t
+    phi = shaft_angle(rpm, fs)
+    truth = {1 / 3: 1e-3, 1.5: 2e-3}
+    angle = phi + 0.7 + sum(a * np.cos(o * phi) for o, a in truth.items())
+    for kwargs in ({}, {"method": "cot", "revolutions": 6}):
+        tr = order_track(angle, fs=fs, speed_rpm=rpm, orders=list(truth), **kwargs)
+        tt = tr["time"].values
+        sel = (tt > 2.0) & (tt < 10.0)
+        for o, a in truth.items():
+            got = tr["amplitude"].sel(order=o).values[sel]
+            assert np.nanmax(np.abs(got / a - 1)) < 0.02, (kwargs, o)
+
+
+def test_steady_record_gives_the_order_table():
+    """Constant 900 rpm for 20 s, orders 1.5 / 3 / 4.5 of known amplitude and phase under
+    noise: the steady-state table holds each within its stated uncertainty (3 σ) and the
+    uncertainty is about the noise figure (σ of a least-squares sine: noise·√(2/N))."""
+    from crankbench.analysis.steady import steady_orders
+
+    fs = 2000.0
+    n = int(20 * fs)
+    t = np.arange(n) / fs
+    phi = 2 * np.pi * 15.0 * t
+    truth = {1.5: (0.4, 30.0), 3.0: (1.0, -60.0), 4.5: (0.2, 120.0)}
+    x = sum(a * np.cos(o * phi + np.radians(p)) for o, (a, p) in truth.items())
+    x = x + 0.3 + np.random.default_rng(2).normal(0.0, 0.2, n)
+    table = steady_orders(x, fs=fs, speed_rpm=np.full(n, 900.0), orders=list(truth))
+    assert len(table) == 3
+    sigma = 0.2 * np.sqrt(2.0 / n)
+    for _, row in table.iterrows():
+        a, p = truth[float(row["order"])]
+        assert abs(row["amplitude"] - a) <= 3 * row["amplitude_uncertainty"]
+        assert row["amplitude_uncertainty"] == pytest.approx(sigma, rel=0.5)
+        dp = (row["phase_deg"] - p + 180.0) % 360.0 - 180.0
+        assert abs(dp) <= 3 * row["phase_uncertainty_deg"] + 1e-9
