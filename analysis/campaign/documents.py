@@ -74,7 +74,8 @@ def reference_speeds(speed_range_rpm, count: int = 5, *, step_rpm: float = 10.0)
 
 
 def _order_amplitudes(track, speeds_rpm, run_id, units) -> list[dict]:
-    """Order amplitudes of the track at the reference speeds (linear in rpm, first sweep)."""
+    """Order amplitudes of the track at the reference speeds (linear in rpm, first sweep); a
+    steady run (speed spread under 1 rpm) gives one row per order at its median speed."""
     if track is None or "amplitude" not in track or "rpm" not in track.coords:
         return []
     rpm = np.asarray(track["rpm"].values, float)
@@ -85,6 +86,11 @@ def _order_amplitudes(track, speeds_rpm, run_id, units) -> list[dict]:
         if good.sum() < 2:
             continue
         r, a = rpm[good], amp[good]
+        if np.ptp(r) < 1.0:        # a steady run: one row, its median amplitude at its speed
+            rows.append({"run_id": run_id, "order": float(order),
+                         "speed_rpm": float(np.median(r)), "amplitude": float(np.median(a)),
+                         "units": units})
+            continue
         k = np.argsort(r, kind="stable")
         r, a = r[k], a[k]
         for s in speeds_rpm:

@@ -9,7 +9,9 @@ phase reference, the largest uncertainty per order); a constant-speed record als
 steady-state order table (amplitude and phase ± 1 σ). ``--json`` prints the
 same plus the parameters used and the tracks (at most ``--json-points`` points per order).
 ``--plot DIR`` writes ``order_map.png``, ``campbell.png`` and ``order_tracks.png`` atomically;
-existing files are kept unless ``--overwrite``.
+existing files are kept unless ``--overwrite``. ``--store FILE.duckdb`` also writes the order
+amplitudes at reference speeds (and a steady run's order table) into a campaign store
+(:mod:`analysis.campaign`), verdict 'inconclusive' since nothing is compared.
 
 Records larger than 256 MB are opened lazily (``measure.open``) and tracked segment by segment
 (``analysis.stream``) with bounded memory; the output has the same form.
@@ -69,6 +71,10 @@ def configure(parser) -> None:
     parser.add_argument("--plot", metavar="DIR", default=None,
                         help="write order_map.png, campbell.png, order_tracks.png to DIR")
     parser.add_argument("--overwrite", action="store_true", help="replace existing plot files")
+    parser.add_argument("--store", metavar="FILE.duckdb", default=None,
+                        help="also write the order amplitudes (and a steady run's order table) "
+                             "into this campaign store (created if missing; verdict "
+                             "'inconclusive': nothing is compared)")
 
 
 #: largest --samples-per-rev (the angle-domain signal grows with it)
@@ -212,6 +218,11 @@ def run(args) -> int:
     from crankbench.predict.errors import ConfigError, RecordError
 
     check_args(args)
+    if args.store:
+        from crankbench.analysis.commands._files import check_outputs, map_inputs, record_inputs
+
+        check_outputs([(Path(args.store), f"--store {args.store}")],
+                      record_inputs(args.record) + map_inputs(args))
     targets = []
     if args.plot:
         from crankbench.analysis.commands._files import check_outputs, map_inputs, record_inputs
@@ -291,6 +302,15 @@ def run(args) -> int:
             print_table(steady, title=f"{args.channel}: steady-state orders (constant speed, "
                                       f"±1 sigma), phases from "
                                       f"{steady.attrs.get('phase_reference', '')}")
+    if args.store:
+        from crankbench.analysis.campaign.documents import store_tracks
+
+        settings = {k: getattr(args, k) for k in (
+            "channel", "orders", "method", "amplitude", "speed_channel", "revolutions",
+            "samples_per_rev", "bandwidth_hz", "bandwidth_orders", "filter_order", "map")}
+        run_id = store_tracks(args.store, tracks, record_path=args.record, settings=settings,
+                              steady_table=steady, attrs=dict(record.attrs))
+        log.info("stored as run %s in %s", run_id, args.store)
     if targets:
         import matplotlib
 

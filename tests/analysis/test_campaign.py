@@ -303,3 +303,49 @@ def test_compare_store_writes_one_run_and_replaces_it(campaign, tmp_path):
     refused = subprocess.run(cmd[:-3] + ["--store", str(records[1])], capture_output=True,
                              text=True)
     assert refused.returncode == 2 and "one of the inputs" in refused.stderr
+
+
+def test_analyse_store_keeps_order_amplitudes_and_the_steady_table(tmp_path):
+    """``analyse --store``: an order analysis without a model lands in the store with verdict
+    inconclusive, its order amplitudes and (a constant-speed record) its steady-state table,
+    against the amplitudes put into the signal; a second run replaces, never duplicates."""
+    from crankbench.analysis.cli import main
+    from crankbench.measure.io import write
+    from crankbench.measure.record import make_record
+
+    fs, rpm, seconds = 4000.0, 1500.0, 8.0
+    t = np.arange(int(fs * seconds)) / fs
+    phi = 2 * np.pi * rpm / 60.0 * t
+    amps = {1.0: 0.8, 2.0: 0.3, 4.5: 0.05}
+    rng = np.random.default_rng(3)
+    x = 2.0 + sum(a * np.cos(o * phi + 0.3 * o) for o, a in amps.items()) \
+        + 0.01 * rng.standard_normal(t.size)
+    rec = make_record({"acc": dict(data=x, sample_rate=fs, units="m/s^2",
+                                   quantity="acceleration"),
+                       "speed": dict(data=np.full(800, rpm), sample_rate=100.0, units="rpm",
+                                     quantity="rotational_speed")})
+    path = tmp_path / "steady.h5"
+    write(rec, path)
+    store = tmp_path / "c.duckdb"
+    args = ["-q", "analyse", str(path), "--channel", "acc", "--orders", "1,2,4.5",
+            "--store", str(store)]
+    assert main(args) == 0
+    assert main(args) == 0                       # again: replaced, not duplicated
+    with Store(store, read_only=True) as s:
+        runs = list_runs(s)
+        assert len(runs) == 1 and runs["verdict"].tolist() == ["inconclusive"]
+        assert "nothing was compared" in runs["verdict_reason"][0]
+        steady = s.table("steady_orders")
+        assert set(steady["order"]) == set(amps)
+        for _, r in steady.iterrows():
+            err = abs(r["amplitude"] - amps[r["order"]])
+            assert err < max(4 * r["amplitude_uncertainty"], 1e-3), (r["order"], err)
+            assert r["speed_rpm"] == pytest.approx(rpm, rel=1e-6)
+        oa = s.table("order_amplitudes")       # a steady run: one row per order at its speed
+        assert sorted(oa["order"]) == sorted(amps)
+        for _, r in oa.iterrows():
+            assert r["amplitude"] == pytest.approx(amps[r["order"]], rel=0.01)
+            assert r["speed_rpm"] == pytest.approx(rpm, rel=1e-6)
+    # the store may not be the record
+    assert main(["-q", "analyse", str(path), "--channel", "acc", "--orders", "1",
+                 "--store", str(path)]) == 2
