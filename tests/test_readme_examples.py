@@ -38,6 +38,9 @@ NOT_RUN = {
     'python -m pytest -q': "the test suite itself",
     'python benchmarks/io_memory.py': "writes and streams a 2 GB record (minutes, disk)",
     'python benchmarks/analysis_memory.py': "order-tracks a 2 GB record (minutes, disk)",
+    'python benchmarks/batch_scaling.py': "starts dask clusters of 1 and 2 worker processes "
+                                          "and times them against each other (minutes; its "
+                                          "bound needs an otherwise idle machine)",
     'crankbench bench -o bench-out/': "the full bench suites (many minutes); the quick bench "
                                       "of the Commands block runs",
     'pip install -e ".[bench]"': "installs the bench peers",
