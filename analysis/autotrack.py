@@ -52,9 +52,7 @@ import warnings
 
 import numpy as np
 
-from crankbench.predict.errors import AnalysisError
-
-__all__ = ["sweep_rate", "auto_track", "steady_speed"]
+__all__ = ["sweep_rate", "auto_track", "steady_speed", "short_record_blocks"]
 
 log = logging.getLogger("crankbench")
 
@@ -279,8 +277,6 @@ def _next_bandwidth(res, current, floor, cap, p):
 def _expected(res, current, new, p):
     """Expected relative error (total, smearing) at bandwidth ``new`` from the solve at
     ``current``, relative to the order's local level."""
-    from .vkf import enbw_hz
-
     amp = np.abs(res["envelope"].values).T
     noise = res["amplitude_noise"].values.T
     total = res["amplitude_uncertainty"].values.T
@@ -349,7 +345,6 @@ def auto_track(context, *, orders, bandwidth_hz=None, bandwidth_orders=None,
     floor_full = np.maximum(8.0 / duration, 0.005 * speed / 60.0)[None, :] * np.ones((k, 1))
     if min_bandwidth_orders is not None:
         floor_full = np.maximum(floor_full, float(min_bandwidth_orders) * speed[None, :] / 60.0)
-    o = np.sort(np.concatenate([[0.0], orders]))
     cap_orders = np.asarray([np.abs(orders[j] - np.concatenate([[0.0], np.delete(orders, j)]))
                              .min() for j in range(k)])
     # half the distance to the nearest tracked order (or order 0): wider, the joint solve
@@ -458,3 +453,34 @@ def _warn_limits(ds, orders, rel, smear_rel, cap_d, bw_d, speed_d, fs, category)
             category, stacklevel=4)
         log.warning("order %g: expected error %.2g %% near %.0f rpm (bandwidth limited)",
                     order, 100 * rel[i, j], rpm[i])
+
+
+def short_record_blocks(phi, speed, fs, orders):
+    """``(revolutions, window, reason)`` when a record is too short for the adaptive
+    Vold–Kalman default, else None.
+
+    The adaptive filter's narrowest band is ``8/duration`` Hz (:mod:`analysis.autotrack`) and
+    an order's band may not exceed half the order (its distance to order 0 and its mirror);
+    where the first exceeds the second for any order at the record's lowest speed, the filter
+    cannot separate that order in this record (it would return NaN after trimming its
+    unsettled ends). Computed order tracking takes over with Hann blocks of ``4/spacing``
+    revolutions (the orders, and order 0, outside each other's main lobe), fewer where the
+    record holds less than two such blocks (the spacing check then warns).
+    """
+    duration = phi.shape[0] / fs
+    floor = 8.0 / duration
+    low = float(np.min(speed)) / 60.0
+    orders = np.asarray(orders, float)
+    caps = 0.5 * orders * low
+    if np.all(floor <= caps):
+        return None
+    revs_total = abs(float(phi[-1] - phi[0])) / (2 * np.pi)
+    worst = float(orders[np.argmax(floor - caps)])
+    why = (f"the record ({duration:.3g} s, {revs_total:.3g} revolutions) is too short for the "
+           f"adaptive Vold-Kalman default, whose narrowest band 8/duration = {floor:.3g} Hz "
+           f"exceeds half of order {worst:g} ({0.5 * worst * low:.3g} Hz at "
+           f"{60.0 * low:.4g} rpm)")
+    o = np.sort(np.concatenate([[0.0], orders]))
+    need = int(np.ceil(4.0 / float(np.min(np.diff(o)))))
+    revs = max(1, min(need, int(np.floor(revs_total / 2.0))))
+    return revs, "hann", why

@@ -450,7 +450,19 @@ def order_track(x, *, fs=None, speed_rpm, orders, amplitude: str = "peak", metho
                                       quantity=attrs.get("quantity"), units=units)
     context = dict(values=values, fs=fs_, speed=speed, phi=phi, angle=angle, units=units,
                    label=label, t0=_t0(x), factor=factor, reference=reference)
-    if method == "auto":
+    short = None
+    if method == "auto" and bandwidth_hz is None and bandwidth_orders is None:
+        from .autotrack import short_record_blocks
+
+        short = short_record_blocks(phi, speed, fs_, orders)
+    if short is not None:             # too short for the adaptive filter: COT, stated
+        revs, win, why = short
+        ds = _cot_track(context, orders, samples_per_rev=samples_per_rev, revolutions=revs,
+                        overlap=overlap, window=win, interpolation=interpolation)
+        ds.attrs["auto_settings"] = (f"computed order tracking, {revs}-revolution {win} "
+                                     f"blocks: {why}")
+        log.info("order_track: %s", ds.attrs["auto_settings"])
+    elif method == "auto":
         from .autotrack import auto_track
 
         ds = auto_track(context, **options)
