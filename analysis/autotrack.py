@@ -396,7 +396,7 @@ def auto_track(context, *, orders, bandwidth_hz=None, bandwidth_orders=None,
             text += (f", widened up to {b.max():.3g} Hz at {r[wide].min():.0f}–"
                      f"{r[wide].max():.0f} rpm around sharp envelope features")
         per_order.append(text)
-    worst = np.nanmax(rel, axis=0)
+    worst = np.array([np.nanmax(c) if np.isfinite(c).any() else np.nan for c in rel.T])
     settings = {
         "method": "Vold-Kalman, joint with order 0, bandwidth per order against time",
         "reason": ("narrow where the orders are steady (noise rejection), widened where the "

@@ -154,7 +154,8 @@ def _settings_text(tracks, rpm) -> list:
         if tracks.attrs.get(key):
             lines.append(f"{key.replace('_', ' ')}: {tracks.attrs[key]}")
     if "amplitude_uncertainty" in tracks:
-        unc = np.nanmax(tracks["amplitude_uncertainty"].values, axis=1)
+        vals = tracks["amplitude_uncertainty"].values
+        unc = np.array([np.nanmax(v) if np.isfinite(v).any() else np.nan for v in vals])
         lines.append("largest 1-sigma uncertainty (noise and smearing): " + ", ".join(
             f"order {o:g}: {u:.3g}" for o, u in zip(tracks["order"].values, unc)))
     return lines
