@@ -26,9 +26,9 @@ speed and the time axis). The functions here take a Record opened lazily by
   brings its ``shaft_angle`` coordinate along (``tests/analysis/test_stream.py``: streamed COT
   equals in-memory to 1e-9 on a vibrating 60-2 wheel).
 
-Error: COT streamed equals the in-memory result to rounding (bit-identical in
-``tests/analysis/test_stream.py``: 800 000 samples, 4 resampling chunks, 30 s segments, read
-back from .h5). VKF streamed differs from the whole-record solve by the filter's memory cut at
+Error: COT streamed equals the in-memory result to rounding (``tests/analysis/test_stream.py``:
+800 000 samples, 4 resampling chunks, 30 s segments, read back from .h5 — the resampled angle
+samples bit-identical, amplitudes and phases to 1e-9). VKF streamed differs from the whole-record solve by the filter's memory cut at
 the segment edges, ~exp(−vkf_overlap) of the envelope (2.4e-5 relative measured with the
 default overlap, B = 2 Hz), and its solve grid (decimation) may differ per segment — compare on
 common times.
