@@ -455,9 +455,10 @@ def _warn_limits(ds, orders, rel, smear_rel, cap_d, bw_d, speed_d, fs, category)
                     order, 100 * rel[i, j], rpm[i])
 
 
-def short_record_blocks(phi, speed, fs, orders):
+def short_record_blocks(phi, speed_rpm, fs, orders):
     """``(revolutions, window, reason)`` when a record is too short for the adaptive
-    Vold–Kalman default, else None.
+    Vold–Kalman default, else None. ``phi`` shaft angle (rad) and ``speed_rpm`` speed (rpm)
+    per sample, ``fs`` sample rate (Hz).
 
     The adaptive filter's narrowest band is ``8/duration`` Hz (:mod:`analysis.autotrack`) and
     an order's band may not exceed half the order (its distance to order 0 and its mirror);
@@ -469,7 +470,7 @@ def short_record_blocks(phi, speed, fs, orders):
     """
     duration = phi.shape[0] / fs
     floor = 8.0 / duration
-    low = float(np.min(speed)) / 60.0
+    low = float(np.min(speed_rpm)) / 60.0
     orders = np.asarray(orders, float)
     caps = 0.5 * orders * low
     if np.all(floor <= caps):
