@@ -579,6 +579,9 @@ def _cot_track(context, orders, *, samples_per_rev, revolutions, overlap, window
     for sl in _frame_batches(starts):
         frames = y[starts[sl, None] + np.arange(length)[None, :]]
         coef[sl], mean[sl], floor[sl] = fitter.fit(frames, angle[starts[sl]])
+    from .leakage import check_grid_leakage
+
+    check_grid_leakage(fitter, y, starts, angle, coef, context["label"])
     t, r, span = _block_coords(t_rel, rpm, starts, length)
     return _cot_dataset(coef, mean, floor, fitter, t + context["t0"], r, span, context,
                         overlap=overlap, interpolation=plan.interpolation, plan=plan)
