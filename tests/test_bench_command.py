@@ -38,6 +38,23 @@ def test_bench_exits_nonzero_when_an_error_exceeds_its_bound(monkeypatch, capsys
     assert main(["bench", "--quick"]) == 1
 
 
+def test_a_missed_speed_target_is_reported_not_failed(monkeypatch, capsys):
+    """A target row (a time ratio against a goal) past its goal is named in a warning and the
+    JSON, but only an error row past its bound makes the run exit 1."""
+    target = Row("demo", "m speed", "n=100", 2.1, "time / dsterf", "target <= 2x", 1e-3,
+                 bound=2.0, target=True)
+    _fake_suite(monkeypatch, "demo", [target])
+    assert main(["bench", "--quick", "--json"]) == 0
+    captured = capsys.readouterr()
+    out = json.loads(captured.out)
+    assert out["failed"] == 0 and out["targets_missed"] == 1
+    assert out["rows"][0]["passed"] is False
+    assert "1 speed target(s) missed" in captured.err and "2.1x > 2x" in captured.err
+    error_row = Row("demo", "m", "s", 0.5, "rel", "ref", 1e-3, bound=0.1)
+    _fake_suite(monkeypatch, "demo", [target, error_row])
+    assert main(["bench", "--quick"]) == 1
+
+
 def test_bench_rejects_unknown_suite(monkeypatch, capsys):
     _fake_suite(monkeypatch, "demo", [])
     assert main(["bench", "--suite", "dem"]) == 2

@@ -7,7 +7,10 @@ Each suite is a module ``analysis/bench/suite_<topic>.py`` defining
 and a module docstring saying what it measures. A :class:`Row` holds one method at one setting:
 its error against an independent reference, its median time, and the ratio of that time to a
 baseline timed in the same process (``baseline`` names it). ``bound`` is the method's documented
-error bound; the bench exits non-zero if ``error > bound``.
+error bound; the bench exits non-zero if ``error > bound``. A speed *target* row
+(``target=True``: an issue's speed goal, the paired time ratio as the "error", the goal as the
+bound) is reported as met or missed but does not fail the run: a ratio measured on a shared
+machine moves with its load, an error bound does not.
 
 How times and ratios are measured (:func:`compare`)
 ---------------------------------------------------
@@ -76,6 +79,9 @@ class Row:
         ``"cpu"`` (process CPU time) or ``"wall"``.
     rounds : int
         Interleaved rounds behind ``time_s`` and ``ratio`` (0 for a single run).
+    target : bool
+        True for a speed-target row: ``passed`` says whether the target is met, and a miss is
+        reported, not counted as an exceeded error bound (:attr:`fails_run`).
     """
 
     suite: str
@@ -97,12 +103,20 @@ class Row:
     paired: bool = False
     clock: str = "cpu"
     rounds: int = 0
+    target: bool = False
 
     @property
     def passed(self) -> bool:
-        """True unless the error is NaN or exceeds the documented bound."""
+        """True unless the error is NaN or exceeds the documented bound (for a target row:
+        the target is met)."""
         return bool(np.isfinite(self.error) and self.error <= self.bound) or (
             not np.isfinite(self.bound) and not np.isnan(self.error))
+
+    @property
+    def fails_run(self) -> bool:
+        """True when this row makes ``crankbench bench`` exit non-zero: an error row past its
+        bound (a missed speed target is reported, not failed)."""
+        return not self.passed and not self.target
 
     @property
     def versus(self) -> str:
@@ -125,6 +139,7 @@ class Row:
     def as_dict(self) -> dict:
         d = asdict(self)
         d["passed"] = self.passed
+        d["fails_run"] = self.fails_run
         d["versus"] = self.versus
         return d
 
@@ -171,7 +186,7 @@ class Timing:
 
     def row(self, suite, method, name, baseline, setting, error, error_kind, reference, *,
             throughput_items=None, throughput_unit="", bound=float("inf"), note="",
-            extra=None) -> "Row":
+            extra=None, target=False) -> "Row":
         """A :class:`Row` for candidate ``name`` against candidate ``baseline`` (None: none);
         ``baseline`` may also be ``(candidate, label)`` to print a longer label."""
         t = self.time(name)
@@ -183,7 +198,7 @@ class Timing:
         thr = throughput_items / t if throughput_items else float("nan")
         return Row(suite, method, setting, float(error), error_kind, reference, t, label, ratio,
                    thr, throughput_unit, bound, note, dict(extra or {}), lo, hi,
-                   baseline is not None, "cpu", self.rounds)
+                   baseline is not None, "cpu", self.rounds, bool(target))
 
 
 def compare(candidates: dict, *, rounds: int = 7, warmup: int = 1,
