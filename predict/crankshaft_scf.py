@@ -58,8 +58,12 @@ force to its nominal compressive stress over B·W, α_T, β_T the largest equiva
 to the nominal torsional stress of the (bored) pin or journal, γ the largest principal stress
 at the oil-bore outlet to the nominal pin stress.
 
-Transcription note: the readable text prints the cubic coefficient of α_T's f(b) as 0.85; it
-was not possible to compare it with IACS's own text (not readable through the search tool).
+Transcription note: the readable text prints the cubic coefficient of α_T's f(b) as 0.85;
+other transcriptions are quoted with 0.857. IACS's own text and a second class society's
+transcription (IRS Classification Notes 2012, LR Naval Ship Rules Vol 2 Pt 2 Ch 1 §3.8) were
+found but their §3 formulas could not be read through the search tool, so the choice is not
+settled by a source. 0.85 is kept because it is the conservative one: 0.857 lowers f(b), and
+α_T, by 0.007 b³/f(b) — 2.2 % at b = 1.5, 5.8 % at b = 2.2 (test_crankshaft_m53.py).
 No worked example with published factor values was found either; the tests check the
 formulas' limits and continuity (γ → Kirsch, β_T = α_T for equal pin and journal, the
 normalisation f(d) → 1 at d = 0) and the validity-range refusals.
@@ -94,6 +98,10 @@ log = logging.getLogger("crankbench")
 M53_RANGES = {"r_pin": (0.03, 0.13), "r_journal": (0.03, 0.13), "s": (-np.inf, 0.5),
               "w": (0.2, 0.8), "b": (1.1, 2.2), "d_o": (0.0, 0.2), "d_g": (0.0, 0.8),
               "d_h": (0.0, 0.8)}
+
+#: keys of ``[crankshaft.fillets]`` read by :func:`predict.crankshaft_m53.m53_from_toml`
+M53_KEYS = ("tensile_strength", "web_centre_distance", "oil_bore_angle_deg", "fatigue_factor",
+            "engine_type", "alternating_torque")
 
 #: additional bending stress σ_add (axial vibration, misalignment), Pa (§4 table)
 ADDITIONAL_BENDING = {"crosshead": 30.0e6, "trunk": 10.0e6}
@@ -516,7 +524,7 @@ def fillet_geometry_from_toml(path) -> FilletGeometry:
     semi = t.raw("semi_built", False)
     if not isinstance(semi, bool):
         t.fail("semi_built", f"= {semi!r} must be true or false")
-    t.check_unknown()
+    t.check_unknown(M53_KEYS)     # the rule's material and load keys: predict.crankshaft_m53
     try:
         return FilletGeometry(crank_radius=radius, semi_built=semi, **kw)
     except ModelError as exc:
