@@ -219,9 +219,9 @@ class M53Acceptance:
     required : float
         The minimum Q (1.15).
     passed : bool or None
-        True: Q ≥ required; False: Q < required; None: inconclusive (``reason`` says why —
-        factors extrapolated outside the formulas' range, or a torque without torsional
-        vibration), Q still reported.
+        True: Q ≥ required; False: Q < required (or Q without torsion already below it);
+        None: inconclusive (``reason`` says why — factors extrapolated outside the formulas'
+        range, or a torque without torsional vibration), Q still reported.
     clause : str
     reason : str
     """
@@ -284,8 +284,16 @@ class M53Assessment:
                               "reason": a.reason} for a in self.locations])
 
 
-def _judge(location, sigma_v, sigma_dw, required, doubts):
+def _judge(location, sigma_v, sigma_dw, required, doubts, torque_note="", sigma_v_bending=0.0):
     q = float(sigma_dw / sigma_v) if sigma_v > 0 else float("inf")
+    if torque_note and not doubts:
+        # σ_V grows with |τ|: Q without torsion bounds Q from above, whatever the torque
+        q_up = float(sigma_dw / sigma_v_bending) if sigma_v_bending > 0 else float("inf")
+        if q_up < required:
+            return M53Acceptance(location, float(sigma_v), float(sigma_dw), q, required, False,
+                                 reason=f"fails on bending alone (Q ≤ {q_up:.3f} with no "
+                                        "torsion), whatever the torque")
+        doubts = [torque_note]
     if doubts:
         return M53Acceptance(location, float(sigma_v), float(sigma_dw), q, required, None,
                              reason="; ".join(doubts))
@@ -317,7 +325,9 @@ def m53_acceptability(scf: StressConcentration, *, fillet_stresses: dict, tensil
         Minimum Q (default 1.15, §7).
     torque_note : str
         If not empty, the torque is not the rule's (e.g. a rigid-shaft torque without
-        torsional vibration): every location is then inconclusive with this reason.
+        torsional vibration): a location is then inconclusive with this reason, unless it
+        fails on bending alone (σ_V grows with the torsional stress, so Q without torsion is
+        an upper bound of Q whatever the torque).
     basis : str
         What the stresses rest on, carried into the result.
 
@@ -358,29 +368,30 @@ def m53_acceptability(scf: StressConcentration, *, fillet_stresses: dict, tensil
         doubts.append("factors extrapolated outside the UR M53 formulas' range ("
                       + "; ".join(scf.violations) + "): the rule asks for measured or FE "
                       "factors")
-    if torque_note:
-        doubts.append(torque_note)
     fs = fillet_stresses
     out = []
     sv = fillet_equivalent_stress(bending=fs["sigma_bh"], torsion=fs["tau_h"],
                                   additional_bending=fs["sigma_add"])
     dw = m53_fatigue_strength(tensile_strength=tensile_strength, diameter=geo.pin_diameter,
                               fillet_radius=geo.pin_fillet_radius, factor=k)
-    out.append(_judge(LOCATIONS[0], sv, dw, req, doubts))
+    out.append(_judge(LOCATIONS[0], sv, dw, req, doubts, torque_note,
+                      abs(fs["sigma_bh"]) + fs["sigma_add"]))
     if not geo.semi_built:
         sv = fillet_equivalent_stress(bending=fs["sigma_bg"], torsion=fs["tau_g"],
                                       additional_bending=fs["sigma_add"])
         dw = m53_fatigue_strength(tensile_strength=tensile_strength,
                                   diameter=geo.journal_diameter,
                                   fillet_radius=geo.journal_fillet_radius, factor=k)
-        out.append(_judge(LOCATIONS[1], sv, dw, req, doubts))
+        out.append(_judge(LOCATIONS[1], sv, dw, req, doubts, torque_note,
+                          abs(fs["sigma_bg"]) + fs["sigma_add"]))
     if oil_bore_stresses is not None:
         if "equivalent" not in oil_bore_stresses:
             raise ModelError("oil_bore_stresses has no 'equivalent': pass the dict of "
                              "m53_oil_bore_stresses")
         dw = m53_fatigue_strength(tensile_strength=tensile_strength, diameter=geo.pin_diameter,
                                   fillet_radius=geo.oil_bore / 2.0, factor=min(k, 1.0))
-        out.append(_judge(LOCATIONS[2], oil_bore_stresses["equivalent"], dw, req, doubts))
+        out.append(_judge(LOCATIONS[2], oil_bore_stresses["equivalent"], dw, req, doubts,
+                          torque_note, abs(oil_bore_stresses.get("sigma_bo", 0.0))))
     return M53Assessment(locations=tuple(out), basis=basis)
 
 
@@ -525,7 +536,7 @@ def m53_from_toml(path, *, speed_rpm=None, points=720):
     >>> p = Path(__file__).resolve().parents[1] / "sample_data/engines/i6.toml"
     >>> r = m53_from_toml(p, points=240)
     >>> print(r["worst"].status, round(r["worst"].q_min, 2))
-    inconclusive 0.87
+    fail 0.87
     """
     from ._toml import load_toml
     from .crankshaft import bearing_loads

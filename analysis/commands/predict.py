@@ -8,10 +8,10 @@ from __future__ import annotations
 
 import importlib
 
-HELP = "run a prediction (balance, torsion, lateral, flywheel) on a model TOML"
+HELP = "run a prediction (balance, torsion, lateral, flywheel, crankshaft) on a model TOML"
 
 #: prediction modules in the order help lists them
-PREDICTIONS = ("balance", "torsion", "lateral", "flywheel")
+PREDICTIONS = ("balance", "torsion", "lateral", "flywheel", "crankshaft")
 
 
 def configure(parser) -> None:

@@ -122,13 +122,21 @@ def test_inconclusive_when_the_factors_are_extrapolated_or_the_torque_is_not_the
     a = m53_acceptability(k, fillet_stresses=fs, tensile_strength=800e6)
     assert a.status == "inconclusive" and all(x.passed is None for x in a.locations)
     assert "b = 1" in a.locations[0].reason and np.isfinite(a.q_min)
-    # a torque that is not the rule's doubts every location, even at Q far below 1.15
+    # a torque that is not the rule's leaves Q open ...
     k2 = scf()
-    big = m53_fillet_stresses(k2, bending_moment=M * 10, radial_force=Q * 10, torque=T * 10)
-    b = m53_acceptability(k2, fillet_stresses=big, tensile_strength=800e6,
+    fs2 = m53_fillet_stresses(k2, bending_moment=M, radial_force=Q, torque=T)
+    b = m53_acceptability(k2, fillet_stresses=fs2, tensile_strength=800e6,
                           torque_note="rigid torque")
-    assert b.status == "inconclusive" and b.q_min < 1.15
-    assert b.locations[0].reason == "rigid torque"
+    assert b.status == "inconclusive" and b.locations[0].reason == "rigid torque"
+    # ... unless bending alone already fails: σ_V grows with τ, so Q(τ = 0) bounds Q above
+    big = m53_fillet_stresses(k2, bending_moment=M * 10, radial_force=Q * 10, torque=T * 10)
+    c = m53_acceptability(k2, fillet_stresses=big, tensile_strength=800e6,
+                          torque_note="rigid torque")
+    no_torsion = m53_fillet_stresses(k2, bending_moment=M * 10, radial_force=Q * 10,
+                                     torque=T * 0)
+    q_up = m53_acceptability(k2, fillet_stresses=no_torsion, tensile_strength=800e6).q_min
+    assert q_up < 1.15 and c.status == "fail" and "bending alone" in c.locations[1].reason
+    assert c.q_min < q_up
 
 
 def test_grain_flow_factor_applies_to_the_fillets_only():
@@ -211,8 +219,13 @@ def test_throw_statics_larger_bearing_share_and_constant_centrifugal_force():
 def test_sample_engine_is_inconclusive_without_a_vibration_torque(tmp_path):
     path = ROOT / "sample_data/engines/i6.toml"
     r = m53_from_toml(path, points=120)
-    assert len(r["throws"]) == 6 and r["worst"].status == "inconclusive"
-    assert "alternating_torque" in r["worst"].locations[0].reason
+    # the sample's thin webs fail at both fillets on bending alone; the oil bore stays open
+    assert len(r["throws"]) == 6 and r["worst"].status == "fail"
+    status = {a.location: a for a in r["worst"].locations}
+    assert status["journal fillet"].passed is False
+    assert "bending alone" in status["journal fillet"].reason
+    assert status["oil-bore outlet"].passed is None
+    assert "alternating_torque" in status["oil-bore outlet"].reason
     text = path.read_text().replace('oil_bore_angle_deg = 90',
                                     'oil_bore_angle_deg = 90\nalternating_torque = 1500')
     p = tmp_path / "i6.toml"
@@ -240,3 +253,21 @@ def test_alpha_t_cubic_coefficient_is_the_conservative_transcription():
         7.8955 - 10.654 * b + 5.3482 * b * b - 0.857 * b ** 3)
     assert k.alpha_t == pytest.approx(hand, rel=1e-13)
     assert 1 - alt / hand == pytest.approx(0.058, abs=0.001)
+
+
+def test_predict_crankshaft_command_prints_the_verdict_per_location(capsys):
+    import json
+
+    from crankbench.analysis.cli import main as cli_main
+
+    path = ROOT / "sample_data/engines/i6.toml"
+    assert cli_main(["predict", "crankshaft", str(path), "--points", "120", "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["verdict"]["verdict"] == "fail"
+    checks = {v["check"]: v["verdict"] for v in out["verdicts"]}
+    assert checks == {"UR M53 crank-pin fillet": "fail", "UR M53 journal fillet": "fail",
+                      "UR M53 oil-bore outlet": "inconclusive"}
+    assert len(out["bearings"]) == 7 and len(out["throws"]) == 6
+    assert cli_main(["predict", "crankshaft", str(path), "--points", "120"]) == 0
+    text = capsys.readouterr().out
+    assert "UR M53 acceptability, worst throw" in text and "Q = " in text
