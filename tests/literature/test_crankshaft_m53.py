@@ -280,3 +280,16 @@ def test_predict_crankshaft_command_prints_the_verdict_per_location(capsys):
     assert cli_main(["predict", "crankshaft", str(path), "--points", "120"]) == 0
     text = capsys.readouterr().out
     assert "UR M53 acceptability, worst throw" in text and "Q = " in text
+
+
+def test_predict_crankshaft_refuses_a_model_without_the_tables(capsys, tmp_path):
+    from crankbench.analysis.cli import main as cli_main
+
+    assert cli_main(["predict", "crankshaft", str(ROOT / "sample_data/engines/i4.toml")]) == 2
+    assert "has no [crankshaft] table" in capsys.readouterr().err
+    text = (ROOT / "sample_data/engines/i6.toml").read_text()
+    p = tmp_path / "no_material.toml"
+    p.write_text(text.replace('tensile_strength = "800 MPa"\n', 'tensile_strength = -800\n'))
+    assert cli_main(["predict", "crankshaft", str(p), "--points", "60"]) == 2
+    assert "tensile_strength" in capsys.readouterr().err
+    assert p.read_text().count("tensile_strength = -800") == 1      # input untouched
