@@ -550,11 +550,12 @@ def m53_from_toml(path, *, speed_rpm=None, points=720):
     t = ct.table("fillets")
     sb = t.positive("tensile_strength", unit="Pa", plausible=(2e8, 2.5e9))
     l1 = t.positive("web_centre_distance", unit="m", plausible=(1e-3, 3.0))
-    psi = t.number("oil_bore_angle_deg", None) if geometry.oil_bore > 0 else None
+    psi = (t.number("oil_bore_angle_deg", None, unit="deg") if geometry.oil_bore > 0
+           else None)
     if geometry.oil_bore > 0 and psi is None:
         t.fail("oil_bore_angle_deg", "is missing: the throw has an oil bore (ψ, deg, "
                "UR M53 §2.1.2.2)")
-    k = t.positive("fatigue_factor", 1.0, plausible=(0.8, 1.2))
+    k = t.positive("fatigue_factor", 1.0, unit="1", plausible=(0.8, 1.2))
     kind = t.string("engine_type", "trunk", options=("trunk", "crosshead"))
     m_tn = t.number("alternating_torque", None, low=0.0, unit="N*m")
     positions = ct.numbers("bearing_positions", unit="m", plausible=(1e-4, 100.0))
