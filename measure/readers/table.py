@@ -29,6 +29,32 @@ TIME_NAMES = {"time", "t", "zeit", "timestamp", "time_s", "x_value", "temps", "t
 TABLE_FORMATS = ("csv", "xlsx")
 
 
+#: unit spellings never read from a name suffix (``cyl_1``, ``valve_in``, ``pos_m`` are names)
+_NO_SUFFIX_UNITS = {"1", "-", "%", "in", "m", "n", "c", "deg"}
+
+
+def suffix_unit(name):
+    """The unit a column name states as its last ``_``-separated word (``"speed_rpm"`` ->
+    ``"rpm"``, ``"acc_g"`` -> ``"g"``, ``"time_ms"`` -> ``"ms"``), or None.
+
+    Only spellings of :mod:`measure.units` count, and not the ones that are ordinary words or
+    indices in names (1, in, m, N, C, deg).
+
+    Examples
+    --------
+    >>> suffix_unit("speed_hz"), suffix_unit("p_cyl_bar"), suffix_unit("acc_x"), suffix_unit("cyl_1")
+    ('hz', 'bar', None, None)
+    """
+    from ..units import _lookup
+
+    if not name or "_" not in str(name):
+        return None
+    base, _, tail = str(name).rpartition("_")
+    if not base.strip() or tail.lower() in _NO_SUFFIX_UNITS:
+        return None
+    return tail if _lookup(tail) is not None else None
+
+
 def split_header(text):
     """``"p [bar]"`` or ``"p (bar)"`` -> ``("p", "bar")``; no unit -> ``(text, None)``.
 
@@ -298,14 +324,29 @@ def table_record(table: Table, *, channels=None):
             "(measure.read(path, map=...), --map MAP.toml) naming each column's units")
     duplicate_names(table)
     parsed = []
+    from_names = []
     for i, header in enumerate(table.names):
         name, unit = split_header(header)
         if unit is None and i < len(table.units) and table.units[i]:
             unit = table.units[i]
+        if unit is None and suffix_unit(name) is not None:
+            unit = suffix_unit(name)
+            from_names.append(f"{name} -> {unit}")
         parsed.append((name or f"column {i + 1}", unit))
+    if from_names:
+        import logging
+
+        logging.getLogger("crankbench").info("%s: units read from the column names' last word: "
+                                             "%s", file, ", ".join(from_names))
     headers = [str(h) for h in table.names]
-    time_idx = next((i for i, (name, _) in enumerate(parsed)
-                     if name and name.strip().lower() in TIME_NAMES), None)
+
+    def is_time(name, unit):
+        key = name.strip().lower() if name else ""
+        if key in TIME_NAMES:
+            return True
+        return bool(unit) and suffix_unit(name) == unit and \
+            key.rpartition("_")[0] in TIME_NAMES
+    time_idx = next((i for i, (name, unit) in enumerate(parsed) if is_time(name, unit)), None)
     if time_idx is None and not table.sample_rate:
         raise RecordError(f"{file}: no time column; expected a first column named 'time [s]' "
                           f"(found columns {headers}), or a sample rate: give a channel map "
@@ -340,4 +381,5 @@ def table_record(table: Table, *, channels=None):
         values = data[row, :t.size]
         values, attrs = si_channel(name, values, {"units": unit, "sample_rate": fs}, file=file)
         out.append((name, "time", values, attrs))
-    return build_dataset(out, {"time": t}, {})
+    attrs = {"units_from_names": "; ".join(from_names)} if from_names else {}
+    return build_dataset(out, {"time": t}, attrs)
