@@ -282,7 +282,40 @@ def _time_from(table, index, unit, file, t):
         i = int(np.flatnonzero(~np.isfinite(t))[0])
         raise RecordError(f"{file}: time {table.label(index)} is empty or NaN/inf at data row "
                           f"{i + 1}; expected a time in every row")
-    return t
+    return _unrounded(t, file, table.label(index))
+
+
+def _unrounded(t: np.ndarray, file, label) -> np.ndarray:
+    """A time column printed with fewer decimals than its sample interval needs (5 kHz as
+    ``%.3f``: steps of 0 and 1 ms) is a uniform clock rounded: rebuilt as the uniform grid it
+    rounds, with a warning, when every stamp is within half the rounding step of that grid;
+    any other irregular column is returned as read (the record's checks name its fault)."""
+    step = np.diff(t)
+    if t.size < 3 or np.all(step > 0) or np.any(step < 0):
+        return t
+    levels = np.unique(step[step > 0])
+    q = float(levels.min())                     # the printed resolution
+    dt = (t[-1] - t[0]) / (t.size - 1)
+    if not (q > dt and np.allclose(levels / q, np.round(levels / q), rtol=0, atol=1e-6)):
+        return t
+    # least-squares clock through every stamp (the end points alone are off by up to q/2)
+    i = np.arange(t.size, dtype=float)
+    dt = np.polyfit(i, t - t[0], 1)[0]
+    grid = i * dt
+    r = t - t[0] - grid
+    t0 = t[0] + 0.5 * float(r.max() + r.min())   # the offset with the smallest worst deviation
+    deviation = 0.5 * float(r.max() - r.min())
+    # the true clock is within q/2 of every stamp; the least-squares slope can be pulled a
+    # little by how the exact half-step stamps happened to round: allow 0.6 q
+    if deviation > 0.6 * q:
+        return t
+    import logging
+
+    logging.getLogger("crankbench").warning(
+        "%s: time %s is rounded to %.3g s, coarser than its %.3g s sample interval (repeated "
+        "stamps): rebuilt as a uniform %.6g Hz clock (every stamp within %.2g s of it, about "
+        "half the rounding step)", file, label, q, dt, 1.0 / dt, deviation)
+    return t0 + grid
 
 
 def duplicate_names(table) -> None:
