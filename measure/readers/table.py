@@ -151,8 +151,9 @@ class SheetTable(Table):
         wb = openpyxl.load_workbook(self.path, read_only=True, data_only=True)
         try:
             if sheet is None:
-                ws = wb.worksheets[0]
-            elif isinstance(sheet, int):
+                self._first_table(wb, header_rows, skip_rows)
+                return
+            if isinstance(sheet, int):
                 if not 1 <= sheet <= len(wb.worksheets):
                     raise RecordError(f"{self.file}: sheet {sheet} does not exist; the workbook "
                                       f"has {len(wb.worksheets)} sheet(s): "
@@ -171,6 +172,29 @@ class SheetTable(Table):
         finally:
             wb.close()
         self._parse(rows, header_rows, skip_rows)
+
+    def _first_table(self, wb, header_rows, skip_rows):
+        """Read the first worksheet that holds a table of numbers (a workbook often opens with
+        a cover or notes sheet), saying which when it is not the first."""
+        faults = []
+        for ws in wb.worksheets:
+            self.sheet = ws.title
+            rows = [list(r) for r in ws.iter_rows(values_only=True)]
+            try:
+                self._parse(rows, header_rows, skip_rows)
+            except RecordError as exc:
+                faults.append(f"{ws.title!r}: {str(exc).split(': ', 1)[-1]}")
+                continue
+            if faults:
+                import logging
+
+                logging.getLogger("crankbench").info(
+                    "%s: reading sheet %r, the first with a table of numbers (sheets: %s; "
+                    "choose another with [source] sheet in a channel map)", self.file, ws.title,
+                    ", ".join(wb.sheetnames))
+            return
+        raise RecordError(f"{self.file}: no sheet holds a table of numbers ("
+                          + "; ".join(faults) + "); expected a sheet of numeric columns")
 
     def _parse(self, rows, header_rows, skip_rows):
         import datetime as dt
