@@ -26,7 +26,7 @@ import numpy as np
 
 from crankbench.predict.errors import RecordError
 
-__all__ = ["stamp_format", "StampParser"]
+__all__ = ["stamp_format", "same_kind", "join_split_stamps", "StampParser"]
 
 _FRACTION = r"(?:(?P<frac>[.,])\d{1,9})?"
 _TZ = r"(?P<tz>Z|[+-]\d{2}:?\d{2})?"
@@ -66,7 +66,7 @@ def stamp_format(token) -> str | None:
     tok = str(token).strip().strip('"').strip("'").strip()
     if len(tok) < 4 or ":" not in tok:
         return None
-    for _family, (regex, date) in _FAMILIES.items():
+    for regex, date in _FAMILIES.values():
         m = regex.match(tok)
         if m is None:
             continue
@@ -78,6 +78,25 @@ def stamp_format(token) -> str | None:
             fmt += "%z"
         return fmt
     return None
+
+
+_DATE_ONLY = re.compile(r"^(?:\d{4}-\d{2}-\d{2}|\d{1,2}\.\d{1,2}\.\d{4}|\d{4}/\d{2}/\d{2})$")
+_TIME_START = re.compile(r"^\d{1,2}:\d{2}")
+
+
+def join_split_stamps(fields: list) -> list:
+    """Whitespace-split fields with each date and the time after it joined into one stamp.
+
+    Examples
+    --------
+    >>> join_split_stamps("2026-11-24 10:00:00.301 1230.1 0.46".split())
+    ['2026-11-24 10:00:00.301', '1230.1', '0.46']
+    """
+    fields = list(fields)
+    for i in range(len(fields) - 2, -1, -1):
+        if _DATE_ONLY.match(fields[i]) and _TIME_START.match(fields[i + 1]):
+            fields[i:i + 2] = [fields[i] + " " + fields[i + 1]]
+    return fields
 
 
 def same_kind(fmt_a: str, fmt_b: str) -> bool:

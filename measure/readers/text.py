@@ -41,7 +41,7 @@ import numpy as np
 
 from crankbench.predict.errors import RecordError
 
-from .clock import StampParser, same_kind, stamp_format
+from .clock import StampParser, join_split_stamps, same_kind, stamp_format
 
 __all__ = ["Dialect", "sniff", "read_columns", "describe_delimiter", "DELIMITERS"]
 
@@ -163,20 +163,12 @@ def _value(token: str, decimal: str) -> bool:
     return _number(token, decimal) or stamp_format(token) is not None
 
 
-_DATE_ONLY = re.compile(r"^(?:\d{4}-\d{2}-\d{2}|\d{1,2}\.\d{1,2}\.\d{4}|\d{4}/\d{2}/\d{2})$")
-_TIME_ONLY = re.compile(r"^\d{1,2}:\d{2}")
-
-
 def _split(line: str, delimiter) -> list[str]:
     if delimiter == "":
         return [line.strip()]
     if delimiter is None:
-        fields = line.split()
         # a date and the time after it are one stamp, not two whitespace-separated fields
-        for i in range(len(fields) - 2, -1, -1):
-            if _DATE_ONLY.match(fields[i]) and _TIME_ONLY.match(fields[i + 1]):
-                fields[i:i + 2] = [fields[i] + " " + fields[i + 1]]
-        return fields
+        return join_split_stamps(line.split())
     return [f for f in _split_quoted(line, delimiter)]
 
 
