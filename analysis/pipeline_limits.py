@@ -135,7 +135,8 @@ def _limit_checks(rec, system, track, grid, pred_stress, response, orders, chann
                     name="predicted torsional stress, one cylinder misfiring",
                     basis=(f"model, worst single misfiring cylinder (gas torque removed), "
                            f"{lo:.0f}–{hi:.0f} rpm, run's load law"),
-                    required=bool(limits.misfire_operation), covered_rpm=(lo, hi)))
+                    required=bool(limits.misfire_operation), covered_rpm=(lo, hi),
+                    predicted=True))
             except (ModelError, AnalysisError) as exc:
                 # never dropped silently: a stated case that could not be computed is listed
                 # as not assessed (inconclusive; counts only when the model requires it)
