@@ -2,10 +2,11 @@
 
 Each function has a plain-numpy twin that gives the same result to rounding; the compiled one
 runs the loop once over the samples instead of several whole-array passes (the sinc
-interpolation gathers 16 taps per output: about 10× faster compiled). ``pip install
-'crankbench[fast]'`` installs numba; without it everything works, slower. ``ACCELERATED`` says
-which is in use (the bench suite ``orders`` prints it); ``CRANKBENCH_NO_NUMBA=1`` forces the
-numpy forms.
+interpolation gathers 16 taps per output: about 10× faster compiled). numba is a core
+dependency; where it cannot be imported everything works, slower (the README's tracker-speed
+figures, bench suite ``orders``, give both). :func:`accelerated` says which is in use (``crankbench bench`` prints it);
+``CRANKBENCH_NO_NUMBA=1`` forces the numpy forms. ``tests/analysis/test_kernels.py`` checks
+that both forms agree.
 """
 
 from __future__ import annotations

@@ -149,9 +149,38 @@ def find_speed_channel(record, channel: str | None = None) -> str:
             if len(group) > 1:
                 log.info("several speed sources (%s); using %r", ", ".join(group), group[0])
             return group[0]
+    raw = [n for n in names if n != channel and _raw_pulses(record[n])]
     raise AnalysisError(f"record has no speed reference: no channel with quantity "
                         f"'rotational_speed', no pulse train, no encoder angle or IAS channel; "
-                        f"channels: {', '.join(names)}")
+                        f"channels: {', '.join(names)}" + (_decode_hint(raw[0]) if raw else ""))
+
+
+def _raw_pulses(var) -> bool:
+    """A voltage channel that switches between two levels (a tacho, wheel pick-up or TDC
+    mark recorded raw): at least 90 % of its samples within 15 % of its range of the two
+    extreme levels, and at least 8 switchings."""
+    if var.ndim != 1 or str(var.attrs.get("units", "")) not in ("V", "mV") or var.shape[0] < 64:
+        return False
+    values = np.asarray(var.values, float)
+    values = values[np.isfinite(values)]
+    if values.size < 64:
+        return False
+    lo, hi = np.percentile(values, [1, 99])
+    if not hi > lo:
+        return False
+    near = (np.abs(values - lo) <= 0.15 * (hi - lo)) | (np.abs(values - hi) <= 0.15 * (hi - lo))
+    switches = int(np.count_nonzero(np.diff((values > 0.5 * (lo + hi)).astype(np.int8))))
+    return bool(near.mean() >= 0.9 and switches >= 8)
+
+
+def _decode_hint(name: str) -> str:
+    """The channel-map lines that decode raw pulse channel ``name``."""
+    return (f". Channel {name!r} looks like a raw pulse signal (two voltage levels): decode it "
+            "with a channel map (--map MAP.toml) holding\n  [source]\n  keep_unmapped = true"
+            f"     # the other columns as their headers say\n  [channel.{name}]\n"
+            f"  column = \"{name}\"    # or its number, 1-based\n  role = \"wheel\"\n"
+            "  pulses_per_rev = <teeth, or 1 for a once-per-revolution mark>\n"
+            "  (or role = \"tdc\" for a TDC mark; see sample_data/raw/genset_60-2_map.toml)")
 
 
 #: decoded pulse trains (speed, angle) by content: one record's channels all take the same
@@ -351,7 +380,8 @@ def speed_reference(record, channel: str, *, speed_channel: str | None = None,
         units = var.attrs.get("units", "rad/s")
         if units not in ("rad/s",):
             raise RecordError(f"speed channel {name!r} has units {units!r}; expected 'rad/s' "
-                              "(convert at ingest)")
+                              "(convert at ingest)"
+                              + (_decode_hint(name) if _raw_pulses(var) else ""))
         t_in = _times(record, name)
         omega = np.asarray(var.values, dtype=float) / _ratio(var, name)
         source = ("IAS channel" if var.attrs.get("quantity") == "angular_velocity"

@@ -422,7 +422,8 @@ def validate(record: xr.Dataset, *, allow_nonfinite: bool = False,
                 raise RecordError(
                     f"channel {name!r} has {n_bad} NaN/inf sample(s) in {len(spans)} run(s): "
                     f"{_describe_spans(spans, variables[dim].values)}; expected finite values "
-                    "(read with allow_nonfinite=True to mask them)")
+                    "(read with allow_nonfinite=True, or `crankbench import|analyse --allow-nonfinite`, "
+                    "to mask them)")
     return record
 
 

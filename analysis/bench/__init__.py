@@ -348,10 +348,13 @@ def machine() -> dict:
                 for lib in threadpool_info() if lib.get("user_api") == "blas"]
     except ImportError:  # pragma: no cover
         pass
+    from crankbench.analysis._kernels import accelerated
+
     return {"cpu": cpu, "cpus_logical": os.cpu_count(), "cpus_available": available,
             "load_average_1_5_15min": load, "memory_bytes": memory,
             "python": platform.python_version(), "platform": platform.platform(),
-            "numpy": numpy.__version__, "scipy": scipy.__version__, "blas": blas}
+            "numpy": numpy.__version__, "scipy": scipy.__version__, "blas": blas,
+            "compiled_kernels": accelerated()}
 
 
 def suites() -> list[str]:

@@ -41,6 +41,9 @@ def configure(parser) -> None:
     parser.add_argument("--map", metavar="MAP.toml", default=None,
                         help="channel map: columns, units, calibration, raw pulse roles")
     parser.add_argument("--channel", required=True, help="channel to analyse")
+    parser.add_argument("--allow-nonfinite", action="store_true",
+                        help="keep empty/NaN samples (dropouts): the trackers mask them and "
+                             "report the masked spans, instead of refusing the record")
     add_list(parser, "--orders", item=positive_order, metavar="Q", required=True,
              help="orders to track, e.g. 0.5,1,1.5")
     parser.add_argument("--method", choices=("auto", "cot", "vkf"), default="auto",
@@ -246,7 +249,7 @@ def run(args) -> int:
                  STREAM_BYTES / 1e6)
         record = measure.open(args.record, map=args.map)
     else:
-        record = measure.read(args.record, map=args.map)
+        record = measure.read(args.record, map=args.map, allow_nonfinite=args.allow_nonfinite)
     names = [str(n) for n in record.data_vars]
     if args.channel not in names:
         raise RecordError(f"{args.record}: --channel {args.channel!r}: no such channel"

@@ -119,6 +119,9 @@ def describe(info: dict, settings: dict) -> list[str]:
             f"load average (1/5/15 min): before {info['load_average_1_5_15min']}, after "
             f"{settings['load_average_after']}",
             f"python {info['python']}, numpy {info['numpy']}, scipy {info['scipy']}; BLAS: {blas}",
+            "resampling kernels: " + ("compiled (numba)" if info.get("compiled_kernels") else
+                                      "numpy forms (numba not importable, or "
+                                      "CRANKBENCH_NO_NUMBA set): slower"),
             f"threads: {settings['threads']} BLAS thread(s) for every method and baseline; "
             f"clock: {settings['clock']}",
             f"timing: {settings['timing']}"]

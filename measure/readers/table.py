@@ -29,6 +29,32 @@ TIME_NAMES = {"time", "t", "zeit", "timestamp", "time_s", "x_value", "temps", "t
 TABLE_FORMATS = ("csv", "xlsx")
 
 
+#: unit spellings never read from a name suffix (``cyl_1``, ``valve_in``, ``pos_m`` are names)
+_NO_SUFFIX_UNITS = {"1", "-", "%", "in", "m", "n", "c", "deg"}
+
+
+def suffix_unit(name):
+    """The unit a column name states as its last ``_``-separated word (``"speed_rpm"`` ->
+    ``"rpm"``, ``"acc_g"`` -> ``"g"``, ``"time_ms"`` -> ``"ms"``), or None.
+
+    Only spellings of :mod:`measure.units` count, and not the ones that are ordinary words or
+    indices in names (1, in, m, N, C, deg).
+
+    Examples
+    --------
+    >>> suffix_unit("speed_hz"), suffix_unit("p_cyl_bar"), suffix_unit("acc_x"), suffix_unit("cyl_1")
+    ('hz', 'bar', None, None)
+    """
+    from ..units import _lookup
+
+    if not name or "_" not in str(name):
+        return None
+    base, _, tail = str(name).rpartition("_")
+    if not base.strip() or tail.lower() in _NO_SUFFIX_UNITS:
+        return None
+    return tail if _lookup(tail) is not None else None
+
+
 def split_header(text):
     """``"p [bar]"`` or ``"p (bar)"`` -> ``("p", "bar")``; no unit -> ``(text, None)``.
 
@@ -117,8 +143,9 @@ class SheetTable(Table):
         wb = openpyxl.load_workbook(self.path, read_only=True, data_only=True)
         try:
             if sheet is None:
-                ws = wb.worksheets[0]
-            elif isinstance(sheet, int):
+                self._first_table(wb, header_rows, skip_rows)
+                return
+            if isinstance(sheet, int):
                 if not 1 <= sheet <= len(wb.worksheets):
                     raise RecordError(f"{self.file}: sheet {sheet} does not exist; the workbook "
                                       f"has {len(wb.worksheets)} sheet(s): "
@@ -137,6 +164,29 @@ class SheetTable(Table):
         finally:
             wb.close()
         self._parse(rows, header_rows, skip_rows)
+
+    def _first_table(self, wb, header_rows, skip_rows):
+        """Read the first worksheet that holds a table of numbers (a workbook often opens with
+        a cover or notes sheet), saying which when it is not the first."""
+        faults = []
+        for ws in wb.worksheets:
+            self.sheet = ws.title
+            rows = [list(r) for r in ws.iter_rows(values_only=True)]
+            try:
+                self._parse(rows, header_rows, skip_rows)
+            except RecordError as exc:
+                faults.append(f"{ws.title!r}: {str(exc).split(': ', 1)[-1]}")
+                continue
+            if faults:
+                import logging
+
+                logging.getLogger("crankbench").info(
+                    "%s: reading sheet %r, the first with a table of numbers (sheets: %s; "
+                    "choose another with [source] sheet in a channel map)", self.file, ws.title,
+                    ", ".join(wb.sheetnames))
+            return
+        raise RecordError(f"{self.file}: no sheet holds a table of numbers ("
+                          + "; ".join(faults) + "); expected a sheet of numeric columns")
 
     def _parse(self, rows, header_rows, skip_rows):
         import datetime as dt
@@ -256,7 +306,40 @@ def _time_from(table, index, unit, file, t):
         i = int(np.flatnonzero(~np.isfinite(t))[0])
         raise RecordError(f"{file}: time {table.label(index)} is empty or NaN/inf at data row "
                           f"{i + 1}; expected a time in every row")
-    return t
+    return _unrounded(t, file, table.label(index))
+
+
+def _unrounded(t: np.ndarray, file, label) -> np.ndarray:
+    """A time column printed with fewer decimals than its sample interval needs (5 kHz as
+    ``%.3f``: steps of 0 and 1 ms) is a uniform clock rounded: rebuilt as the uniform grid it
+    rounds, with a warning, when every stamp is within half the rounding step of that grid;
+    any other irregular column is returned as read (the record's checks name its fault)."""
+    step = np.diff(t)
+    if t.size < 3 or np.all(step > 0) or np.any(step < 0):
+        return t
+    levels = np.unique(step[step > 0])
+    q = float(levels.min())                     # the printed resolution
+    dt = (t[-1] - t[0]) / (t.size - 1)
+    if not (q > dt and np.allclose(levels / q, np.round(levels / q), rtol=0, atol=1e-6)):
+        return t
+    # least-squares clock through every stamp (the end points alone are off by up to q/2)
+    i = np.arange(t.size, dtype=float)
+    dt = np.polyfit(i, t - t[0], 1)[0]
+    grid = i * dt
+    r = t - t[0] - grid
+    t0 = t[0] + 0.5 * float(r.max() + r.min())   # the offset with the smallest worst deviation
+    deviation = 0.5 * float(r.max() - r.min())
+    # the true clock is within q/2 of every stamp; the least-squares slope can be pulled a
+    # little by how the exact half-step stamps happened to round: allow 0.6 q
+    if deviation > 0.6 * q:
+        return t
+    import logging
+
+    logging.getLogger("crankbench").warning(
+        "%s: time %s is rounded to %.3g s, coarser than its %.3g s sample interval (repeated "
+        "stamps): rebuilt as a uniform %.6g Hz clock (every stamp within %.2g s of it, about "
+        "half the rounding step)", file, label, q, dt, 1.0 / dt, deviation)
+    return t0 + grid
 
 
 def duplicate_names(table) -> None:
@@ -298,14 +381,29 @@ def table_record(table: Table, *, channels=None):
             "(measure.read(path, map=...), --map MAP.toml) naming each column's units")
     duplicate_names(table)
     parsed = []
+    from_names = []
     for i, header in enumerate(table.names):
         name, unit = split_header(header)
         if unit is None and i < len(table.units) and table.units[i]:
             unit = table.units[i]
+        if unit is None and suffix_unit(name) is not None:
+            unit = suffix_unit(name)
+            from_names.append(f"{name} -> {unit}")
         parsed.append((name or f"column {i + 1}", unit))
+    if from_names:
+        import logging
+
+        logging.getLogger("crankbench").info("%s: units read from the column names' last word: "
+                                             "%s", file, ", ".join(from_names))
     headers = [str(h) for h in table.names]
-    time_idx = next((i for i, (name, _) in enumerate(parsed)
-                     if name and name.strip().lower() in TIME_NAMES), None)
+
+    def is_time(name, unit):
+        key = name.strip().lower() if name else ""
+        if key in TIME_NAMES:
+            return True
+        return bool(unit) and suffix_unit(name) == unit and \
+            key.rpartition("_")[0] in TIME_NAMES
+    time_idx = next((i for i, (name, unit) in enumerate(parsed) if is_time(name, unit)), None)
     if time_idx is None and not table.sample_rate:
         raise RecordError(f"{file}: no time column; expected a first column named 'time [s]' "
                           f"(found columns {headers}), or a sample rate: give a channel map "
@@ -340,4 +438,5 @@ def table_record(table: Table, *, channels=None):
         values = data[row, :t.size]
         values, attrs = si_channel(name, values, {"units": unit, "sample_rate": fs}, file=file)
         out.append((name, "time", values, attrs))
-    return build_dataset(out, {"time": t}, {})
+    attrs = {"units_from_names": "; ".join(from_names)} if from_names else {}
+    return build_dataset(out, {"time": t}, attrs)
