@@ -69,8 +69,8 @@ log = logging.getLogger("crankbench")
 
 #: refinement ratio between the two grids
 _REFINE = 1.5
-#: largest number of elements of one grid (memory: about 5 kB per element)
-_MAX_ELEMENTS = 150_000
+#: largest number of elements of one grid (memory: about 16 kB per element while assembling)
+_MAX_ELEMENTS = 60_000
 #: sub-points per element edge across the section for cut elements
 _SUB = 8
 _CORNERS = np.array([[-1, -1, -1], [1, -1, -1], [1, 1, -1], [-1, 1, -1],
@@ -143,6 +143,9 @@ def _twist_stiffness(xs, ys, zs, inside, *, young, poisson):
     sub = np.array([(a, b, c) for a in s for b in s for c in (-g, g)])
     sub_w = np.full(len(sub), 8.0 / len(sub))
     nx, ny, nz = len(xs) - 1, len(ys) - 1, len(zs) - 1
+    if nx * ny * nz > 5 * _MAX_ELEMENTS:
+        raise ModelError(f"throw FE: a grid of {nx} x {ny} x {nz} cells is too fine (more than "
+                         f"{5 * _MAX_ELEMENTS}); use a larger element_size")
     i, j, k = (v.ravel() for v in np.meshgrid(np.arange(nx), np.arange(ny), np.arange(nz),
                                               indexing="ij"))
     zc = 0.5 * (zs[k] + zs[k + 1])
@@ -296,6 +299,10 @@ def throw_stiffness_fe(throw, *, shear_modulus: float = 80.0e9, poisson_ratio: f
         element_size = min(min(throw.journal_diameter, throw.pin_diameter) / 10.0,
                            throw.web_thickness / 2.0)
     size = check_positive(element_size, "element_size", error=ModelError)
+    if size > min(throw.journal_diameter, throw.pin_diameter) / 4.0:
+        log.warning("throw_stiffness_fe: element_size=%.4g m is more than a quarter of the "
+                    "smaller of the journal and pin diameters: the two-grid extrapolation and "
+                    "its uncertainty are not reliable that coarse", size)
     young = 2.0 * g * (1.0 + nu)
     k_coarse, n_coarse = _throw_grid_stiffness(throw, size, young=young, poisson=nu)
     k_fine, n_fine = _throw_grid_stiffness(throw, size / _REFINE, young=young, poisson=nu)

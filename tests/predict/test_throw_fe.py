@@ -151,3 +151,17 @@ def test_toml_fe_method_builds_the_shaft_line(tmp_path):
     k = throw_stiffness(CrankThrow(**I6), method="fe", shear_modulus=G).stiffness
     i = line.edge_names.index("cyl 2-cyl 3")
     assert line.stiffnesses[i] == pytest.approx(k, rel=1e-13)
+
+
+def test_fe_grid_size_is_checked(caplog):
+    t = CrankThrow(**I6)
+    with caplog.at_level(logging.WARNING, logger="crankbench"):
+        throw_stiffness_fe(t, element_size=0.02)
+    assert "more than a quarter of the smaller of the journal and pin diameters" in caplog.text
+    with pytest.raises(ModelError, match=r"throw FE: a grid of \d+ x \d+ x \d+ cells is too "
+                                         r"fine .*use a larger element_size"):
+        throw_stiffness_fe(t, element_size=0.001)
+    with pytest.raises(ModelError, match=r"poisson_ratio=0.5 must lie in \[0, 0.5\)"):
+        throw_stiffness_fe(t, poisson_ratio=0.5)
+    with pytest.raises(ModelError, match="throw must be a CrankThrow, got dict"):
+        throw_stiffness_fe(I6)
