@@ -181,9 +181,12 @@ class CriticalComparison:
         from .verdict import Verdict
 
         name = "critical speeds against the model"
+        unjudged = self.settings.get("amplitudes_not_judged")
+        amplitude_rule = (f"amplitude ratio within [{1 / (1 + self.amplitude_tolerance):.2f}, "
+                          f"{1 + self.amplitude_tolerance:.2f}]" if unjudged is None else
+                          f"amplitudes not judged ({unjudged})")
         rule = (f"measured critical within ±{100 * self.tolerance:g} % of the predicted, "
-                f"amplitude ratio within [{1 / (1 + self.amplitude_tolerance):.2f}, "
-                f"{1 + self.amplitude_tolerance:.2f}], every significant critical found "
+                f"{amplitude_rule}, every significant critical found "
                 f"(gate ±{100 * self.gate:g} %)")
         m = self.matched
         n_sig = int(m["significant"].sum()) if len(m) else 0
@@ -205,6 +208,10 @@ class CriticalComparison:
                 name, rule=rule, basis=basis,
                 reason="no predicted critical speed in the measured range and no resonance "
                        "matched: nothing was compared")
+        if unjudged is not None:
+            return Verdict.passed(name, rule=rule, basis=basis,
+                                  reason=f"{len(m)} critical(s) matched within the speed "
+                                         f"tolerance; amplitudes not judged: {unjudged}")
         return Verdict.passed(name, rule=rule, basis=basis,
                               reason=f"{len(m)} critical(s) matched within the tolerances")
 
@@ -258,6 +265,7 @@ class CriticalComparison:
 
 def match_criticals(measured, predicted, *, gate=0.15, tolerance=0.03,
                     amplitude_tolerance=0.5, speed_range_rpm=None, combine_sweeps=True,
+                    amplitudes_not_judged=None,
                     order_tolerance=1e-6, significant_fraction=0.05):
     """Assign measured resonances to predicted (mode, order) critical speeds.
 
@@ -282,6 +290,10 @@ def match_criticals(measured, predicted, *, gate=0.15, tolerance=0.03,
         Default: the range of the measured track if the table carries its curves, else all.
     combine_sweeps : bool
         Merge one order's resonances from different sweeps (run-up, run-down) first.
+    amplitudes_not_judged : str, optional
+        Why the amplitude ratios cannot be judged (e.g. the run's load is not stated, so the
+        predicted amplitudes rest on an assumed load): they are still tabulated, but raise no
+        disagreement, and the verdict's rule says so. None (default): judged.
     order_tolerance : float
         Orders equal within this are the same order.
     significant_fraction : float
@@ -425,7 +437,7 @@ def match_criticals(measured, predicted, *, gate=0.15, tolerance=0.03,
                          f"{r.speed_rpm_measured:.1f} rpm deviates {r.deviation_pct:+.1f} % "
                          f"from the predicted {r.speed_rpm_predicted:.1f} rpm "
                          f"(tolerance ±{100 * tolerance:g} %)")
-        if not r.amplitude_ok:
+        if not r.amplitude_ok and amplitudes_not_judged is None:
             flags.append(f"mode {r['mode']} order {r.order:g}: amplitude ratio measured/"
                          f"predicted {r.amplitude_ratio:.2f} outside "
                          f"[{amp_lo:.2f}, {amp_hi:.2f}]")
@@ -446,7 +458,8 @@ def match_criticals(measured, predicted, *, gate=0.15, tolerance=0.03,
                      f"no predicted critical (gate ±{100 * gate:g} %)")
     settings = dict(gate=gate, tolerance=tolerance, amplitude_tolerance=amplitude_tolerance,
                     speed_range_rpm=None if speed_range_rpm is None else
-                    [float(v) for v in speed_range_rpm], combine_sweeps=bool(combine_sweeps))
+                    [float(v) for v in speed_range_rpm], combine_sweeps=bool(combine_sweeps),
+                    amplitudes_not_judged=amplitudes_not_judged)
     return CriticalComparison(matched, unmatched_measured, unmatched_predicted, nat, gate,
                               tolerance, amplitude_tolerance, tuple(flags), settings)
 

@@ -568,6 +568,9 @@ def compare_vibrograph(record, model, *, load=None, speed_channel=None, orders=N
     step("read")
     rec, source = _load_record(record)
     engine, mounted, spec, model_path = load_engine_model(model)
+    if load is None:
+        load = LoadCase.from_record(rec, engine)      # the load the record states, if any
+    load_stated = load is not None
     load = LoadCase.from_any(load, engine)
     sensors, skipped = place_sensors(rec, mounted, channels=channels)
     for name, why in skipped:
@@ -692,7 +695,21 @@ def compare_vibrograph(record, model, *, load=None, speed_channel=None, orders=N
             rule = (f"measured/predicted order amplitude (peak and median over the speeds where "
                     f"the prediction is >= 10 % of its largest) within [{lo_band:.2f}, "
                     f"{hi_band:.2f}]")
-            if significant:
+            gas_share = 0.0
+            if not load_stated and measured_x is None and p_peak > 0:
+                gas_k = np.abs(np.einsum("bj,j->b", h[k], loads.gas[k]) * lf)
+                gas_share = float(gas_k[j] / max(pk[j], 1e-300))
+            if significant and gas_share > 0.2:
+                at = (f"imep {load.imep / 1e5:.4g} bar" if load.imep is not None else
+                      "the engine's default combustion (predict.pressure)")
+                v = Verdict.inconclusive(
+                    name, rule=rule, basis=basis,
+                    reason=f"ratio {ratio:.3g}, not judged: the gas-torque reaction is "
+                           f"{100 * gas_share:.0f} % of the predicted amplitude and the run's "
+                           f"load is not stated (the prediction assumes {at} at every speed); "
+                           "give --imep and --load-law (or imep/load_law in the channel map's "
+                           "[source]), or record the cylinder pressure")
+            elif significant:
                 ok = lo_band <= ratio <= hi_band and lo_band <= med <= hi_band
                 v = Verdict.from_bool(name, ok, rule=rule, basis=basis,
                                       reason="" if ok else

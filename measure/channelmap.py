@@ -20,6 +20,9 @@ says the rest, once per rig, so no Python is needed to bring its records in
     # engine_id = "G3"
     # test_id = "run 7"
     # keep_unmapped = false       # also read the columns not mapped (from their headers)
+    # imep = "13 bar"             # the run's load, so predicted amplitudes can be judged:
+    # load_law = "constant"       #   constant | propeller (gas load ∝ speed²) ...
+    # load_reference_rpm = 720    #   ... with imep at this speed (default: rated)
 
     [channel.pressure]
     column = 3                    # 1-based number or the header text
@@ -87,7 +90,10 @@ ROLES = ("wheel", "tdc")
 _SOURCE_TABLE_KEYS = ("sample_rate", "time_column", "time_units", "delimiter", "decimal",
                       "header_rows", "skip_rows", "encoding", "sheet")
 #: every key of [source] and of a [channel.<name>] table
-SOURCE_KEYS = _SOURCE_TABLE_KEYS + ("start_time", "engine_id", "test_id", "keep_unmapped")
+#: the run's load as the record states it (record attrs; analysis.pipeline.LoadCase)
+LOAD_KEYS = ("imep", "load_law", "load_reference_rpm")
+SOURCE_KEYS = _SOURCE_TABLE_KEYS + ("start_time", "engine_id", "test_id", "keep_unmapped") \
+    + LOAD_KEYS
 CHANNEL_KEYS = ("column", "units", "quantity", "scale", "offset", "location", "direction",
                 "node", "position", "mount", "instrument_natural_frequency",
                 "instrument_damping_ratio", "role", "pulses_per_rev", "missing_teeth",
@@ -271,6 +277,13 @@ def _parse(doc: TomlTable, *, text: str, origin: str) -> ChannelMap:
                 source[key] = src.string(key)
         if "keep_unmapped" in src:
             source["keep_unmapped"] = _bool(src, "keep_unmapped")
+        if "imep" in src:
+            source["imep"] = src.positive("imep", unit="Pa", plausible=(1e4, 1e7))
+        if "load_law" in src:
+            source["load_law"] = src.string("load_law", options=("constant", "propeller"))
+        if "load_reference_rpm" in src:
+            source["load_reference_rpm"] = src.positive("load_reference_rpm", unit="rpm",
+                                                        plausible=(1.0, 1e5))
         if "sample_rate" in source and "time_column" in source:
             src.fail("sample_rate", "and time_column are both given; give one (the time "
                                     "column's own rate is used)")
@@ -652,7 +665,7 @@ def apply_map(table, cmap: ChannelMap, *, allow_nonfinite=False):
                               "its header; map it or leave keep_unmapped out")
         extra[name] = dict(data=data[i][:n], units=unit, sample_rate=fs, **time,
                            attrs={"column": table.label(i)})
-    attrs = {k: src[k] for k in ("engine_id", "test_id") if k in src}
+    attrs = {k: src[k] for k in ("engine_id", "test_id") + LOAD_KEYS if k in src}
     return _assemble(cmap, plain, roles, extra, attrs, file, allow_nonfinite)
 
 
@@ -705,7 +718,8 @@ def apply_map_to_record(record, cmap: ChannelMap, *, file, allow_nonfinite=False
                             sample_rate=var.attrs["sample_rate"])
             extra[name] = spec
     attrs = {k: v for k, v in record.attrs.items() if k not in ("source", "sha256")}
-    attrs.update({k: cmap.source[k] for k in ("engine_id", "test_id") if k in cmap.source})
+    attrs.update({k: cmap.source[k] for k in ("engine_id", "test_id") + LOAD_KEYS
+                  if k in cmap.source})
     return _assemble(cmap, plain, roles, extra, attrs, file, allow_nonfinite)
 
 

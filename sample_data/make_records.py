@@ -98,6 +98,15 @@ def _model_channel(omega_grid):
     return orders[keep], table[keep]
 
 
+def model_imep():
+    """imep of the model's default combustion (the load the record is made at), Pa."""
+    from crankbench.predict.engine import Engine
+    from crankbench.predict.pressure import synthetic_pressure
+
+    engine = Engine.from_toml(MODEL)
+    return float(synthetic_pressure(engine).imep(engine))
+
+
 def order_amplitudes(rpm):
     """Complex amplitudes (m/s^2, peak; phase from cylinder 1's firing TDC) of every excited
     order at speeds ``rpm``: (orders, (n_orders, n_speeds) complex)."""
@@ -133,7 +142,9 @@ def build():
                       pulses_per_rev=TEETH, missing_teeth=MISSING,
                       attrs={"tdc_offset_deg": 0.0}),
     }, start_time="2026-01-15T09:30:00+00:00",
-        attrs={"engine_id": "I4-demo", "test_id": "runup-1500-3000"})
+        attrs={"engine_id": "I4-demo", "test_id": "runup-1500-3000",
+               # the run's load, stated so the gas-torque orders can be judged
+               "imep": model_imep(), "load_law": "constant"})
     rpm_grid = np.linspace(SPEED_START_RPM, SPEED_END_RPM, 31)
     _, g = order_amplitudes(rpm_grid)
     truth = xr.Dataset(

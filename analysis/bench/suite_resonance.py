@@ -8,15 +8,16 @@ run-down) is simulated with ``scipy.signal.lsim`` and complex-demodulated into a
   speed against the closed-form ``f_n`` and of the sweep-corrected amplitude against the
   steady-state peak ``1/(2ζ√(1−ζ²))``; bounds 0.5 % and 5 % (the issue's acceptance for
   sweeps ≤ 100 rpm/s);
-* baseline, timed side by side: the raw peak of the track (speed of the maximum and its
-  amplitude, parabolic interpolation) — what one reads off an order-track plot.
+* baseline, timed side by side (interleaved rounds, paired ratio: :func:`analysis.bench.compare`):
+  the raw peak of the track (speed of the maximum and its amplitude, parabolic interpolation)
+  — what one reads off an order-track plot.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from . import Row, median_time
+from . import compare
 
 __all__ = ["run", "swept_track"]
 
@@ -68,12 +69,13 @@ def run(quick: bool) -> list:
         track = swept_track(rate, zeta=zeta)
         steady = 1 / (2 * zeta * np.sqrt(1 - zeta**2))
         res = find_resonances(track)
-        t_fit = median_time(lambda: find_resonances(track), repeats=3 if quick else 5)
-        t_raw = median_time(lambda: _raw_peak(track), repeats=5, min_time=0.01)
+        timing = compare({"fit": lambda: find_resonances(track), "raw": lambda: _raw_peak(track)},
+                         rounds=3 if quick else 5, min_time=0.01)
         setting = f"{rate:+g} rpm/s, ζ={zeta:g}"
         if len(res) != 1:
-            rows.append(Row(SUITE, "find_resonances", setting, float("nan"), "found",
-                            "one resonance expected", t_fit, note=f"found {len(res)}"))
+            rows.append(timing.row(SUITE, "find_resonances", "fit", None, setting,
+                                   float("nan"), "found", "one resonance expected",
+                                   note=f"found {len(res)}"))
             continue
         r = res.resonances[0]
         speed_err = abs(r.speed_rpm / fn_rpm - 1)
@@ -84,18 +86,17 @@ def run(quick: bool) -> list:
         raw_amp_err = abs(a_pk / steady - 1)
         within = abs(rate) <= 100.0
         ref = "closed-form SDOF (f_n, 1/(2ζ√(1−ζ²))); lsim swept track"
+        base = ("raw", "raw peak")
         rows += [
-            Row(SUITE, "find_resonances: critical speed", setting, speed_err, "rel",
-                ref, t_fit, baseline="raw peak", ratio=t_fit / t_raw,
-                bound=0.005 if within else float("inf"),
-                note=f"{r.method}; η={r.sweep_eta:.3g}"),
-            Row(SUITE, "find_resonances: amplitude (sweep-corrected)", setting, amp_err, "rel",
-                ref, t_fit, baseline="raw peak", ratio=t_fit / t_raw,
-                bound=0.05 if within else float("inf"),
-                note=f"estimated peak loss {r.sweep_peak_loss:.3f}"),
-            Row(SUITE, "raw peak: speed of the maximum", setting, raw_speed_err, "rel", ref,
-                t_raw, note="baseline, informational"),
-            Row(SUITE, "raw peak: amplitude", setting, raw_amp_err, "rel", ref, t_raw,
-                note="baseline, informational"),
+            timing.row(SUITE, "find_resonances: critical speed", "fit", base, setting,
+                       speed_err, "rel", ref, bound=0.005 if within else float("inf"),
+                       note=f"{r.method}; η={r.sweep_eta:.3g}"),
+            timing.row(SUITE, "find_resonances: amplitude (sweep-corrected)", "fit", base,
+                       setting, amp_err, "rel", ref, bound=0.05 if within else float("inf"),
+                       note=f"estimated peak loss {r.sweep_peak_loss:.3f}"),
+            timing.row(SUITE, "raw peak: speed of the maximum", "raw", None, setting,
+                       raw_speed_err, "rel", ref, note="baseline, informational"),
+            timing.row(SUITE, "raw peak: amplitude", "raw", None, setting, raw_amp_err, "rel",
+                       ref, note="baseline, informational"),
         ]
     return rows

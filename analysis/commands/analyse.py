@@ -40,7 +40,9 @@ def configure(parser) -> None:
                         help="record file (any format measure.read knows)")
     parser.add_argument("--map", metavar="MAP.toml", default=None,
                         help="channel map: columns, units, calibration, raw pulse roles")
-    parser.add_argument("--channel", required=True, help="channel to analyse")
+    parser.add_argument("--channel", default=None,
+                        help="channel to analyse (default: the record's only sampled channel "
+                             "that is not a speed source)")
     parser.add_argument("--allow-nonfinite", action="store_true",
                         help="keep empty/NaN samples (dropouts): the trackers mask them and "
                              "report the masked spans, instead of refusing the record")
@@ -251,6 +253,8 @@ def run(args) -> int:
     else:
         record = measure.read(args.record, map=args.map, allow_nonfinite=args.allow_nonfinite)
     names = [str(n) for n in record.data_vars]
+    if args.channel is None:
+        args.channel = _only_signal(record, names, args.record)
     if args.channel not in names:
         raise RecordError(f"{args.record}: --channel {args.channel!r}: no such channel"
                           f"{suggest(args.channel, names)}; channels: {', '.join(names)}")
@@ -355,3 +359,20 @@ def run(args) -> int:
             plt.close(fig)
             log.info("wrote %s", path)
     return 0
+
+
+def _only_signal(record, names, path) -> str:
+    """The one sampled channel of a record that is not a speed source, or a clear error."""
+    from crankbench.analysis.speedref import _is_pulses
+    from crankbench.predict.errors import ConfigError
+
+    speed_like = ("rotational_speed", "pulse_times")
+    candidates = [n for n in names if record[n].attrs.get("sample_rate") is not None
+                  and record[n].attrs.get("quantity") not in speed_like
+                  and not _is_pulses(record[n])]
+    if len(candidates) == 1:
+        log.info("%s: analysing channel %r (the only signal channel)", path, candidates[0])
+        return candidates[0]
+    raise ConfigError(f"{path}: give --channel: the record has {len(candidates)} signal "
+                      f"channels ({', '.join(candidates) or 'none'}); all channels: "
+                      f"{', '.join(names)}")

@@ -267,7 +267,10 @@ def from_toml(path):
     -------
     TorsionalSystem
         With ``engine`` attached (when named), ``limits`` (when a ``[limits]`` table exists)
-        and ``operating`` attributes ``speed_range_rpm`` and ``imep`` in ``system.operating``.
+        and ``operating`` attributes ``speed_range_rpm``, ``imep``, ``load_law`` ("constant" or
+        "propeller": how the run's gas load follows speed, so measured amplitudes can be judged
+        against the prediction) and ``load_reference_rpm`` (where ``imep`` applies on the
+        propeller law; default the engine's rated speed) in ``system.operating``.
 
     Raises
     ------
@@ -305,6 +308,8 @@ def from_toml(path):
     speed_range = sl.numbers("speed_range_rpm", None, length=2, low=0.0, unit="rpm",
                              plausible=_SPEED)
     imep = sl.positive("imep", None, unit="Pa", plausible=(1e4, 1e7))
+    load_law = sl.string("load_law", None, options=("constant", "propeller"))
+    load_reference = sl.positive("load_reference_rpm", None, unit="rpm", plausible=_SPEED)
 
     def wrap(table, func, *args, **kwargs):
         try:
@@ -432,6 +437,7 @@ def from_toml(path):
         system = system.replace(limits=_complete_limits(limits, system, lt))
     return system.replace(operating=dict(
         speed_range_rpm=None if speed_range is None else tuple(speed_range), imep=imep,
+        load_law=load_law, load_reference_rpm=load_reference,
         source=str(path), excitation=excitation))
 
 

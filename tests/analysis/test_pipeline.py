@@ -256,3 +256,31 @@ def test_misfire_case_that_cannot_be_computed_is_listed_not_dropped(marine, monk
     assert before and all(c.status != "inconclusive" for c in before)
     assert len(after) == 1 and after[0].status == "inconclusive"
     assert "could not be computed" in after[0].detail and "no cylinder pressure" in after[0].detail
+
+
+@pytest.mark.slow
+def test_unstated_load_leaves_amplitudes_unjudged_and_a_model_law_judges_them(marine, tmp_path):
+    """The 6L32 run-up ran on the propeller law. Without a stated load the prediction assumes
+    the model's imep at every speed: amplitude ratios 0.13-0.58 at the low-speed criticals,
+    which must not fail the model (nor pass it on amplitudes) — speeds are still judged and
+    the verdict says why amplitudes are not. With the law in the model's [shaftline] the
+    amplitudes are judged and agree (ratios within [0.67, 1.5])."""
+    run, _ = marine
+    result = analyse(run.record, MODEL)                 # an in-memory record: no stored load
+    comp = result.comparison
+    ratios = comp.matched.loc[comp.matched["significant"], "amplitude_ratio"]
+    assert ratios.min() < 0.67                          # the assumed load is far off ...
+    assert not any("amplitude ratio" in f for f in comp.flags)   # ... and not judged
+    v = comp.verdict()
+    assert v.status == "pass" and "amplitudes not judged" in v.rule
+    assert "load is not stated" in v.reason and "--load-law" in v.reason
+    text = MODEL.read_text().replace('imep = 2.4e6', 'imep = 2.4e6\nload_law = "propeller"')
+    text = text.replace('engine = "../engines/marine_6l.toml"',
+                        f'engine = "{(MODEL.parent / "../engines/marine_6l.toml").resolve()}"')
+    path = tmp_path / "marine_propeller.toml"
+    path.write_text(text)
+    judged = analyse(run.record, path).comparison
+    assert judged.settings["amplitudes_not_judged"] is None
+    sig = judged.matched["significant"]
+    assert judged.matched.loc[sig, "amplitude_ok"].all(), judged.flags
+    assert "amplitude ratio within" in judged.verdict().rule

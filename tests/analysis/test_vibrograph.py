@@ -190,3 +190,48 @@ def test_dirty_channels_still_agree(tmp_path):
     assert set(judged["sensor"]) == {"acc_engine_mount_z", "acc_gearbox_mount_z"}
     assert (judged["verdict"] == "pass").all(), judged
     assert np.allclose(judged["ratio"], 1.0, atol=0.03)
+
+
+def test_gas_dominated_orders_need_a_stated_load(tmp_path):
+    """The shipped I4 record states its load (imep, constant law; the channel map's [source]
+    writes the same attrs): orders 4 and 6, mostly the gas-torque reaction, are judged and
+    pass. The same record with the load removed from its attrs: those orders are inconclusive,
+    naming the gas share and the setting to use; order 2 (inertia) is still judged."""
+    from crankbench.measure import read
+
+    rec = read(RECORD)
+    assert LoadCase.from_record(rec).imep == pytest.approx(1.3e6, rel=1e-6)
+    stated = compare_vibrograph(rec, ENGINE).table.set_index("order")
+    assert (stated.loc[[2.0, 4.0, 6.0], "verdict"] == "pass").all()
+    bare = rec.copy()
+    bare.attrs = {k: v for k, v in rec.attrs.items() if k not in ("imep", "load_law")}
+    unstated = compare_vibrograph(bare, ENGINE)
+    table = unstated.table.set_index("order")
+    assert table.loc[2.0, "verdict"] == "pass"
+    for q in (4.0, 6.0):
+        assert table.loc[q, "verdict"] == "inconclusive"
+        assert "load is not stated" in table.loc[q, "reason"]
+        assert "--load-law" in table.loc[q, "reason"]
+    assert unstated.verdict.status == "inconclusive"
+    # the same load given explicitly judges them again
+    given = compare_vibrograph(bare, ENGINE, load=LoadCase(imep=rec.attrs["imep"]))
+    assert (given.table.set_index("order").loc[[4.0, 6.0], "verdict"] == "pass").all()
+
+
+def test_channel_map_states_the_runs_load(tmp_path):
+    from crankbench.measure import read
+
+    path = tmp_path / "rig.csv"
+    t = np.arange(200) / 1000.0
+    path.write_text("time [s],acc [m/s^2]\n" + "".join(f"{a:.4f},{np.sin(a):.6f}\n" for a in t))
+    (tmp_path / "map.toml").write_text(
+        '[source]\nimep = "13 bar"\nload_law = "propeller"\nload_reference_rpm = 3000\n'
+        '[channel.acc]\ncolumn = "acc"\nunits = "m/s^2"\n')
+    rec = read(path, map=tmp_path / "map.toml")
+    load = LoadCase.from_record(rec)
+    assert load.imep == pytest.approx(1.3e6) and load.law == "propeller"
+    assert load.scale([1500.0])[0] == pytest.approx(0.25)
+    (tmp_path / "bad.toml").write_text('[source]\nload_law = "sometimes"\n'
+                                       '[channel.acc]\ncolumn = "acc"\nunits = "m/s^2"\n')
+    with pytest.raises(ConfigError, match="load_law"):
+        read(path, map=tmp_path / "bad.toml")
