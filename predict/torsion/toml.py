@@ -370,9 +370,11 @@ def from_toml(path):
                   elements=t.integer("elements", None, minimum=1))
         tt = t.table("throw", None)
         if tt is not None:
-            from .throws import THROW_METHODS, CrankThrow
+            from .throws import THROW_METHODS, UNAVAILABLE_THROW_METHODS, CrankThrow
 
-            kw["throw_method"] = tt.string("method", "wilson", options=THROW_METHODS)
+            # tuplin/bicera pass here so that throw_stiffness says why they are unavailable
+            kw["throw_method"] = tt.string("method", "wilson", options=(
+                *THROW_METHODS, *UNAVAILABLE_THROW_METHODS))
             dims = {key: tt.positive(key, **_DIAMETER) for key in (
                 "journal_diameter", "journal_length", "pin_diameter", "pin_length",
                 "web_thickness", "web_width", "crank_radius")}
