@@ -73,10 +73,15 @@ ZONES = ("A", "B", "C", "D")
 ISO_10816_6_GRADES = (1.12e-3, 1.78e-3, 2.82e-3, 4.46e-3, 7.07e-3, 11.2e-3, 17.8e-3, 28.2e-3,
                       44.6e-3, 70.7e-3, 112e-3, 178e-3)
 #: ISO 10816-6 machine classes 1–7: (A/B–C, C–D) velocity rms boundaries, m/s. Zones A and B
-#: are one zone (A/B) in this part. NOT VERIFIED: the search for the published Table A.1 found
-#: no copy; these are the boundaries as recalled (each class one severity grade above the one
-#: before: class 1 at grades 1.78/2.82 mm/s ... class 7 at 28.2/44.6 mm/s). Check them against
-#: your copy of the standard or pass your own ZoneBoundaries; the report says so.
+#: are one zone (A/B) in this part. NOT VERIFIED: no published copy or transcription of
+#: Table A.1 was found (searched Nov 2026: the standard's text, vendor and class notes, papers,
+#: public code; found only its scope — reciprocating machines above 100 kW, rigid or resilient
+#: mounting, marine propulsion/auxiliary engines, generating sets, compressors, locomotives,
+#: not road vehicles — and the different ISO 8528-9 genset values quoted in LR's vibration
+#: guidance, Table 7.5.1). These are the boundaries as recalled (each class one severity grade
+#: above the one before: class 1 at grades 1.78/2.82 mm/s … class 7 at 28.2/44.6 mm/s); the
+#: table's displacement and acceleration columns are not implemented. Check them against your
+#: copy of the standard or pass your own ZoneBoundaries; the report says so (``verified``).
 ISO_10816_6_CLASSES = {k: (ISO_10816_6_GRADES[k], ISO_10816_6_GRADES[k + 1])
                        for k in range(1, 8)}
 _ISO6_SOURCE = ("ISO 10816-6:1995 Annex A Table A.1, velocity rms 2–1000 Hz (boundaries NOT "
@@ -194,10 +199,13 @@ def reciprocating_class(*, power_w=None, rated_speed_rpm=None, resilient=None):
     """ISO 10816-6 machine class (1–7) from power, speed and mounting, with the reason.
 
     crankbench's rule, stated in the report, not the standard's text: the standard classes
-    machines by type, power, speed and mounting (Annex A/B), so the class agreed in the
-    contract should be given in the model (``[limits.vibration] machine_class``). Here:
-    rigidly mounted engines class 2 up to 600 rpm rated, else 3; resiliently mounted class 5
-    up to 1000 rpm, 6 up to 1800 rpm, else 7.
+    machines by type, rated power, speed and mounting (Annex A/B, not verified here), so the
+    class agreed in the contract should be given in the model (``[limits.vibration]
+    machine_class``). Here: rigidly mounted engines class 2 up to 600 rpm rated, else 3;
+    resiliently mounted class 5 up to 1000 rpm, 6 up to 1800 rpm, else 7. The pipeline takes
+    the rated power from ``[limits.vibration] rated_power_kw`` (else the indicated power, said
+    so) and the mounting from ``[limits.vibration] mounting`` (else resilient when the engine
+    model has ``[mounts]``, else unknown: no class).
 
     Parameters
     ----------
@@ -205,7 +213,7 @@ def reciprocating_class(*, power_w=None, rated_speed_rpm=None, resilient=None):
         Rated power, W (the part covers machines above 100 kW).
     rated_speed_rpm : float, optional
     resilient : bool, optional
-        Mounted on resilient (rubber, spring) mounts.
+        Mounted on resilient (rubber, spring) mounts; False: rigidly mounted.
 
     Returns
     -------
@@ -216,6 +224,8 @@ def reciprocating_class(*, power_w=None, rated_speed_rpm=None, resilient=None):
     --------
     >>> reciprocating_class(power_w=3.1e6, rated_speed_rpm=720, resilient=True)
     (5, 'class 5: resiliently mounted, rated 720 rpm, 3100 kW (crankbench rule, not the standard: give the contract class)')
+    >>> reciprocating_class(power_w=1.2e6, rated_speed_rpm=500, resilient=False)[0]
+    2
     """
     if power_w is None or rated_speed_rpm is None or resilient is None:
         missing = [n for n, v in (("power", power_w), ("rated speed", rated_speed_rpm),

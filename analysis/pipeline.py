@@ -404,8 +404,10 @@ def analyse(record, model, *, channel=None, speed_channel=None, orders=None, max
         Matching settings (:func:`analysis.match_criticals`).
     machine_class : str or int, optional
         Vibration-severity class of ``vibration_standard`` (default: the model's
-        ``[limits.vibration] machine_class``, else for ISO 10816-6 chosen from the engine's
-        power and mounting, see :func:`analysis.limits.reciprocating_class`).
+        ``[limits.vibration] machine_class``, else for ISO 10816-6 chosen from the rated
+        power (``[limits.vibration] rated_power_kw``, else the indicated power, said so) and
+        mounting (``[limits.vibration] mounting``, else resilient when the engine model has
+        ``[mounts]``), see :func:`analysis.limits.reciprocating_class`).
     vibration_standard : {'ISO 10816-6', 'ISO 10816-1'}, optional
         Default: the model's ``[limits.vibration] standard``, else ISO 10816-6 (reciprocating
         machines).

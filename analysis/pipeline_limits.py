@@ -135,7 +135,8 @@ def _limit_checks(rec, system, track, grid, pred_stress, response, orders, chann
                     name="predicted torsional stress, one cylinder misfiring",
                     basis=(f"model, worst single misfiring cylinder (gas torque removed), "
                            f"{lo:.0f}–{hi:.0f} rpm, run's load law"),
-                    required=bool(limits.misfire_operation), covered_rpm=(lo, hi)))
+                    required=bool(limits.misfire_operation), covered_rpm=(lo, hi),
+                    predicted=True))
             except (ModelError, AnalysisError) as exc:
                 # never dropped silently: a stated case that could not be computed is listed
                 # as not assessed (inconclusive; counts only when the model requires it)
@@ -149,33 +150,56 @@ def _limit_checks(rec, system, track, grid, pred_stress, response, orders, chann
     return checks
 
 
-def _engine_power_and_mounting(system):
-    """(rated power W or None, resilient mounting or None, rated speed rpm or None)."""
-    engine = getattr(system, "engine", None)
-    if engine is None:
-        return None, None, None
-    rated = getattr(engine, "rated_speed_rpm", None)
-    power = None
-    imep = (getattr(engine, "combustion", None) or {})
-    imep = imep.get("imep") if isinstance(imep, dict) else getattr(imep, "imep", None)
-    bore, stroke = getattr(engine, "bore", None), getattr(engine, "stroke", None)
-    if stroke is None and getattr(engine, "crank_radius", None) is not None:
-        stroke = 2.0 * engine.crank_radius
-    if None not in (imep, bore, stroke, rated):
-        # P = p_mi V_d z n / (60 i), i = 2 revolutions per cycle for a 4-stroke (indicated)
-        swept = np.pi / 4.0 * bore**2 * stroke * engine.n_cylinders
-        power = imep * swept * rated / 60.0 / (getattr(engine, "cycle", 4) / 2.0)
-    resilient = None
-    source = getattr(engine, "source", None)
-    if source:
-        try:
-            from crankbench.predict.mounts import MountedEngine
+def _engine_power_and_mounting(system, vib=None):
+    """What the ISO 10816-6 class is chosen by, each with where it came from.
 
-            MountedEngine.from_toml(source)
+    Returns a dict: ``power_w`` (W or None) and ``power_note``; ``resilient`` (bool or None)
+    and ``mounting_note``; ``rated_speed_rpm``. Power: the rated power of ``[limits.vibration]
+    rated_power_kw`` (the standard classes machines by rated power), else the indicated power at
+    rated speed from the model's imep (an over-estimate of the rated brake power by the
+    mechanical losses, stated as such). Mounting: ``[limits.vibration] mounting``, else
+    resilient when the engine model has a ``[mounts]`` table, else unknown (no class chosen).
+    """
+    vib = vib or {}
+    engine = getattr(system, "engine", None)
+    rated = getattr(engine, "rated_speed_rpm", None) if engine is not None else None
+    power, power_note = None, "no rated power in the model ([limits.vibration] rated_power_kw)"
+    if vib.get("rated_power_kw") is not None:
+        power = float(vib["rated_power_kw"]) * 1e3
+        power_note = (f"rated power {power / 1e3:.0f} kW from [limits.vibration] rated_power_kw "
+                      "(ISO 10816-6 classes by rated power)")
+    elif engine is not None:
+        comb = getattr(engine, "combustion", None) or {}
+        imep = comb.get("imep") if isinstance(comb, dict) else getattr(comb, "imep", None)
+        bore, stroke = getattr(engine, "bore", None), getattr(engine, "stroke", None)
+        if stroke is None and getattr(engine, "crank_radius", None) is not None:
+            stroke = 2.0 * engine.crank_radius
+        if None not in (imep, bore, stroke, rated):
+            # P_i = p_mi V_d n / (60 i), i = 2 revolutions per cycle for a 4-stroke
+            swept = np.pi / 4.0 * bore**2 * stroke * engine.n_cylinders
+            power = imep * swept * rated / 60.0 / (getattr(engine, "cycle", 4) / 2.0)
+            power_note = (f"indicated power {power / 1e3:.0f} kW at the rated {rated:.0f} rpm "
+                          "from the engine's imep (no rated power in the model: give "
+                          "[limits.vibration] rated_power_kw; indicated exceeds brake power by "
+                          "the mechanical losses)")
+    resilient, mounting_note = None, ("mounting unknown: give [limits.vibration] mounting = "
+                                      "\"rigid\" or \"resilient\"")
+    if vib.get("mounting") is not None:
+        resilient = vib["mounting"] == "resilient"
+        mounting_note = f"{vib['mounting']} mounting from [limits.vibration] mounting"
+    elif engine is not None and getattr(engine, "source", None):
+        try:
+            import tomllib
+
+            with open(engine.source, "rb") as fh:
+                has_mounts = "mounts" in tomllib.load(fh)
+        except (OSError, ValueError):
+            has_mounts = False
+        if has_mounts:
             resilient = True
-        except (ValueError, OSError, KeyError):
-            resilient = None
-    return power, resilient, rated
+            mounting_note = "resilient mounting: the engine model has [mounts]"
+    return {"power_w": power, "power_note": power_note, "resilient": resilient,
+            "mounting_note": mounting_note, "rated_speed_rpm": rated}
 
 
 def _severity_checks(rec, system, machine_class, standard):
@@ -192,10 +216,14 @@ def _severity_checks(rec, system, machine_class, standard):
         std = vib.get("standard", "ISO 10816-6")
     if cls is None:
         cls = vib.get("machine_class")
+    chosen_by = ""
     if std == "ISO 10816-6" and cls is None:
-        power, resilient, rated = _engine_power_and_mounting(system)
-        cls, reason = reciprocating_class(power_w=power, rated_speed_rpm=rated,
-                                          resilient=resilient)
+        why = _engine_power_and_mounting(system, vib)
+        cls, reason = reciprocating_class(power_w=why["power_w"],
+                                          rated_speed_rpm=why["rated_speed_rpm"],
+                                          resilient=why["resilient"])
+        chosen_by = f"; class chosen by {why['power_note']}; {why['mounting_note']}"
+        reason = f"{reason}{chosen_by}"
     elif std == "ISO 10816-1" and cls is None:
         cls, reason = "III", "class III (default)"
     for name in rec.data_vars:
@@ -218,7 +246,7 @@ def _severity_checks(rec, system, machine_class, standard):
                                      band_hz=band, window_s=window)
             loc = f" ({v.attrs['location']})" if v.attrs.get("location") else ""
             basis = (f"channel {name}{loc}, {q}, velocity rms {band[0]:g}–{band[1]:g} Hz in "
-                     f"{window:g} s windows")
+                     f"{window:g} s windows{chosen_by}")
             bounds = None
             if vib.get("boundaries_mm_s") is not None:
                 from .limits import ZoneBoundaries

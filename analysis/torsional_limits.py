@@ -52,7 +52,7 @@ def _ranges_text(ranges):
 def check_torsional_stress(speed_rpm, stress, limits, *, sections=None, section="",
                            operating_range_rpm=None, rated_speed_rpm=None, misfire=False,
                            name="torsional vibratory stress", basis="", required=True,
-                           covered_rpm=None):
+                           covered_rpm=None, predicted=False):
     """Hold a vibratory shear stress over speed against the rule's limits.
 
     Parameters
@@ -82,6 +82,12 @@ def check_torsional_stress(speed_rpm, stress, limits, *, sections=None, section=
     covered_rpm : (float, float), optional
         Speed range the data cover (default: that of ``speed_rpm``); a check whose data do not
         cover the operating range is inconclusive for the barred-range judgement.
+    predicted : bool
+        The stress is calculated, not measured: each barred range is widened to at least the
+        rule's extent 16 n_c/(18 − λ_c) … (18 − λ_c) n_c/16 around its worst speed n_c
+        (:func:`predict.torsion.rules.m68_barred_range`). Measured ranges are used as measured
+        (plus the tachometer tolerance), which the rule allows for a range verified by
+        measurement (KR Rules for Steel Ships 2025 Pt 5 Ch 4 206.3).
 
     Returns
     -------
@@ -91,8 +97,9 @@ def check_torsional_stress(speed_rpm, stress, limits, *, sections=None, section=
 
     References
     ----------
-    IACS UR M68 Rev.2, M68.5 (permissible torsional vibration stresses, barred speed ranges);
-    see :mod:`predict.torsion.rules`.
+    IACS UR M68 (permissible torsional vibration stresses, barred speed ranges), as reproduced
+    in KR Rules for Steel Ships 2025 Pt 5 Ch 4 202 and 206; see :mod:`predict.torsion.rules`
+    for what was checked against which text.
 
     Examples
     --------
@@ -107,7 +114,11 @@ def check_torsional_stress(speed_rpm, stress, limits, *, sections=None, section=
     >>> print(trans.status, "|", cont.status, "|", cont.detail)
     pass | fail | barred 708–732 rpm reaches above λ = 0.8 (576 rpm); it contains the rated speed 720 rpm
     """
-    from crankbench.predict.torsion.rules import RuleLimits, judge_barred_ranges
+    from crankbench.predict.torsion.rules import (
+        RuleLimits,
+        judge_barred_ranges,
+        m68_barred_range,
+    )
     from crankbench.predict.torsion.stress import StressLimits, check_stress
 
     if not isinstance(limits, (RuleLimits, StressLimits)):
@@ -174,9 +185,20 @@ def check_torsional_stress(speed_rpm, stress, limits, *, sections=None, section=
         data=result)
     # continuous limit: barred ranges where the rule allows them
     kc = int(np.argmax(rc))
+    ranges = list(result.barred_ranges_rpm)
+    if predicted and rated is not None:
+        widened = []
+        for a, b in ranges:
+            inside = (speed >= a) & (speed <= b)
+            nc = float(speed[inside][np.argmax(rc[inside])]) if inside.any() else 0.5 * (a + b)
+            lo_r, hi_r = m68_barred_range(nc, rated)
+            widened.append((min(a, lo_r), max(b, hi_r)))
+        ranges = widened
     status, reason, rule = judge_barred_ranges(
-        result.barred_ranges_rpm, application=application, rated_speed_rpm=rated,
+        ranges, application=application, rated_speed_rpm=rated,
         operating_range_rpm=op, tachometer_tolerance_rpm=tol, misfire=misfire)
+    if predicted and ranges:
+        rule += "; calculated stress: barred extent 16 n_c/(18 − λ_c) … (18 − λ_c) n_c/16"
     lo, hi = covered_rpm if covered_rpm is not None else (speed[0], speed[-1])
     need = op if op is not None else ((None, rated) if rated is not None else None)
     if status == "pass" and need is not None:
@@ -189,9 +211,9 @@ def check_torsional_stress(speed_rpm, stress, limits, *, sections=None, section=
             status = "inconclusive"
             reason = (f"{reason}; but the data cover {lo:.0f}–{hi:.0f} rpm only: "
                       f"{', '.join(gaps)} rpm of the operating range not assessed")
-    if op is not None and result.barred_ranges_rpm and status == "pass" and \
+    if op is not None and ranges and status == "pass" and \
             application == "propulsion" and not misfire:
-        inside = [r for r in result.barred_ranges_rpm if r[1] >= op[0] and r[0] <= op[1]]
+        inside = [r for r in ranges if r[1] >= op[0] and r[0] <= op[1]]
         if inside:
             reason += (f"; {_ranges_text(inside)} lies in the operating range "
                        f"{op[0]:.0f}–{op[1]:.0f} rpm: to be passed rapidly")

@@ -594,6 +594,8 @@ def apply_map(table, cmap: ChannelMap, *, allow_nonfinite=False):
                 if h is not None and (split_header(h)[0] or "").strip().lower() in TIME_NAMES]
         if auto:
             time_idx = auto[0]
+        elif table.clock_columns:
+            time_idx = table.clock_columns[0]
         elif not table.sample_rate:
             raise RecordError(
                 f"{file}: no time axis: the map gives neither [source] sample_rate nor "
@@ -622,6 +624,11 @@ def apply_map(table, cmap: ChannelMap, *, allow_nonfinite=False):
     if n < 4:
         raise RecordError(f"{file}: {n} data row(s) ({describe}); expected a record of at "
                           "least 4 samples")
+    clock = time_idx is not None and time_idx in table.clock_columns
+    if clock and "time_units" in src:
+        raise ConfigError(f"source.time_units = {src['time_units']!r}: time column "
+                          f"{table.label(time_idx)} holds dates/times, read as seconds from its "
+                          "first stamp; leave time_units out")
     if time_idx is not None:
         from .units import to_si
 
@@ -631,9 +638,13 @@ def apply_map(table, cmap: ChannelMap, *, allow_nonfinite=False):
             raise RecordError(f"{file}: time column {table.label(time_idx)} is empty at data "
                               f"row {i + 1} ({describe}); expected a time in every row")
         try:
-            t, si, _ = to_si(t, time_unit, channel=str(table.names[time_idx]))
+            t, si, _ = to_si(t, "s" if clock else time_unit, channel=str(table.names[time_idx]))
         except RecordError as exc:
             raise ConfigError(f"source.time_units: {exc}") from None
+        if clock:  # millisecond stamps at a higher rate: the uniform clock they round
+            from .readers.table import _unrounded
+
+            t = _unrounded(t, file, table.label(time_idx))
         if si != "s":
             raise ConfigError(f"{file}: time column {table.label(time_idx)} has unit "
                               f"{time_unit!r}; expected a time unit (s, ms, us)")
@@ -666,6 +677,8 @@ def apply_map(table, cmap: ChannelMap, *, allow_nonfinite=False):
         extra[name] = dict(data=data[i][:n], units=unit, sample_rate=fs, **time,
                            attrs={"column": table.label(i)})
     attrs = {k: src[k] for k in ("engine_id", "test_id") + LOAD_KEYS if k in src}
+    if clock and "start_time" not in src:  # the first stamp, unless the map states one
+        attrs.update(getattr(table, "start_times", {}).get(time_idx, {}))
     return _assemble(cmap, plain, roles, extra, attrs, file, allow_nonfinite)
 
 

@@ -501,10 +501,13 @@ def critical_speed_table(comparison, predicted=None):
             "amplitude_measured", "amplitude_ratio", "damping_ratio", "confidence",
             "significant", "status"]
     rows = []
+    unjudged = comparison.settings.get("amplitudes_not_judged") is not None
     for _, r in comparison.matched.iterrows():
         d = {c: r.get(c) for c in cols if c in r}
-        ok = bool(r.speed_ok) and bool(r.amplitude_ok)
-        d["status"] = ("matched" if ok else "matched, outside tolerance") if r.significant \
+        ok = bool(r.speed_ok) and (unjudged or bool(r.amplitude_ok))
+        judged = "matched (speed; amplitude not judged: load not stated)" if unjudged \
+            else "matched"
+        d["status"] = (judged if ok else "matched, outside tolerance") if r.significant \
             else "matched, not judged: " + not_judged_reason(predicted, r["mode"], r["order"])
         rows.append(d)
     for _, r in comparison.unmatched_predicted.iterrows():

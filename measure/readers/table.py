@@ -85,6 +85,10 @@ class Table:
     n_columns : int
     sample_rate : float or None
         Stated in the file (Hz), if found.
+    clock_columns : tuple of int
+        Columns of date/time text, read as seconds from their first stamp.
+    start_times : dict
+        ``{column: {"start_time": ISO 8601}}`` of the date/time columns read so far.
     """
 
     file: str
@@ -92,6 +96,7 @@ class Table:
     units: list
     n_columns: int
     sample_rate: float | None = None
+    clock_columns: tuple = ()
 
     def describe(self) -> str:
         """How the table was read (dialect, sheet)."""
@@ -119,12 +124,15 @@ class TextTable(Table):
         self.names = list(d.names) + [None] * (d.n_columns - len(d.names))
         self.units = list(d.units) + [None] * (d.n_columns - len(d.units))
         self.sample_rate = d.sample_rate
+        self.clock_columns = d.clock_columns
+        self.start_times = {}
 
     def describe(self) -> str:
         return self.dialect.describe()
 
     def read(self, columns) -> np.ndarray:
-        return read_columns(self.path, self.dialect, columns, file=self.file)
+        return read_columns(self.path, self.dialect, columns, file=self.file,
+                            starts=self.start_times)
 
 
 class SheetTable(Table):
@@ -294,7 +302,7 @@ def _time_from(table, index, unit, file, t):
     finite = np.flatnonzero(np.isfinite(t))
     n = int(finite[-1]) + 1 if finite.size else 0
     t = t[:n]
-    if unit not in (None, "", "s"):
+    if unit not in (None, "", "s") and index not in table.clock_columns:
         t, si, _ = to_si(t, unit, channel=table.names[index])
         if si != "s":
             raise RecordError(f"{file}: time {table.label(index)} has unit {unit!r}; expected "
@@ -361,8 +369,9 @@ def table_record(table: Table, *, channels=None):
     """A Record from a table's headers alone (no channel map).
 
     Each column header is ``name [unit]`` (or ``name (unit)``, or a units row gives the unit);
-    the time axis is the column named time/t (with a time unit) or, without one, the sample
-    rate stated in the file.
+    the time axis is the column named time/t (with a time unit), else the first column of
+    date/time text (seconds from its first stamp; the stamp is the record's ``start_time``),
+    else the sample rate stated in the file.
 
     Raises
     ------
@@ -403,14 +412,25 @@ def table_record(table: Table, *, channels=None):
             return True
         return bool(unit) and suffix_unit(name) == unit and \
             key.rpartition("_")[0] in TIME_NAMES
+    clocks = tuple(table.clock_columns)
     time_idx = next((i for i, (name, unit) in enumerate(parsed) if is_time(name, unit)), None)
+    if time_idx is None and clocks:
+        time_idx = clocks[0]
+    skipped = [i for i in clocks if i != time_idx]  # date/time text is no channel
+    if skipped:
+        import logging
+
+        logging.getLogger("crankbench").info(
+            "%s: date/time %s not read (the time axis is %s)", file,
+            ", ".join(table.label(i) for i in skipped), table.label(time_idx))
     if time_idx is None and not table.sample_rate:
         raise RecordError(f"{file}: no time column; expected a first column named 'time [s]' "
                           f"(found columns {headers}), or a sample rate: give a channel map "
                           "with [source] sample_rate (Hz) or time_column")
-    names = [p[0] for i, p in enumerate(parsed) if i != time_idx]
+    names = [p[0] for i, p in enumerate(parsed) if i != time_idx and i not in skipped]
     wanted = select(names, channels, file=file)
-    idx = [i for i, (name, _) in enumerate(parsed) if i != time_idx and name in wanted]
+    idx = [i for i, (name, _) in enumerate(parsed)
+           if i != time_idx and i not in skipped and name in wanted]
     for i in idx:
         name, unit = parsed[i]
         if unit is None:
@@ -439,4 +459,6 @@ def table_record(table: Table, *, channels=None):
         values, attrs = si_channel(name, values, {"units": unit, "sample_rate": fs}, file=file)
         out.append((name, "time", values, attrs))
     attrs = {"units_from_names": "; ".join(from_names)} if from_names else {}
+    if time_idx in clocks:
+        attrs.update(getattr(table, "start_times", {}).get(time_idx, {}))
     return build_dataset(out, {"time": t}, attrs)

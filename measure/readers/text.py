@@ -16,10 +16,19 @@ a second of units, or no header at all. :func:`sniff` reads the first 64 kB and 
   recognised by its unit spellings), the preamble above them, and a sample rate or time step
   stated in the preamble.
 
+A column of date/time text (``2026-11-24 10:00:00.301``, ISO with ``T`` and a UTC offset,
+``24.11.2026 10:00:00,301``, ``2026/11/24 10:00:00``, ``10:00:00.301``; see
+:mod:`measure.readers.clock`) counts as data too: the sniffer records its format
+(``Dialect.clocks``), keeps a date and its time one field when runs of whitespace separate
+the fields, and requires every cell of that column to be a stamp of that format and every other
+cell a number.
+
 :func:`read_columns` then parses only the wanted columns with pandas' C parser in chunks of
 65 536 rows into one preallocated ``(columns, rows)`` float64 array, so memory stays at the size
 of the numbers kept (8 bytes a value) plus one chunk, and a bad cell is reported with its
-line, column and the dialect it was read with.
+line, column and the dialect it was read with. A date/time column becomes seconds from its
+first stamp (float64, parsed per chunk with pandas' ``to_datetime`` and the column's format);
+a bad stamp is reported with its line, column and the format expected.
 """
 
 from __future__ import annotations
@@ -31,6 +40,8 @@ from pathlib import Path
 import numpy as np
 
 from crankbench.predict.errors import RecordError
+
+from .clock import StampParser, join_split_stamps, same_kind, stamp_format
 
 __all__ = ["Dialect", "sniff", "read_columns", "describe_delimiter", "DELIMITERS"]
 
@@ -91,6 +102,12 @@ class Dialect:
     sample_rate: float | None = None
     bom: bool = False
     notes: tuple = field(default=(), compare=False)
+    clocks: tuple = ()
+
+    @property
+    def clock_columns(self) -> tuple:
+        """0-based columns holding date/time text (read as seconds from their first stamp)."""
+        return tuple(c for c, _, _ in self.clocks)
 
     @property
     def data_start(self) -> int:
@@ -108,6 +125,7 @@ class Dialect:
                          "the header")
         parts.append({"utf-8-sig": "UTF-8 with BOM", "utf-8": "UTF-8", "cp1252":
                       "Windows-1252", "utf-16": "UTF-16"}.get(self.encoding, self.encoding))
+        parts += [f"date/time in column {c + 1} ({fmt})" for c, fmt, _ in self.clocks]
         return ", ".join(parts)
 
 
@@ -140,11 +158,17 @@ def _number(token: str, decimal: str) -> bool:
     return True
 
 
+def _value(token: str, decimal: str) -> bool:
+    """A number, an empty/NaN cell or a date/time stamp."""
+    return _number(token, decimal) or stamp_format(token) is not None
+
+
 def _split(line: str, delimiter) -> list[str]:
     if delimiter == "":
         return [line.strip()]
     if delimiter is None:
-        return line.split()
+        # a date and the time after it are one stamp, not two whitespace-separated fields
+        return join_split_stamps(line.split())
     return [f for f in _split_quoted(line, delimiter)]
 
 
@@ -167,7 +191,7 @@ def _split_quoted(line: str, delimiter: str) -> list[str]:
 def _row(line, delimiter, decimal):
     """(fields, numeric) of one line read with a delimiter and decimal mark."""
     fields = _split(line, delimiter)
-    numeric = all(_number(f, decimal) for f in fields) and not all(
+    numeric = all(_value(f, decimal) for f in fields) and not all(
         f.strip() == "" for f in fields)
     return fields, numeric
 
@@ -336,7 +360,7 @@ def sniff(path, *, delimiter=..., decimal=None, header_rows=None, skip_rows=None
                 fields = _header_fields(above, r[2], r[1])
                 if r[1] == 1 and any(c in above for c in ",;\t|"):
                     continue  # a one-column reading whose header holds a delimiter
-                if fields is not None and not all(_number(f, r[3]) for f in fields):
+                if fields is not None and not all(_value(f, r[3]) for f in fields):
                     agree.append(r)
         if agree:
             top = agree
@@ -356,16 +380,19 @@ def sniff(path, *, delimiter=..., decimal=None, header_rows=None, skip_rows=None
     if trailing and start > 0:  # an all-empty last column the header names is a column
         named = _split(body[start - 1], delim)
         trailing = not (len(named) == k and named[-1].strip())
+    clocks = _clocks(body, data_index, start, rows, delim, dec, k, file)
     # every line after the run must be a data row too: else name the bad cell
     for i in range(start + rows, len(body)):
         fields, numeric = _row(body[i], delim, dec)
         if numeric and len(fields) == k:
+            _check_kinds(fields, clocks, data_index[i] + 1, delim, dec, file)
             continue
         line_no = data_index[i] + 1
         if len(fields) != k:
             raise RecordError(f"{file}: line {line_no} has {len(fields)} field(s) where the "
                               f"table has {k} (read as {describe_delimiter(delim)}, decimal "
                               f"{'comma' if dec == ',' else 'point'}): {body[i][:80]!r}")
+        _check_kinds(fields, clocks, line_no, delim, dec, file)
         col = next(c for c, f in enumerate(fields) if not _number(f, dec))
         raise RecordError(f"{file}: line {line_no}, column {col + 1}: {fields[col].strip()!r} "
                           f"is not a number (read as {describe_delimiter(delim)}, decimal "
@@ -393,7 +420,7 @@ def sniff(path, *, delimiter=..., decimal=None, header_rows=None, skip_rows=None
             if not line.strip() or (comment and line.startswith(comment)):
                 break
             fields = _header_fields(line, delim, k, trailing)
-            if fields is None or all(_number(f, dec) for f in fields):
+            if fields is None or all(_value(f, dec) for f in fields):
                 break
             head_lines.insert(0, line)
             j -= 1
@@ -402,9 +429,10 @@ def sniff(path, *, delimiter=..., decimal=None, header_rows=None, skip_rows=None
         if j >= 0 and head_lines:
             # a "header" with numeric rows above it is a bad data row, not a header
             above_fields = _header_fields(lines[j], delim, k)
-            if above_fields is not None and all(_number(f, dec) for f in above_fields):
+            if above_fields is not None and all(_value(f, dec) for f in above_fields):
                 bad = _header_fields(head_lines[0], delim, k)
-                col = next(i for i, f in enumerate(bad) if not _number(f, dec))
+                _check_kinds(bad, clocks, j + 2, delim, dec, file)
+                col = next(i for i, f in enumerate(bad) if not _value(f, dec))
                 raise RecordError(
                     f"{file}: line {j + 2}, column {col + 1}: {bad[col]!r} is not a number "
                     f"(read as {describe_delimiter(delim)}, decimal "
@@ -425,7 +453,42 @@ def sniff(path, *, delimiter=..., decimal=None, header_rows=None, skip_rows=None
         names, units = names[:k], units[:k]
     return Dialect(delimiter=delim, decimal=dec, header_rows=n_header, skip_rows=n_skip,
                    encoding=enc, n_columns=k, names=names, units=units,
-                   sample_rate=_rate_from(preamble), bom=bom)
+                   sample_rate=_rate_from(preamble), bom=bom,
+                   clocks=tuple(c for c in clocks if c[0] < k))
+
+
+def _clocks(body, data_index, start, rows, delim, dec, k, file) -> list:
+    """[(column, format, example)] of the columns of date/time text in the run of data rows,
+    each checked to hold stamps of one format (or empty cells) and the others numbers."""
+    clocks = {}
+    for i in range(start, start + rows):
+        for c, f in enumerate(_split(body[i], delim)):
+            fmt = stamp_format(f)
+            if fmt is not None and c not in clocks:
+                clocks[c] = (c, fmt, f.strip().strip('"').strip())
+    clocks = [clocks[c] for c in sorted(clocks)]
+    for i in range(start, start + rows):
+        _check_kinds(_split(body[i], delim), clocks, data_index[i] + 1, delim, dec, file)
+    return clocks
+
+
+def _check_kinds(fields, clocks, line_no, delim, dec, file) -> None:
+    """A stamp in a numbers column, a number or another format in a date/time column:
+    an error naming line, column and what was expected."""
+    how = f"read as {describe_delimiter(delim)}, decimal {'comma' if dec == ',' else 'point'}"
+    formats = {c: (fmt, example) for c, fmt, example in clocks}
+    for c, f in enumerate(fields):
+        cell = f.strip().strip('"').strip()
+        if c in formats:
+            fmt, example = formats[c]
+            got = stamp_format(cell)
+            if cell.lower() not in _NA and (got is None or not same_kind(got, fmt)):
+                raise RecordError(f"{file}: line {line_no}, column {c + 1}: {cell!r} is not a "
+                                  f"date/time of the column's format {fmt} (like {example!r}; "
+                                  f"{how}); expected a date/time in every data cell")
+        elif not _number(cell, dec):
+            raise RecordError(f"{file}: line {line_no}, column {c + 1}: {cell!r} is not a "
+                              f"number ({how}); expected numbers in every data cell")
 
 
 def _count_lines(path) -> int:
@@ -437,12 +500,19 @@ def _count_lines(path) -> int:
     return n + (last != b"\n")
 
 
-def read_columns(path, dialect: Dialect, columns=None, *, file=None) -> np.ndarray:
+def read_columns(path, dialect: Dialect, columns=None, *, file=None, starts=None) -> np.ndarray:
     """Parse the data rows of ``columns`` (0-based; default all) into a (k, rows) float array.
 
     Empty cells and NaN spellings become NaN (trailing empty cells of short columns); any
-    other non-number is an error naming line, column and dialect. Memory: the array plus one
-    chunk of 65 536 rows.
+    other non-number is an error naming line, column and dialect. A date/time column
+    (``dialect.clocks``) becomes seconds from its first stamp (:mod:`measure.readers.clock`).
+    Memory: the array plus one chunk of 65 536 rows.
+
+    Parameters
+    ----------
+    starts : dict, optional
+        Filled with ``{column: {"start_time": ISO 8601}}`` (or ``start_time_of_day``) for each
+        date/time column read.
 
     Examples
     --------
@@ -451,6 +521,10 @@ def read_columns(path, dialect: Dialect, columns=None, *, file=None) -> np.ndarr
     >>> _ = p.write_text("1;2,5;3\\n4;5,5;6\\n")
     >>> read_columns(p, sniff(p), [0, 1]).tolist()
     [[1.0, 4.0], [2.5, 5.5]]
+    >>> _ = p.write_text("24.11.2026 23:59:59,9;2,5\\n25.11.2026 00:00:00,1;3\\n")
+    >>> starts = {}
+    >>> read_columns(p, sniff(p), [0, 1], starts=starts).round(6).tolist(), starts
+    ([[0.0, 0.2], [2.5, 3.0]], {0: {'start_time': '2026-11-24T23:59:59.900000'}})
     """
     import pandas as pd
 
@@ -464,33 +538,56 @@ def read_columns(path, dialect: Dialect, columns=None, *, file=None) -> np.ndarr
     out = np.empty((len(cols), upper), dtype=np.float64)
     if not cols:
         return out
-    order = np.argsort(cols)
-    sorted_cols = [cols[i] for i in order]
+    clocks = {c: (fmt, example) for c, fmt, example in dialect.clocks}
+    # whitespace-separated: a date-time stamp is two fields on the line (date, time)
+    split = {c for c, (fmt, _) in clocks.items() if dialect.delimiter is None and " " in fmt}
+
+    def field(c):
+        return c + sum(1 for s in split if s < c)
+    n_fields = dialect.n_columns + len(split)
+    used = sorted({field(c) for c in cols} | {field(c) + 1 for c in cols if c in split})
+    text_fields = {field(c) for c in clocks} | {field(c) + 1 for c in split}
     kwargs = dict(sep=dialect.delimiter if dialect.delimiter not in (None, "") else r"\s+",
                   decimal=dialect.decimal, header=None, skiprows=dialect.data_start,
-                  usecols=sorted_cols, dtype=np.float64, encoding=dialect.encoding,
-                  skip_blank_lines=True, engine="c", comment=None,
+                  usecols=used, dtype={f: (str if f in text_fields else np.float64)
+                                       for f in used},
+                  encoding=dialect.encoding, skip_blank_lines=True, engine="c", comment=None,
                   na_values=["", "nan", "NaN", "NAN", "-nan", "n/a", "N/A", "NA"],
-                  keep_default_na=False, names=list(range(dialect.n_columns))
+                  keep_default_na=False, names=list(range(n_fields))
                   if dialect.delimiter != "" else [0], index_col=False)
     if dialect.delimiter == "":
         kwargs["sep"] = "\x1f"  # one column: a separator no number contains
+    parsers = {}
+    for c in cols:
+        if c in clocks and c not in parsers:
+            name = dialect.names[c] if c < len(dialect.names) and dialect.names[c] else None
+            parsers[c] = StampParser(*clocks[c], file=file, label=f"column {c + 1}" + (
+                f" ({name!r})" if name else ""))
     row = 0
     try:
         reader = pd.read_csv(path, chunksize=_CHUNK_ROWS, **kwargs)
-        for chunk in _chunks(reader, path, dialect, kwargs, file):
-            block = chunk.to_numpy(dtype=np.float64, copy=False)
-            m = block.shape[0]
+        for chunk in _chunks(reader, path, dialect, kwargs, file, text_fields):
+            m = chunk.shape[0]
             if row + m > out.shape[1]:  # more rows than newlines counted (\r line ends)
                 out = np.concatenate([out, np.empty((len(cols), row + m - out.shape[1]))], 1)
-            out[order, row:row + m] = block.T
+            for j, c in enumerate(cols):
+                if c in parsers:
+                    cells = chunk[field(c)]
+                    if c in split:
+                        cells = cells + " " + chunk[field(c) + 1]
+                    out[j, row:row + m] = parsers[c].seconds(
+                        cells, first_line=dialect.data_start + row + 1)
+                else:
+                    out[j, row:row + m] = chunk[field(c)].to_numpy(dtype=np.float64)
             row += m
     except pd.errors.EmptyDataError:
         row = 0
+    if starts is not None:
+        starts.update({c: p.start_attrs() for c, p in parsers.items()})
     return out[:, :row]
 
 
-def _chunks(reader, path, dialect, kwargs, file):
+def _chunks(reader, path, dialect, kwargs, file, text_fields=()):
     """Iterate the reader's chunks, turning parse errors into messages naming line and cell."""
     import pandas as pd
 
@@ -501,12 +598,12 @@ def _chunks(reader, path, dialect, kwargs, file):
         except StopIteration:
             return
         except (ValueError, pd.errors.ParserError) as exc:
-            raise _locate(path, dialect, kwargs, start, exc, file) from None
+            raise _locate(path, dialect, kwargs, start, exc, file, text_fields) from None
         start += chunk.shape[0]
         yield chunk
 
 
-def _locate(path, dialect, kwargs, start, exc, file) -> RecordError:
+def _locate(path, dialect, kwargs, start, exc, file, text_fields=()) -> RecordError:
     """The first bad cell at or after data row ``start``, as a RecordError."""
     import pandas as pd
 
@@ -525,6 +622,8 @@ def _locate(path, dialect, kwargs, start, exc, file) -> RecordError:
         frame = None
     if frame is not None:
         for c in frame.columns:
+            if c in text_fields:
+                continue  # date/time text: checked by its StampParser
             cells = frame[c].astype(str).to_numpy()
             for i, cell in enumerate(cells):
                 if not _number(cell, dialect.decimal):

@@ -16,8 +16,9 @@ from .._lazy import lazy_names
 __all__ = ["chain", "TorsionalSystem", "Modes", "from_toml", "forced_response",
            "ForcedResponse", "ShaftLine", "resonance_amplitudes", "engine_excitation",
            "Excitation", "StressLimits", "check_stress", "CrankThrow", "throw_stiffness",
-           "uniform_shaft_frequencies", "friction_damper_response", "friction_dissipation",
-           "optimum_slip_torque", "FrictionDamper", "friction_forced_response"]
+           "throw_stiffness_fe", "uniform_shaft_frequencies", "friction_damper_response",
+           "friction_dissipation", "optimum_slip_torque", "FrictionDamper",
+           "friction_forced_response"]
 
 _LAZY = {
     "chain": "system",
@@ -34,6 +35,7 @@ _LAZY = {
     "check_stress": "stress",
     "CrankThrow": "throws",
     "throw_stiffness": "throws",
+    "throw_stiffness_fe": "throw_fe",
     "uniform_shaft_frequencies": "throws",
     "friction_damper_response": "friction",
     "friction_dissipation": "friction",

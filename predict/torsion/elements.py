@@ -291,8 +291,9 @@ class ShaftLine:
         Give ``stiffness`` (N·m/rad) — optionally with ``diameter``/``bore`` for stress — or
         ``length``/``diameter``/``bore`` (m), or ``segments`` [(L, D, d), ...] for a stepped
         shaft (stress at its smallest section), or ``throw`` (a
-        :class:`~predict.torsion.throws.CrankThrow`, stiffness by ``throw_method`` "carter" or
-        "wilson", stress at the smaller of journal and pin). ``damping`` is relative viscous
+        :class:`~predict.torsion.throws.CrankThrow`, stiffness by ``throw_method`` "wilson",
+        "carter" or "fe", see :func:`~predict.torsion.throws.throw_stiffness`; stress at the
+        smaller of journal and pin). ``damping`` is relative viscous
         (N·m·s/rad), ``loss_factor`` hysteretic η.
 
         Distributed inertia: with ``density`` (kg/m³, needs ``length``/``diameter`` or

@@ -4,47 +4,79 @@
 torsional vibration stress (half the range of the superposed alternating stress over a cycle,
 nominal stress on the plain section) for
 
-* continuous operation, clause M68.5 (Rev.2 numbering; "M68.4" in some society rule books):
+* continuous operation (λ = n/n_0):
 
   - ``τ_C = ± (σ_B + 160) / 18 · C_K · C_D · (3 − 2 λ²)``  for λ < 0.9,
-  - ``τ_C = ± (σ_B + 160) / 18 · C_K · C_D · 1.38``         for 0.9 ≤ λ ≤ 1.05;
+  - ``τ_C = ± (σ_B + 160) / 18 · C_K · C_D · 1.38``         for 0.9 ≤ λ ≤ 1.05
+    (the two branches meet at λ = 0.9: 3 − 2·0.81 = 1.38); no value above λ = 1.05;
 
-* transient operation (passing through a barred speed range), same clause:
-  ``τ_T = ± 1.7 τ_C / √C_K`` for λ ≤ 0.8;
+* transient operation (passing rapidly through a barred speed range), **only below
+  λ = 0.8**: ``τ_T = ± 1.7 τ_C / √C_K``. Above λ = 0.8 the rule gives no transient allowance,
+  so :func:`m68_limits` returns τ_T = τ_C there (exceeding τ_C above 0.8 n_0 is not permitted
+  even in passing);
 
 with σ_B the specified minimum tensile strength of the shaft material (N/mm²), in the formula
-limited to 760 N/mm² (carbon and carbon-manganese steel) or 800 N/mm² (alloy steel) for
-intermediate shafts and 600 N/mm² for propeller shafts (M68.3/M68.4); C_K the factor of the
-shaft's design feature (M68.4, Table 1; :data:`M68_CK`); C_D = 0.35 + 0.93 d^(−0.2) the size
-factor (d in mm); λ = n / n_0 the speed ratio to the rated speed (for constant-speed generating
-sets n_0 is the full-load speed).
+limited to 760 N/mm² (carbon and carbon-manganese steel), 800 N/mm² (alloy steel) and
+600 N/mm² for propeller shafts (:data:`TENSILE_CAP_MPA`); C_K the factor of the shaft's design
+feature (:data:`M68_CK`); C_D = 0.35 + 0.93 d^(−0.2) the size factor (d in mm); n_0 the rated
+(maximum continuous) speed, for constant-speed generating sets the full-load speed.
 
-Barred speed ranges (M68.5): where the stress exceeds τ_C — including one-cylinder misfiring
-if the plant is intended to run continuously so — a restricted speed range is imposed, to be
-passed rapidly; **restricted ranges in normal operation are not acceptable above λ = 0.8**; in
-one-cylinder misfiring conditions of single-engine ships they must still allow safe
-navigation (a judgement the report leaves to the surveyor, stating the ranges).
+Barred speed ranges: where the stress exceeds τ_C — including one-cylinder misfiring if the
+plant is intended to run so — a barred range is imposed, marked on the tachometer and passed
+rapidly; its extent from a calculation is ``16 n_c/(18 − λ_c) ≤ n ≤ (18 − λ_c) n_c/16`` around
+the critical speed n_c (:func:`m68_barred_range`); a range verified by measurement may be used
+instead, having regard to the tachometer accuracy (what :func:`barred_ranges` plus
+``tachometer_tolerance_rpm`` does on measured stress). **No barred range in normal firing above
+λ = 0.8** (:func:`judge_barred_ranges`); under one-cylinder misfire the ranges must still allow
+safe navigation (a judgement the report leaves to the surveyor, stating the ranges).
 
 **Crankshafts** are outside M68 (its scope clause M68.1 sends them to UR M53): their
 permissible vibratory stress is the engine maker's figure, entered in the model
 (``[limits.crankshaft]``).
 
-What was checked against the published text for this module: the scope of M68.1 (crankshafts
-excluded, reference to M53), the symbol list with C_D = 0.35 + 0.93 d^(−0.2) and n_0 for
-constant-speed sets (as reproduced in LR Rules for Naval Ships, Vol 2 Pt 5 Ch 1 §3.1.1) and the
-C_K values of the intermediate-shaft rows (same source, Table 1.3.1). The τ_C/τ_T formulas,
-the other C_K rows and the λ = 0.8 clause are transcribed from UR M68 (Rev.2 with Corr.); the
-continuity of the two τ_C branches at λ = 0.9 (3 − 2·0.81 = 1.38) is checked by a test. The
-rule edition in force for a given ship is the society's: ``source`` names the edition used.
+What was checked against published text, and where (the UR's own PDF was not reachable; these
+are class-society rules that reproduce it, all IACS members):
+
+* **Formulas, both τ_C branches with their λ ranges, τ_T = 1.7 τ_C/√C_K "within the range
+  below 80 % of the maximum continuous revolutions", every C_K value of the table with its notes
+  (keyways not to be used with a barred range; radial hole ≤ 0.3 d; slot limits; propeller
+  shaft 0.55 from the aftmost bearing to the boss, ≥ 2.5 d_s; stern tube shaft 0.8),
+  C_D = 0.35 + 0.93 d^(−0.2), and the barred-range extent 16 n_c/(18 − λ_c) … (18 − λ_c) n_c/16
+  with the misfire and measured-range clauses**: Korean Register, *Rules for the
+  Classification of Steel Ships* (2025), Pt 5 Ch 4 "Torsional vibration of shaftings",
+  Sec 2, 202.1(1)–(2), Table 5.4.1, 206.1(1)–(3) and 206.3 [2]_. All match this module.
+* **σ_B caps** 760 (carbon, C-Mn) / 800 (alloy) N/mm² and the 500 N/mm² minimum where
+  stresses approach the transient limit: LR Rules for Naval Ships Vol 2 Pt 3 Ch 2 §3.1.2–3.1.5
+  and LR Rules for Special Service Craft Pt 11 Ch 2 §3.1.2–3.1.5 [3]_; 600 N/mm² for propeller
+  shafts, 760 carbon / 800 alloy otherwise (for the shaft formulae): GL (BKI) Rules I-1-2
+  Sec 4 A.2 (2008) [4]_.
+  **Differs**: KR 202.1(1) (amended 2017) caps carbon-steel σ_B at 600 N/mm² for *all*
+  shafts — stricter than the 760 used here; a KR-classed ship needs ``tensile_strength_mpa``
+  ≤ 600 entered for carbon steel.
+* **Symbols and n_0 for constant-speed sets**: LR Naval Ships Vol 2 Pt 5 Ch 1 §3.1.1 [5]_.
+* **No barred range above λ = 0.8 for normal firing**: the sentence itself in KR Guidance
+  Annex 5-3 §2(2)(A)(d) (the UR M53 crankshaft text); for shafting it follows from τ_T being
+  granted only below λ = 0.8 (KR 202.1(2)).
+* **Clause numbers**: the headings M68.1 (scope, crankshafts excluded → M53) and M68.2
+  (alternative calculation methods) were read in a published copy of the UR (Corr.2 Nov 2012,
+  Aug 2014) [1]_. The numbers M68.3 (material), M68.4 (diameters, C_K table) and M68.5
+  (permissible torsional vibration stresses, barred ranges) used in ``source`` texts follow the
+  UR's layout as transcribed, **not seen in a published copy**. The current edition is Rev.3
+  (Feb 2021) per two secondary sources; the formulas above are those of the 2025 KR rules.
 
 References
 ----------
 .. [1] IACS Unified Requirement M68, *Dimensions of propulsion shafts and their permissible
-   torsional vibration stresses*, Rev.2 (Corr.2 Nov 2012, Aug 2014): M68.1 scope, M68.3
-   material limitations, M68.4 shaft diameters (C_K table), M68.5 permissible torsional
-   vibration stresses and barred speed ranges.
-.. [2] Lloyd's Register, Rules for the Classification of Naval Ships, Vol 2 Pt 5 Ch 1 §3.1
-   (symbols, C_d size factor, C_k table).
+   torsional vibration stresses* (Corr.2 Nov 2012, Aug 2014; Rev.3 Feb 2021).
+.. [2] Korean Register, Rules for the Classification of Steel Ships 2025 (RA-05-E), Pt 5 Ch 4,
+   Sec 2 "Allowable limit of vibration stresses", 202 (intermediate, thrust, propeller and
+   stern tube shafts), Table 5.4.1 (C_k), 206 (barred speed range); Guidance Annex 5-3.
+.. [3] Lloyd's Register, Rules for the Classification of Naval Ships (Jan 2023), Vol 2 Pt 3
+   Ch 2 §3.1 (materials for shafts); Rules for Special Service Craft Pt 11 Ch 2 §3.1.
+.. [4] Germanischer Lloyd / BKI, Rules I-1-2 (2008), Section 4 Main Shafting, A.2 (limits of
+   R_m used in the formulae).
+.. [5] Lloyd's Register, Rules for the Classification of Naval Ships, Vol 2 Pt 5 Ch 1 §3.1
+   (symbols, C_d size factor, C_k table, N_s).
 """
 
 from __future__ import annotations
@@ -57,9 +89,9 @@ from .._validate import check_finite_array, check_option, check_positive
 from ..errors import ModelError
 
 __all__ = ["M68_CK", "M68_SOURCE", "TENSILE_CAP_MPA", "size_factor", "m68_limits",
-           "SectionRule", "MakerLimit", "RuleLimits", "barred_ranges", "judge_barred_ranges"]
+           "m68_barred_range", "SectionRule", "MakerLimit", "RuleLimits", "barred_ranges", "judge_barred_ranges"]
 
-M68_SOURCE = "IACS UR M68 Rev.2"
+M68_SOURCE = "IACS UR M68"
 
 #: C_K factors of UR M68 (M68.4, Table 1) by design feature of the shaft section
 M68_CK = {
@@ -126,8 +158,13 @@ def m68_limits(speed_rpm, *, tensile_strength, diameter, ck, rated_speed_rpm):
     -------
     (ndarray, ndarray)
         τ_C and τ_T at each speed, Pa (stress amplitude). Above λ = 1.05 the rule gives no
-        value: NaN. τ_T is given at every speed (the rule applies it for λ ≤ 0.8, where barred
-        ranges may lie).
+        value: NaN. τ_T = 1.7 τ_C/√C_K below λ = 0.8 (the only range where the rule grants a
+        transient allowance, KR Pt 5 Ch 4 202.1(2)); τ_T = τ_C from λ = 0.8 up.
+
+    References
+    ----------
+    IACS UR M68 (permissible torsional vibration stresses), as reproduced in KR Rules for
+    Steel Ships 2025 Pt 5 Ch 4 202.1(1)–(2); see the module docstring for what was checked.
 
     Examples
     --------
@@ -136,7 +173,7 @@ def m68_limits(speed_rpm, *, tensile_strength, diameter, ck, rated_speed_rpm):
     >>> tc, tt = m68_limits([360.0, 720.0], tensile_strength=600e6, diameter=0.4, ck=1.0,
     ...                     rated_speed_rpm=720.0)
     >>> print(np.round(tc / 1e6, 2), np.round(tt / 1e6, 2))
-    [66.56 36.74] [113.16  62.46]
+    [66.56 36.74] [113.16 36.74]
     """
     s = check_finite_array(speed_rpm, "speed_rpm", ndim=1, error=ModelError)
     sigma = check_positive(tensile_strength, "tensile_strength", error=ModelError) / 1e6
@@ -147,8 +184,45 @@ def m68_limits(speed_rpm, *, tensile_strength, diameter, ck, rated_speed_rpm):
     base = (sigma + 160.0) / 18.0 * float(ck) * size_factor(diameter)
     shape = np.where(lam < 0.9, 3.0 - 2.0 * lam**2, 1.38)
     tc = np.where(lam <= 1.05 + 1e-12, base * shape, np.nan) * 1e6
-    tt = 1.7 * tc / np.sqrt(float(ck))
+    # no transient allowance from λ = 0.8 up (τ_T is granted "below 80 % of n_0" only)
+    tt = np.where(lam < 0.8, 1.7 * tc / np.sqrt(float(ck)), tc)
     return tc, tt
+
+
+def m68_barred_range(critical_speed_rpm, rated_speed_rpm):
+    """Barred speed range of UR M68 around a critical speed found by calculation.
+
+    ``16 n_c / (18 − λ_c) ≤ n ≤ (18 − λ_c) n_c / 16``, λ_c = n_c / n_0 (KR Rules for Steel
+    Ships 2025 Pt 5 Ch 4 206.1(1), reproducing the UR). A range verified by measurement may
+    replace it (206.3), with the tachometer accuracy added.
+
+    Parameters
+    ----------
+    critical_speed_rpm : float
+        n_c, the speed of the resonance whose stress exceeds τ_C, rpm.
+    rated_speed_rpm : float
+        n_0, rpm.
+
+    Returns
+    -------
+    (float, float)
+        Lower and upper end of the barred range, rpm.
+
+    Examples
+    --------
+    A critical at 400 rpm on an engine rated 720 rpm (λ_c = 0.556):
+
+    >>> lo, hi = m68_barred_range(400.0, 720.0)
+    >>> print(round(lo, 1), round(hi, 1))
+    366.9 436.1
+    """
+    nc = check_positive(critical_speed_rpm, "critical_speed_rpm", error=ModelError)
+    n0 = check_positive(rated_speed_rpm, "rated_speed_rpm", error=ModelError)
+    lam = nc / n0
+    if lam >= 18.0:
+        raise ModelError(f"critical_speed_rpm={nc!r} is {lam:.1f} × rated_speed_rpm: the M68 "
+                         "barred-range formula needs λ_c < 18")
+    return 16.0 * nc / (18.0 - lam), (18.0 - lam) * nc / 16.0
 
 
 @dataclass(frozen=True)

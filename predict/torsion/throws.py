@@ -18,20 +18,40 @@ shaft, web width b across it, crank radius R; every term scaled by D_ref⁴)::
 
 Validity: both were fitted to crankshafts *without* overlap of pin and journal
 (R ≥ (D_j + D_p)/2) and with webs wider than thick; for overlapped throws they over-estimate
-the flexibility, and :func:`throw_stiffness` warns. Their scatter against measured throws is
-of the order ±10-20 %; the result says so.
+the flexibility, and :func:`throw_stiffness` warns. ``uncertainty`` is ±15 %.
 
 **Source status (read this before relying on the numbers).** The two formulas above were
 written from memory of Ker Wilson vol. 1 ch. 3 and have *not* been checked against a printed
-or otherwise readable copy of Carter (1928), Ker Wilson (1956) or Nestorides (1958): searches of
-the available public material (web pages, documentation, public code) found none of these texts,
-no reproduction of the formulas, and no published worked example or table of measured against
-formula stiffness. Their coefficients are therefore unverified, the tests check only the
-implementation against the form written here, and every result carries this in its ``note``.
-For the same reason the Tuplin (1953) and BICERA (Nestorides 1958, with its overlap charts)
-formulas are **not** implemented: no readable source gave their coefficients, and an unchecked
-empirical formula is worse than none. A throw stiffness from the engine maker, a
-finite-element model or a measurement should be preferred (``stiffness =`` in the TOML).
+or otherwise readable copy of Carter (1928), Ker Wilson (1956), Tuplin or Nestorides (1958).
+Two searches of the available public material (web pages, documentation, public code and
+issue threads, in English, Chinese, Japanese, Korean, Russian, Polish and German; the second
+in issue 18's follow-up) found only the title page and the start of the contents of
+Nestorides' handbook (a scanned copy) and the title page and preface of Tuplin's *Vibration in
+Machinery* (1940): no page giving any of the throw formulas, no reproduction of them, and no
+published worked example or table of measured against formula stiffness. Every result of the two formulas therefore carries this in its ``note``.
+For the same reason the Tuplin and BICERA (Nestorides 1958, with its overlap charts)
+formulas are **not** implemented: ``method="tuplin"`` or ``"bicera"`` raises an error saying
+so rather than returning an unchecked empirical formula.
+
+**Second method.** ``method="fe"`` (:func:`predict.torsion.throw_fe.throw_stiffness_fe`) is a
+3-D elastic finite-element model of the idealised throw these dimensions describe (sharp
+corners, obround webs), with its discretisation error estimated; it is checked against the
+closed form of a plain shaft, solid and bored, and holds for overlapped throws too. Against
+it (tests/predict/test_throw_fe.py), in equivalent length, formula over FE minus one:
+
+==============================================  ======  ======
+throw (D_j, l_j, D_p, l_p, h, b, R; in D_j)     Carter  Wilson
+==============================================  ======  ======
+I6 sample (sample_data, D_j = 85 mm)            -8 %    +5 %
+long stroke (1, .5, .95, .55, .45, 1.6, 1.35)   +3 %    +7 %
+overlapped (1, .4, .9, .45, .3, 1.4, .65)       +3 %    +4 %
+==============================================  ======  ======
+
+The overlapped throw is outside both formulas' range and is flagged so. The ±15 %
+``uncertainty`` thus holds against the idealised solid on these three throws: a check of order
+of magnitude and form, not of the printed coefficients, and not against measured throws. A throw stiffness from the
+engine maker, a finite-element model of the real drawing or a measurement should be
+preferred (``stiffness =`` in the TOML).
 
 Distributed inertia
 -------------------
@@ -48,8 +68,11 @@ References
 .. [2] W. Ker Wilson, *Practical Solution of Torsional Vibration Problems*, vol. 1, 3rd ed.,
    Chapman & Hall, 1956, ch. 3 (stiffness of crankshafts: Carter's and Wilson's formulas).
 .. [3] E. J. Nestorides, *A Handbook on Torsional Vibration*, B.I.C.E.R.A., Cambridge, 1958,
-   part 1 §3 (crankshaft stiffness; the empirical formulas and their range).
-.. [4] S. Timoshenko, *Vibration Problems in Engineering*, 2nd ed., 1937, §55 (torsional
+   part 1 (crankshaft stiffness; only its title page and the start of its contents were
+   readable here).
+.. [4] W. A. Tuplin, *Vibration in Machinery*, Pitman, 1940 (title and contents only were
+   readable; no throw formula).
+.. [5] S. Timoshenko, *Vibration Problems in Engineering*, 2nd ed., 1937, §55 (torsional
    vibration of a uniform shaft; shaft with a disk at its end, β tan β = J_shaft/J_disk).
 """
 
@@ -64,11 +87,20 @@ from .._validate import check_int, check_nonnegative, check_option, check_positi
 from ..errors import ModelError
 
 __all__ = ["CrankThrow", "ThrowStiffness", "throw_stiffness", "THROW_METHODS",
+           "UNAVAILABLE_THROW_METHODS",
            "lumping_error", "elements_for_tolerance", "uniform_shaft_frequencies"]
 
 log = logging.getLogger("crankbench")
 
-THROW_METHODS = ("carter", "wilson")
+THROW_METHODS = ("carter", "wilson", "fe")
+
+#: classical formulas an engineer may ask for that are not implemented, and why
+UNAVAILABLE_THROW_METHODS = {
+    "tuplin": "Tuplin's equivalent-length formula is not implemented: no readable source gave "
+              "its coefficients (module predict.torsion.throws)",
+    "bicera": "the BICERA formula (Nestorides 1958) is not implemented: no readable source "
+              "gave its coefficients or overlap charts (module predict.torsion.throws)",
+}
 
 
 @dataclass(frozen=True)
@@ -144,7 +176,8 @@ class ThrowStiffness:
     within_validity : bool
         False when the throw lies outside the formula's stated range (see ``note``).
     uncertainty : float
-        Typical relative scatter of the empirical formula against measured throws.
+        Relative uncertainty: for the formulas their stated ±15 % (checked against the FE of
+        the idealised throw, module docstring); for ``"fe"`` the discretisation estimate.
     note : str
     """
 
@@ -186,8 +219,13 @@ def throw_stiffness(throw: CrankThrow, *, method: str = "wilson",
     Parameters
     ----------
     throw : CrankThrow
-    method : {"carter", "wilson"}
-        Formula (module docstring).
+    method : {"wilson", "carter", "fe"}
+        Formula (module docstring), or ``"fe"``: the 3-D finite-element model of
+        :func:`predict.torsion.throw_fe.throw_stiffness_fe` (seconds per throw; results are
+        cached per throw). ``"tuplin"`` and ``"bicera"`` raise :class:`ModelError`: not
+        implemented, no readable source gave their coefficients. The default stays Ker
+        Wilson's formula, the one of the two implemented formulas that carries end
+        corrections for journal and pin; BICERA's, the usual modern choice, is unavailable.
     shear_modulus : float
         G, Pa.
     reference_diameter : float, optional
@@ -197,11 +235,13 @@ def throw_stiffness(throw: CrankThrow, *, method: str = "wilson",
     -------
     ThrowStiffness
         A throw outside the formula's range (overlapped pin and journal, webs thicker than
-        wide, or a non-positive web term) gets ``within_validity=False`` and a logged warning.
+        wide, or a non-positive web term) gets ``within_validity=False`` and a logged warning
+        (``"fe"`` has no such range).
 
     References
     ----------
-    Carter (1928); Ker Wilson vol. 1 (1956) ch. 3; Nestorides (1958) §3.
+    Carter (1928); Ker Wilson vol. 1 (1956) ch. 3; Nestorides (1958) §3 -- none of them
+    readable here (module docstring).
 
     Examples
     --------
@@ -213,10 +253,19 @@ def throw_stiffness(throw: CrankThrow, *, method: str = "wilson",
     """
     if not isinstance(throw, CrankThrow):
         raise ModelError(f"throw must be a CrankThrow, got {type(throw).__name__}")
+    if method in UNAVAILABLE_THROW_METHODS:
+        raise ModelError(f"throw_stiffness(method={method!r}): "
+                         f"{UNAVAILABLE_THROW_METHODS[method]}; use one of "
+                         f"{', '.join(repr(m) for m in THROW_METHODS)} or give the throw's "
+                         "stiffness from the maker, an FE model or a measurement")
     method = check_option(method, "method", THROW_METHODS, error=ModelError)
     g = check_positive(shear_modulus, "shear_modulus", error=ModelError)
     dref = throw.journal_diameter if reference_diameter is None else check_positive(
         reference_diameter, "reference_diameter", error=ModelError)
+    if method == "fe":
+        from .throw_fe import _cached_fe
+
+        return _cached_fe(throw, g, dref)
     d4 = dref ** 4
     jq = d4 / (throw.journal_diameter ** 4 - throw.journal_bore ** 4)
     pq = d4 / (throw.pin_diameter ** 4 - throw.pin_bore ** 4)

@@ -132,6 +132,10 @@ def load_limits(table, *, engine=None):
         [limits.vibration]                  # vibration severity of the engine structure
         standard = "ISO 10816-6"            # default; or "ISO 10816-1"
         machine_class = 5                   # the contract's class (default: from the engine)
+        rated_power_kw = 3000               # rated power the class is chosen by (default: the
+                                            # indicated power from the engine's imep)
+        mounting = "resilient"              # or "rigid" (default: resilient if the engine
+                                            # model has [mounts], else unknown)
         # boundaries_mm_s = [11.2, 11.2, 17.8]   # own A/B, B/C, C/D boundaries, velocity rms
         source = "contract clause ..."
 
@@ -209,6 +213,9 @@ def load_limits(table, *, engine=None):
                      "boundaries_mm_s": vt.numbers("boundaries_mm_s", None, length=3, low=0.0,
                                                    strict_low=True, unit="mm/s",
                                                    plausible=(0.01, 1000.0)),
+                     "rated_power_kw": vt.positive("rated_power_kw", None, unit="kW",
+                                                   plausible=(0.1, 2e5)),
+                     "mounting": vt.string("mounting", None, options=("rigid", "resilient")),
                      "source": vt.string("source", "model [limits.vibration]")}
         mc = vibration["machine_class"]
         if mc is not None and not isinstance(mc, (int, str)):
@@ -363,9 +370,11 @@ def from_toml(path):
                   elements=t.integer("elements", None, minimum=1))
         tt = t.table("throw", None)
         if tt is not None:
-            from .throws import THROW_METHODS, CrankThrow
+            from .throws import THROW_METHODS, UNAVAILABLE_THROW_METHODS, CrankThrow
 
-            kw["throw_method"] = tt.string("method", "wilson", options=THROW_METHODS)
+            # tuplin/bicera pass here so that throw_stiffness says why they are unavailable
+            kw["throw_method"] = tt.string("method", "wilson", options=(
+                *THROW_METHODS, *UNAVAILABLE_THROW_METHODS))
             dims = {key: tt.positive(key, **_DIAMETER) for key in (
                 "journal_diameter", "journal_length", "pin_diameter", "pin_length",
                 "web_thickness", "web_width", "crank_radius")}

@@ -4,8 +4,9 @@ Sources:
 * [Carter] B. C. Carter, *Engineering* 126 (1928) 36; [KW] W. Ker Wilson, *Practical Solution
   of Torsional Vibration Problems* vol. 1, 3rd ed. (1956) ch. 3 — the equivalent-length
   formulas as predict.torsion.throws states them. That form could not be checked against a
-  printed copy (none readable was found): the test below checks the implementation against the
-  stated form only, not the coefficients against the literature.
+  printed copy (none readable was found, in two searches): the test below checks the
+  implementation against the stated form only, not the coefficients against the literature;
+  tests/predict/test_throw_fe.py checks the formulas against a 3-D FE of the idealised throw.
 * [Tim] S. Timoshenko, *Vibration Problems in Engineering*, 2nd ed. (1937) §55: free-free
   uniform shaft ω_m = mπc/L; shaft fixed at one end with a disk at the other,
   β tan β = J_shaft/J_disk, β = ωL/c.

@@ -66,7 +66,8 @@ ERRORS = {
     # NaN / inf runs (strict read)
     "nan_run.h5": r"channel 'acc' has 20 NaN/inf sample\(s\) in 1 run\(s\): samples 100..119 "
                   r"\(t = 0.1..0.119 s\); expected finite values \(read with "
-                  r"allow_nonfinite=True to mask them\)",
+                  r"allow_nonfinite=True, or `crankbench import\|analyse --allow-nonfinite`, "
+                  r"to mask them\)",
     "nan_run.mf4": r"channel 'acc' has 20 NaN/inf sample\(s\) in 1 run\(s\): samples 100..119",
     "inf_run.csv": r"channel 'acc' has 6 NaN/inf sample\(s\) in 2 run\(s\): samples 200..204 "
                    r"\(t = 0.2..0.204 s\); samples 300..300",
