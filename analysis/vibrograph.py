@@ -46,14 +46,13 @@ import numpy as np
 from crankbench.predict._validate import check_positive, check_range
 from crankbench.predict.errors import AnalysisError, ConfigError, ModelError, RecordError
 
-from .vibro_sensors import VibroSensor, place_sensors  # re-exported: part of this API
+from .vibro_sensors import _QUANTITIES, VibroSensor, place_sensors  # the last two re-exported
 
 __all__ = ["VibroSensor", "VibrographResult", "place_sensors", "load_engine_model",
            "model_kind", "compare_vibrograph"]
 
 log = logging.getLogger("crankbench")
 
-_QUANTITIES = {"displacement": 0, "velocity": 1, "acceleration": 2}
 _TWO_PI = 2.0 * np.pi
 
 
