@@ -392,6 +392,9 @@ def speed_reference(record, channel: str, *, speed_channel: str | None = None,
         t_in, omega = t_in[good], omega[good]
     if t_in.shape[0] == 0:
         raise AnalysisError(f"{source} holds no usable speed values")
+    if source.startswith(("IAS", "speed channel")):
+        omega = _repair_glitches(t_in, omega, source)
+        omega = _one_direction(omega, source)
     cover = None
     if _is_pulses(var) and var.shape[0] > 1:
         edges = np.asarray(var.values, float)
@@ -453,6 +456,83 @@ def speed_reference(record, channel: str, *, speed_channel: str | None = None,
         if np.isfinite(values).all() and values.shape[0] >= 64:
             check_speed_reference(values, fs, rpm, label=channel, source=source)
     return out
+
+
+#: a speed glitch: this many robust standard deviations from the running median, and at least
+#: this fraction of it (a shaft cannot step by that much between two samples and back)
+_GLITCH_SIGMAS = 10.0
+_GLITCH_FRACTION = 0.05
+#: ... and reached and left faster than any engine changes speed (free revving ~1e4 rpm/s)
+_GLITCH_RATE_RPM_S = 2.0e4
+
+
+def _repair_glitches(t_in, omega, source):
+    """Counter glitches of a speed channel (overflow spikes such as 65535, single samples
+    dropping to 0 while the shaft runs) bridged by interpolation, with a warning.
+
+    A sample is a glitch when it stands more than ``_GLITCH_SIGMAS`` robust standard
+    deviations (of the channel's deviation from its running median over about one
+    revolution, so a real IAS oscillation sets its own scale) and ``_GLITCH_FRACTION`` of the
+    local speed away from that median, in a run left and re-entered faster than
+    ``_GLITCH_RATE_RPM_S`` (2e4 rpm/s, twice a free-revving engine); a slower departure (a real
+    stop or step) is kept.
+
+    Examples
+    --------
+    >>> t = np.arange(200) / 100.0
+    >>> w = np.full(200, 125.0)
+    >>> w[50], w[120:122] = 6863.0, 0.0
+    >>> fixed = _repair_glitches(t, w, "speed channel 'n'")
+    >>> float(fixed.min()), float(fixed.max())
+    (125.0, 125.0)
+    """
+    from scipy.ndimage import median_filter
+
+    n = omega.shape[0]
+    if n < 9:
+        return omega
+    per_rev = _samples_per_rev(t_in, omega)
+    width = int(np.clip(per_rev, 5, 101)) | 1
+    med = median_filter(omega, size=width, mode="nearest")
+    dev = omega - med
+    sigma = 1.4826 * float(np.median(np.abs(dev - np.median(dev))))
+    bad = (np.abs(dev) > _GLITCH_SIGMAS * sigma) & \
+        (np.abs(dev) > _GLITCH_FRACTION * np.abs(med))
+    if not bad.any():
+        return omega
+    # keep departures a shaft can make (a real stop or step): out and back over the run's
+    # span at less than _GLITCH_RATE_RPM_S
+    edges = np.flatnonzero(np.diff(np.concatenate([[0], bad.astype(np.int8), [0]])))
+    for a, b in edges.reshape(-1, 2):
+        span = float(t_in[min(b, n - 1)] - t_in[max(a - 1, 0)])
+        rate = float(np.max(np.abs(dev[a:b]))) * 60.0 / _TWO_PI / max(span, 1e-300)
+        if rate < _GLITCH_RATE_RPM_S:
+            bad[a:b] = False
+    if not bad.any() or bad.all():
+        return omega
+    fixed = omega.copy()
+    fixed[bad] = np.interp(t_in[bad], t_in[~bad], omega[~bad])
+    first = t_in[np.flatnonzero(bad)[:3]]
+    log.warning("%s: %d glitch sample(s) (spikes or drop-outs a shaft cannot follow: up to "
+                "%.4g rpm off the running speed) bridged by interpolation, first at t = %s s",
+                source, int(bad.sum()), float(np.max(np.abs(dev[bad]))) * 60 / _TWO_PI,
+                ", ".join(f"{v:.6g}" for v in first))
+    return fixed
+
+
+def _one_direction(omega, source):
+    """A speed channel negative wherever the shaft runs is a sensor whose sign convention is
+    the other way round: its magnitude, with a warning. A channel with both signs (a real
+    reversal) is left to the caller's refusal."""
+    running = np.abs(omega) > 0.005 * float(np.max(np.abs(omega)))
+    if running.any() and np.all(omega[running] < 0):
+        log.warning("%s is negative throughout (%.6g .. %.6g rpm): taken as the shaft turning "
+                    "the other way round to the sensor's sign convention; its magnitude is "
+                    "used (order amplitudes unchanged, phases referred to the shaft's own "
+                    "direction of rotation)", source, float(omega.min()) * 60 / _TWO_PI,
+                    float(omega.max()) * 60 / _TWO_PI)
+        return -omega
+    return omega
 
 
 def _samples_per_rev(t_in, omega) -> float:

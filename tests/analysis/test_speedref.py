@@ -135,3 +135,63 @@ def test_fast_speed_channel_with_its_vibration_analysed_against_itself():
     n = a.shape[1]
     got = np.nanmean(a[:, n // 5: -n // 5], axis=1)
     np.testing.assert_allclose(got, np.array([12.0, 4.0]) * 2 * np.pi / 60, rtol=2e-3)
+
+
+def _runup_record(speed_rpm_values, fs=5000.0, seconds=8.0):
+    t = np.arange(int(seconds * fs)) / fs
+    rpm = 1200 + 100 * t
+    phi = np.cumsum(rpm / 60 * 2 * np.pi / fs)
+    acc = 0.5 * np.sin(2 * phi)
+    speed = speed_rpm_values(t, rpm) * 2 * np.pi / 60
+    rec = xr.Dataset({"acc": ("time", acc, {"units": "m/s^2", "quantity": "acceleration",
+                                            "sample_rate": fs}),
+                      "speed": ("time", speed, {"units": "rad/s",
+                                                "quantity": "rotational_speed",
+                                                "sample_rate": fs})}, coords={"time": t})
+    return rec, rpm
+
+
+def test_counter_glitches_in_the_speed_channel_are_bridged(caplog):
+    """A 65535 overflow spike and a 5-sample drop to 0 in a running speed channel: bridged
+    (warned), so order 2 stays within 0.1 % everywhere (the spike had put 6.6 % into the
+    peak, the drop split the record into 'stopped' spans)."""
+    from crankbench.analysis import order_track
+
+    def dirty(t, rpm):
+        out = rpm.copy()
+        out[10000:10005] = 0.0
+        out[20000] = 65535.0
+        return out
+
+    rec, rpm = _runup_record(dirty)
+    with caplog.at_level("WARNING", logger="crankbench"):
+        ref = speed_reference(rec, "acc")
+    assert any("6 glitch sample(s)" in r.getMessage() for r in caplog.records)
+    np.testing.assert_allclose(ref.values, rpm, rtol=1e-3)
+    a = order_track(rec["acc"], speed_rpm=ref, orders=[2])["amplitude"].values[0]
+    inner = a[len(a) // 10: -len(a) // 10]
+    assert np.nanmax(np.abs(inner / 0.5 - 1)) < 1e-3
+
+
+def test_a_real_stop_is_not_a_glitch():
+    """Speed at 0 for 0.5 s in the middle (a real stop): kept, not interpolated over."""
+    def stop(t, rpm):
+        out = rpm.copy()
+        out[(t > 3.0) & (t < 3.5)] = 0.0
+        return out
+
+    rec, _ = _runup_record(stop)
+    ref = speed_reference(rec, "acc", check=False)
+    t = rec["time"].values
+    assert np.all(ref.values[(t > 3.05) & (t < 3.45)] < 1.0)
+
+
+def test_a_speed_channel_negative_throughout_is_taken_by_its_magnitude(caplog):
+    rec, rpm = _runup_record(lambda t, rpm: -rpm)
+    with caplog.at_level("WARNING", logger="crankbench"):
+        ref = speed_reference(rec, "acc")
+    np.testing.assert_allclose(ref.values, rpm, rtol=1e-4)    # (cycle-averaged: 5 kHz)
+    assert any("negative throughout" in r.getMessage() for r in caplog.records)
+    mixed, _ = _runup_record(lambda t, rpm: np.where(t < 4, rpm, -rpm))
+    with pytest.raises(AnalysisError, match="turning one way"):
+        speed_reference(mixed, "acc", check=False)
