@@ -156,11 +156,24 @@ def _check_order_range(top_order: float, samples_per_rev: int, x, fs, rpm, *,
             f"{int(np.ceil(divisor * top_order))}")
     values, fs_, _, label = _as_signal(x, fs)
     speed = _as_rpm(rpm, values.shape[0], fs_)
-    f_top = top_order * float(speed.max()) / 60.0
-    if f_top >= 0.5 * fs_:
-        raise AnalysisError(f"order {top_order:g} reaches {f_top:.6g} Hz at {speed.max():.6g} "
-                            f"rpm, above the Nyquist frequency {0.5 * fs_:.6g} Hz of {label}")
+    _check_nyquist(top_order, float(speed.max()), fs_, label)
 
+
+
+def _check_nyquist(top_order, speed_max_rpm, fs, label):
+    """Refuse an order above the channel's Nyquist frequency; when it is far above (>= 5x),
+    name the likely cause: a time axis in ms read as s, or a sample rate stated wrongly."""
+    f_top = float(top_order) * float(speed_max_rpm) / 60.0
+    if f_top < 0.5 * fs:
+        return
+    hint = ""
+    if f_top >= 2.5 * fs:
+        hint = (f"; the channel's {fs:.6g} Hz is implausibly low for an engine record at "
+                f"{speed_max_rpm:.6g} rpm: check its time axis (a time column in ms read as s "
+                "makes the rate 1000x too low: name the unit, e.g. 'time [ms]', or give "
+                "[source] time_units / sample_rate in a channel map)")
+    raise AnalysisError(f"order {top_order:g} reaches {f_top:.6g} Hz at {speed_max_rpm:.6g} "
+                        f"rpm, above the Nyquist frequency {0.5 * fs:.6g} Hz of {label}{hint}")
 
 def default_samples_per_rev(top_order: float) -> int:
     """Angle samples per revolution: 64, or more so the top order is in the pass band.
@@ -435,11 +448,7 @@ def order_track(x, *, fs=None, speed_rpm, orders, amplitude: str = "peak", metho
     n = values.shape[0]
     angle, reference = _angle_input(shaft_angle, speed_rpm, n)
     speed = _as_rpm(speed_rpm, n, fs_)
-    f_top = float(orders.max()) * float(speed.max()) / 60.0
-    if f_top >= 0.5 * fs_:
-        raise AnalysisError(f"order {orders.max():g} reaches {f_top:.6g} Hz at "
-                            f"{speed.max():.6g} rpm, above the Nyquist frequency {0.5 * fs_:.6g} "
-                            f"Hz of {label}")
+    _check_nyquist(float(orders.max()), float(speed.max()), fs_, label)
     from .resample import shaft_angle as integrate
 
     phi = integrate(speed, fs_) if angle is None else angle
@@ -556,11 +565,7 @@ def _cot_track(context, orders, *, samples_per_rev, revolutions, overlap, window
         raise AnalysisError(
             f"order {orders.max():g} exceeds samples_per_rev/4 = {spr / 4:g} (the anti-alias "
             f"pass band); use samples_per_rev >= {int(np.ceil(4 * orders.max()))}")
-    f_top = float(orders.max()) * float(speed.max()) / 60.0
-    if f_top >= 0.5 * fs:
-        raise AnalysisError(f"order {orders.max():g} reaches {f_top:.6g} Hz at "
-                            f"{speed.max():.6g} rpm, above the Nyquist frequency {0.5 * fs:.6g} "
-                            f"Hz of {context['label']}")
+    _check_nyquist(float(orders.max()), float(speed.max()), fs, context["label"])
     fitter = BlockFit(orders, spr, revolutions, window)
     fitter.check_spacing()
     y, t_rel, rpm, angle, plan = resample_arrays(

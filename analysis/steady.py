@@ -153,7 +153,8 @@ def steady_orders(x, *, fs=None, speed_rpm, orders, amplitude: str = "peak", seg
     """
     import pandas as pd
 
-    from .orders import BlockFit, _check_orders, _t0, amplitude_factor, default_samples_per_rev
+    from .orders import (BlockFit, _check_nyquist, _check_orders, _t0, amplitude_factor,
+                         default_samples_per_rev)
     from .resample import _angle_input, _as_rpm, _as_signal, resample_arrays, shaft_angle
 
     factor = amplitude_factor(amplitude)
@@ -165,9 +166,7 @@ def steady_orders(x, *, fs=None, speed_rpm, orders, amplitude: str = "peak", seg
     phi = shaft_angle(speed, fs_) if angle is None else angle
     spr = default_samples_per_rev(float(orders.max())) if samples_per_rev is None else \
         check_int(samples_per_rev, "samples_per_rev", minimum=4, error=AnalysisError)
-    if orders.max() * speed.max() / 60.0 >= 0.5 * fs_:
-        raise AnalysisError(f"order {orders.max():g} reaches {orders.max() * speed.max() / 60:.6g}"
-                            f" Hz, above the Nyquist frequency {0.5 * fs_:.6g} Hz of {label}")
+    _check_nyquist(float(orders.max()), float(speed.max()), fs_, label)
     if segments is None:
         segments = steady_segments(speed, fs_, tolerance=tolerance,
                                    min_revolutions=min_revolutions)

@@ -33,3 +33,17 @@ def test_two_signal_channels_need_a_choice(tmp_path, capsys):
     assert main(["analyse", str(path), "--orders", "2"]) == 2
     err = capsys.readouterr().err
     assert "give --channel: the record has 2 signal channels (acc, acc2)" in err
+
+
+def test_time_in_ms_labelled_seconds_is_named(tmp_path, capsys):
+    """A time column in ms under a 'Time [s]' header makes the rate 1000x too low: the
+    refusal names the time axis as the likely cause and the settings to fix it."""
+    fs = 2000.0
+    t = np.arange(int(2 * fs)) / fs
+    phi = np.cumsum((1500 + 0 * t) / 60 * 2 * np.pi / fs)
+    path = tmp_path / "ms.csv"
+    path.write_text("Time [s],speed [rpm],acc [m/s^2]\n" + "".join(
+        f"{1e3 * a:.4f},1500,{np.sin(2 * p):.6f}\n" for a, p in zip(t, phi)))
+    assert main(["analyse", str(path), "--orders", "2"]) == 2
+    err = capsys.readouterr().err
+    assert "above the Nyquist frequency 1 Hz" in err and "time column in ms read as s" in err
