@@ -130,6 +130,10 @@ def _name_flags(message: str, flags: dict) -> str:
 
 
 
+#: libraries whose own log lines are shown from -vv only
+_QUIET_LIBRARIES = ("matplotlib", "fontTools", "weasyprint", "PIL")
+
+
 class _BarSafeHandler(logging.StreamHandler):
     """Writes log lines through ``tqdm.write`` so they never break a progress bar."""
 
@@ -151,6 +155,10 @@ def _setup_logging(verbose: int, quiet: bool) -> None:
     log.handlers[:] = [handler]
     log.setLevel(level)
     log.propagate = False
+    # third-party libraries' own log lines (matplotlib's font-cache fallbacks, fontTools...)
+    # are not crankbench's messages: shown from -vv only
+    for name in _QUIET_LIBRARIES:
+        logging.getLogger(name).setLevel(logging.DEBUG if verbose >= 2 else logging.ERROR)
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -161,6 +169,7 @@ def main(argv: list[str] | None = None) -> int:
     if extra:
         _unrecognized(parser, args, argv, extra)
     saved = (log.handlers[:], log.level, log.propagate)
+    saved_levels = {name: logging.getLogger(name).level for name in _QUIET_LIBRARIES}
     _setup_logging(args.verbose, args.quiet)
     try:
         if not getattr(args, "_run", None):
@@ -176,6 +185,8 @@ def main(argv: list[str] | None = None) -> int:
             return _run(args)
     finally:  # main() may be called in-process (tests, notebooks): leave logging as found
         log.handlers[:], log.level, log.propagate = saved
+        for name, level in saved_levels.items():
+            logging.getLogger(name).setLevel(level)
 
 
 def _unrecognized(parser, args, argv, extra):
