@@ -96,8 +96,8 @@ class SpanSpeed:
     @renamed(rpm="speed_rpm")
     def __init__(self, n, fs, t0, *, speed_rpm=None, t_in=None, omega=None):
         self.n, self.fs, self.t0 = int(n), float(fs), float(t0)
-        if speed_rpm is None or hasattr(speed_rpm,
-                                        "compute"):      # dask: sliced per span, never whole
+        if speed_rpm is None or hasattr(speed_rpm, "compute") or hasattr(speed_rpm, "span"):
+            # dask, or computed per span (analysis.stream_speed): sliced per span, never whole
             self._rpm = speed_rpm
         else:
             self._rpm = np.asarray(speed_rpm,
@@ -146,30 +146,192 @@ def _speed_for(record, channel, var, *, speed_rpm, speed_channel) -> SpanSpeed:
     sv = record[name]
     if _is_pulses(sv):
         t_in, omega = _pulse_speed(sv, name)
+        source = f"pulse train {name!r}"
     else:
-        if sv.attrs.get("units", "rad/s") != "rad/s":
-            raise RecordError(f"speed channel {name!r} has units {sv.attrs.get('units')!r}; "
-                              "expected 'rad/s'")
-        if sv.dims == var.dims:       # same clock: read the span of the speed channel itself
-            return SpanSpeed(n, fs, t0, speed_rpm=sv.data * (60.0 / _TWO_PI))
-        rate = sv.attrs.get("sample_rate")
-        if rate is not None and sv.dims[0] in record.coords:   # regular clock: t0 + i/rate
-            t_in = _first_time(record, sv) + np.arange(sv.shape[0]) / float(rate)
-        else:
-            t_in = np.asarray(_times(record, name), float)
-        omega = np.asarray(sv.values, float)
+        source = _check_speed_channel(sv, name)
+        if sv.dims == var.dims:       # same clock: read the speed channel span by span
+            return _same_clock_speed(record, var, sv, name, source, n, fs, t0)
+        t_in, omega = _speed_trace(record, sv, name, source)
     good = np.isfinite(omega)
     t_in, omega = np.asarray(t_in)[good], np.asarray(omega)[good]
     if t_in.shape[0] == 0:
         raise AnalysisError(f"speed source {name!r} holds no usable speed values")
     speed = SpanSpeed(n, fs, t0, t_in=t_in, omega=omega)
+    low, high = _span_extremes(t_in, omega, t0, t0 + (n - 1) / fs)
+    speed.extremes = (low, high)
     pulse = name if _is_pulses(sv) else _pulse_reference_channel(record, exclude=name)
     if pulse is not None and omega.min() > 0:
-        _attach_pulse_angle(speed, record[pulse], pulse)
+        _attach_pulse_angle(speed, record[pulse], pulse, low)
+    if speed.angle is None and not _is_pulses(sv) and low > 0:
+        from .speedref import _averaged, _samples_per_rev
+
+        if _averaged(source, _samples_per_rev(t_in, omega)):
+            speed = _averaged_speed(speed, low)
     return speed
 
 
-def _attach_pulse_angle(speed: SpanSpeed, pv, name: str) -> None:
+def _check_speed_channel(sv, name) -> str:
+    """The label of a speed or IAS channel (rad/s), as speed_reference names it."""
+    if sv.attrs.get("quantity") == "angle":
+        raise AnalysisError(f"channel {name!r} is an encoder angle: the streamed trackers take "
+                            "the speed from a speed (rad/s) or IAS channel or a pulse train; "
+                            "give one with --speed-channel, or analyse a shorter record "
+                            "in memory")
+    if sv.attrs.get("units", "rad/s") != "rad/s":
+        raise RecordError(f"speed channel {name!r} has units {sv.attrs.get('units')!r}; "
+                          "expected 'rad/s'")
+    return ("IAS channel" if sv.attrs.get("quantity") == "angular_velocity"
+            else "speed channel") + f" {name!r}"
+
+
+def _speed_trace(record, sv, name, source):
+    """A speed channel on its own clock (small: read whole) as (s, rad/s of the crankshaft),
+    its glitches bridged and its sign rule applied as in memory."""
+    from .speedref import _not_one_way, _one_direction, _ratio, _repair_glitches, _times
+
+    rate = sv.attrs.get("sample_rate")
+    if rate is not None and sv.dims[0] in record.coords:   # regular clock: t0 + i/rate
+        t_in = _first_time(record, sv) + np.arange(sv.shape[0]) / float(rate)
+    else:
+        t_in = np.asarray(_times(record, name), float)
+    omega = np.asarray(sv.values, float) / _ratio(sv, name)
+    good = np.isfinite(omega)
+    if not good.all():
+        log.warning("%s: %d non-finite speed values skipped", source, int((~good).sum()))
+        t_in, omega = t_in[good], omega[good]
+    if t_in.shape[0] == 0:
+        raise AnalysisError(f"{source} holds no usable speed values")
+    omega = _one_direction(_repair_glitches(t_in, omega, source), source)
+    if omega.max() <= 0 or omega.min() < 0:
+        i = int(np.argmin(omega))
+        raise _not_one_way(source, omega[i] * 60.0 / _TWO_PI, t_in[i])
+    return t_in, omega
+
+
+def _same_clock_speed(record, var, sv, name, source, n, fs, t0) -> SpanSpeed:
+    """A speed or IAS channel on the analysed channel's clock, repaired, sign-corrected and
+    (where the in-memory path does) cycle-averaged span by span."""
+    from .speedref import _averaged, _pulse_reference_channel, _ratio
+    from .stream_speed import RepairedChannel
+
+    raw = RepairedChannel(sv.data, fs=fs, t0=t0, ratio=_ratio(sv, name), source=source)
+    speed = SpanSpeed(n, fs, t0, speed_rpm=raw)
+    speed.extremes = (raw.low_rpm, raw.high_rpm)
+    if raw.low_rpm <= 0:              # a stop: tracked per running span, never averaged
+        return speed
+    pulse = _pulse_reference_channel(record, exclude=name)
+    if pulse is not None:
+        _attach_pulse_angle(speed, record[pulse], pulse, raw.low_rpm)
+    median_rev = 60.0 / max(raw.median_rpm, 1e-300) * fs
+    if speed.angle is None and _averaged(source, median_rev):
+        speed = _averaged_speed(speed, raw.low_rpm)
+        speed.extremes = (raw.low_rpm, raw.high_rpm)
+    return speed
+
+
+def _averaged_speed(speed: SpanSpeed, low_rpm: float) -> SpanSpeed:
+    """``speed`` averaged over whole engine cycles (:func:`analysis.trend.cycle_average`), as
+    :func:`analysis.speedref.speed_reference` does for a fast speed or IAS channel."""
+    from .stream_speed import CycleAveraged
+
+    avg = CycleAveraged(speed, n=speed.n, fs=speed.fs, low_rpm=low_rpm)
+    return SpanSpeed(speed.n, speed.fs, speed.t0, speed_rpm=avg)
+
+
+def _span_extremes(t_in, omega, a, b):
+    """Lowest and highest speed (rpm) of a trace interpolated over the times a..b."""
+    inside = omega[(t_in > a) & (t_in < b)]
+    ends = np.interp([a, b], t_in, omega)
+    values = np.concatenate([inside, ends]) * (60.0 / _TWO_PI)
+    return float(values.min()), float(values.max())
+
+
+def _stopped_spans(speed: SpanSpeed):
+    """Sample spans ``[(a, b), ...]`` where the shaft stands (speed ≤ 0.5 % of the highest, the
+    rule of the in-memory tracker), or None when it turns throughout."""
+    low, high = getattr(speed, "extremes", (1.0, 1.0))
+    if high <= 0 or low > 5e-3 * high:
+        return None
+    edges, prev, step = [], False, 1 << 18
+    for a in range(0, speed.n, step):
+        b = min(speed.n, a + step)
+        if speed._rpm is None:
+            part = np.interp(speed.t0 + np.arange(a, b) / speed.fs, speed._t_in,
+                             speed._omega) * (60.0 / _TWO_PI)
+        else:
+            part = np.asarray(speed._rpm[a:b], float)
+        flags = np.concatenate([[prev], part <= 5e-3 * high]).astype(np.int8)
+        edges.extend(a + np.flatnonzero(np.diff(flags)))
+        prev = bool(flags[-1])
+    if prev:
+        edges.append(speed.n)
+    return list(zip(edges[0::2], edges[1::2])) or None
+
+
+class _Shifted:
+    """Samples a..b-1 of a SpanSpeed as a speed of their own (a running span)."""
+
+    ndim = 1
+
+    def __init__(self, speed, a, b):
+        self.speed, self.a, self.n = speed, int(a), int(b - a)
+
+    def span(self, i, j):
+        return self.speed(self.a + i, self.a + j)
+
+    def __getitem__(self, key):
+        start, stop, step = key.indices(self.n)
+        return self.speed(self.a + start, self.a + stop)[::step]
+
+
+def _running_span(speed: SpanSpeed, a: int, b: int) -> SpanSpeed:
+    """The speed of samples a..b-1 (a running span), its angle from the span's start as in
+    memory (:func:`analysis.orders.order_track` on a record that stops)."""
+    sub = SpanSpeed(b - a, speed.fs, speed.t0 + a / speed.fs, speed_rpm=_Shifted(speed, a, b))
+    sub.extremes = (1.0, 1.0)
+    return sub
+
+
+def _track_running_spans(record, channel, speed, stops, options):
+    """Streamed tracks of each span where the shaft turns, as the in-memory tracker gives them
+    (a warning names the standing spans; their results are absent)."""
+    import warnings
+
+    import xarray as xr
+
+    from .orders import OrderWarning
+
+    n, fs, t0 = speed.n, speed.fs, speed.t0
+    bounds = [0] + [v for s in stops for v in s] + [n]
+    runs = [(a, b) for a, b in zip(bounds[0::2], bounds[1::2]) if b > a]
+    shown = ", ".join(f"{t0 + a / fs:.6g}..{t0 + (b - 1) / fs:.6g} s" for a, b in stops[:5])
+    warnings.warn(f"{channel}: the shaft stands (speed <= 0.5 % of {speed.extremes[1]:.6g} "
+                  f"rpm) at {shown}; orders are tracked in each running span separately",
+                  OrderWarning, stacklevel=3)
+    log.warning("%s: the shaft stands at %s; orders tracked in each running span", channel,
+                shown)
+    dim = record[channel].dims[0]
+    parts, skipped = [], []
+    for a, b in runs:
+        sub = record[[channel]].isel({dim: slice(a, b)})
+        try:
+            parts.append(order_track_stream(sub, channel, speed_rpm=_running_span(speed, a, b),
+                                            **options))
+        except AnalysisError as exc:
+            skipped.append(f"{t0 + a / fs:.6g}..{t0 + (b - 1) / fs:.6g} s ({exc})")
+    if not parts:
+        raise AnalysisError(f"{channel}: no running span long enough to track: "
+                            f"{'; '.join(skipped)}")
+    if skipped:
+        log.info("%s: running spans not tracked: %s", channel, "; ".join(skipped))
+    out = xr.concat(parts, dim="time", data_vars="minimal", coords="minimal",
+                    combine_attrs="override") if len(parts) > 1 else parts[0]
+    out.attrs["stopped_spans_s"] = [v for a, b in stops for v in (t0 + a / fs,
+                                                                  t0 + (b - 1) / fs)]
+    return out
+
+
+def _attach_pulse_angle(speed: SpanSpeed, pv, name: str, low: float) -> None:
     """The shaft angle per span from a pulse train's edges, as
     :func:`analysis.speedref.speed_reference` gives it for the whole channel (the edges' mean
     rotation, :func:`analysis.trend.mean_rotation`, each span read with its reach as margin),
@@ -190,7 +352,6 @@ def _attach_pulse_angle(speed: SpanSpeed, pv, name: str) -> None:
                     name, exc)
         return
     ends = (float(at(np.array([t0]))[0]), float(at(np.array([t0 + (n - 1) / fs]))[0]))
-    low = float(speed._omega.min()) * 60.0 / _TWO_PI
     margin = int(np.ceil(1.2 * MEAN_ROTATION_REACH_REVOLUTIONS * 60.0 / low * fs)) + 2
 
     def angle(a, b):
@@ -378,13 +539,15 @@ class _Framer:
 
 
 def _prepare(record, channel, *, speed_rpm, speed_channel, chunk, trend, segment_seconds,
-             orders=None):
+             orders=None, speed=None):
     """Channel, speed, detrending reader and segment length of a streamed analysis."""
     var = _channel(record, channel)
     label = str(channel)
     segment_seconds = check_positive(segment_seconds, "segment_seconds", error=AnalysisError)
     chunk = check_int(chunk, "chunk", minimum=1024, error=AnalysisError)
-    speed = _speed_for(record, channel, var, speed_rpm=speed_rpm, speed_channel=speed_channel)
+    if speed is None:
+        speed = _speed_for(record, channel, var, speed_rpm=speed_rpm,
+                           speed_channel=speed_channel)
     if orders is not None:          # before any work: the top order below the Nyquist frequency
         top = float(np.max(orders)) * _speed_top(speed, chunk) / 60.0
         if top >= 0.5 * speed.fs:
@@ -463,8 +626,9 @@ def _blocks(speed, reader, *, label, samples_per_rev, revolutions, overlap, inte
 def _coarse_speed(speed: SpanSpeed, points: int = 20000) -> np.ndarray:
     """The speed at about ``points`` samples spread over the record (sweep-rate estimate)."""
     step = max(1, speed.n // points)
-    return np.concatenate([speed(a, min(speed.n, a + 1)) for a in range(0, speed.n, step)]), \
-        speed.fs / step
+    span = step * max(1, (1 << 18) // step)          # whole spans, every step-th sample kept
+    return np.concatenate([speed(a, min(speed.n, a + span))[::step]
+                           for a in range(0, speed.n, span)]), speed.fs / step
 
 
 @renamed(rpm="speed_rpm")
@@ -533,9 +697,23 @@ def order_track_stream(record, channel: str, *, orders, speed_rpm=None, speed_ch
     method = check_option(method, "method", _METHODS, error=AnalysisError)
     factor = amplitude_factor(amplitude)
     orders = _check_orders(orders)
+    speed = None
+    if not isinstance(speed_rpm, SpanSpeed):
+        speed = _speed_for(record, channel, _channel(record, channel), speed_rpm=speed_rpm,
+                           speed_channel=speed_channel)
+        stops = _stopped_spans(speed)
+        if stops is not None:
+            return _track_running_spans(record, channel, speed, stops, dict(
+                orders=orders, segment_seconds=segment_seconds, amplitude=amplitude,
+                method=method, samples_per_rev=samples_per_rev, revolutions=revolutions,
+                overlap=overlap, window=window, interpolation=interpolation, chunk=chunk,
+                bandwidth_hz=bandwidth_hz, bandwidth_orders=bandwidth_orders,
+                filter_order=filter_order, vkf_overlap=vkf_overlap, trend=trend))
+    else:
+        speed = speed_rpm
     var, label, speed, segment, reader = _prepare(
-        record, channel, speed_rpm=speed_rpm, speed_channel=speed_channel, chunk=chunk,
-        trend=trend, segment_seconds=segment_seconds, orders=orders)
+        record, channel, speed_rpm=None, speed_channel=speed_channel, chunk=chunk,
+        trend=trend, segment_seconds=segment_seconds, orders=orders, speed=speed)
     if method == "vkf" or (method == "auto" and (bandwidth_hz is not None
                                                  or bandwidth_orders is not None)):
         return _vkf_stream(var, label, speed, reader, orders=orders, segment=segment,
