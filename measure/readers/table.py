@@ -406,29 +406,28 @@ def _unrounded(t: np.ndarray, file, label) -> np.ndarray:
     return t0 + grid
 
 
-def _without_cut_last_row(table, data: np.ndarray) -> np.ndarray:
-    """A logger stopped mid-write leaves a last line without its line break and with cells
-    missing: that row is dropped with a warning (its empty cells would otherwise read as
-    NaN, refused further on as a dropout). A complete last row, or one with a line break, is
-    kept whatever it holds."""
-    if not isinstance(table, TextTable) or data.ndim != 2 or data.shape[1] < 2 \
-            or np.all(np.isfinite(data[:, -1])):
-        return data
+def last_row_cut(table, last_row: np.ndarray) -> bool:
+    """Whether a table's last row was cut mid-write: a logger stopped while writing leaves a
+    last line without its line break and with cells missing. Such a row is dropped, with a
+    warning, by the callers (its empty cells would otherwise read as NaN, refused further on
+    as a dropout); a complete last row, or one with a line break, is kept whatever it holds."""
+    last_row = np.asarray(last_row, float)
+    if not isinstance(table, TextTable) or np.all(np.isfinite(last_row)):
+        return False
     try:
         with open(table.file, "rb") as f:
             f.seek(-1, 2)
             cut = f.read(1) not in (b"\n", b"\r")
     except OSError:
-        return data
-    if not cut:
-        return data
-    import logging
+        return False
+    if cut:
+        import logging
 
-    logging.getLogger("crankbench").warning(
-        "%s: the last line has no line break and %d empty cell(s): the file was cut mid-row "
-        "(logger stopped while writing?); that row is dropped", table.file,
-        int(np.count_nonzero(~np.isfinite(data[:, -1]))))
-    return data[:, :-1]
+        logging.getLogger("crankbench").warning(
+            "%s: the last line has no line break and %d empty cell(s): the file was cut "
+            "mid-row (logger stopped while writing?); that row is dropped", table.file,
+            int(np.count_nonzero(~np.isfinite(last_row))))
+    return cut
 
 
 def duplicate_names(table) -> None:
@@ -522,7 +521,8 @@ def table_record(table: Table, *, channels=None):
                               f"'{name} [unit]', e.g. '{name} [g]', or a channel map giving its "
                               "units")
     both = table.read(([time_idx] if time_idx is not None else []) + idx)  # one pass
-    both = _without_cut_last_row(table, both)
+    if both.ndim == 2 and both.shape[1] > 1 and last_row_cut(table, both[:, -1]):
+        both = both[:, :-1]
     t = None
     if time_idx is not None:
         t = _time_from(table, time_idx, parsed[time_idx][1], file, both[0])
