@@ -147,6 +147,8 @@ def _speed_for(record, channel, var, *, speed_rpm, speed_channel) -> SpanSpeed:
     if _is_pulses(sv):
         t_in, omega = _pulse_speed(sv, name)
         source = f"pulse train {name!r}"
+    elif sv.attrs.get("quantity") == "angle" and sv.dims == var.dims:
+        return _same_clock_encoder(sv, name, n, fs, t0)
     else:
         source = _check_speed_channel(sv, name)
         if sv.dims == var.dims:       # same clock: read the speed channel span by span
@@ -170,13 +172,35 @@ def _speed_for(record, channel, var, *, speed_rpm, speed_channel) -> SpanSpeed:
     return speed
 
 
+def _same_clock_encoder(sv, name, n, fs, t0) -> SpanSpeed:
+    """An encoder angle channel on the analysed channel's clock: its own angle (the mean
+    rotation) and speed, span by span, as speed_reference takes it whole."""
+    from .speedref import _is_angle_source, _ratio
+    from .stream_speed import EncoderAngle
+
+    if sv.shape[0] >= 8 and not _is_angle_source(sv[:: max(1, sv.shape[0] // 4096)]):
+        raise AnalysisError(f"channel {name!r} (quantity 'angle') does not turn with the "
+                            "shaft (it spans less than 4 revolutions): it is a vibratory "
+                            "angle, not an encoder angle; name a speed channel or pulse train")
+    tdc = float(sv.attrs.get("tdc_offset_deg", 0.0))
+    enc = EncoderAngle(sv.data, fs=fs, t0=t0, ratio=_ratio(sv, name), tdc_deg=tdc,
+                       source=f"encoder angle channel {name!r}")
+    speed = SpanSpeed(n, fs, t0, speed_rpm=enc)
+    speed.extremes = (enc.low_rpm, enc.high_rpm)
+    if enc.low_rpm > 0:
+        reference = (f"zero of encoder angle channel {name!r}" +
+                     (f" moved by tdc_offset_deg {tdc:g}" if tdc else ""))
+        _attach_mean_rotation(speed, enc.angle, enc.ends, enc.low_rpm, reference)
+    return speed
+
+
 def _check_speed_channel(sv, name) -> str:
     """The label of a speed or IAS channel (rad/s), as speed_reference names it."""
     if sv.attrs.get("quantity") == "angle":
-        raise AnalysisError(f"channel {name!r} is an encoder angle: the streamed trackers take "
-                            "the speed from a speed (rad/s) or IAS channel or a pulse train; "
-                            "give one with --speed-channel, or analyse a shorter record "
-                            "in memory")
+        raise AnalysisError(f"channel {name!r} is an encoder angle on another clock than the "
+                            "analysed channel: the streamed trackers take it on the same clock "
+                            "only; give a speed channel or pulse train with --speed-channel, "
+                            "or analyse the record in memory")
     if sv.attrs.get("units", "rad/s") != "rad/s":
         raise RecordError(f"speed channel {name!r} has units {sv.attrs.get('units')!r}; "
                           "expected 'rad/s'")
@@ -339,8 +363,6 @@ def _attach_pulse_angle(speed: SpanSpeed, pv, name: str, low: float) -> None:
     from crankbench.predict.errors import AnalysisError as _AE
 
     from .speedref import _pulse_angle_function
-    from .trend import MEAN_ROTATION_REACH_REVOLUTIONS, mean_rotation
-
     edges = np.asarray(pv.values, float)
     n, fs, t0 = speed.n, speed.fs, speed.t0
     if edges.size <= 8 or edges[0] > t0 + (n - 1) / fs or edges[-1] < t0:
@@ -352,12 +374,21 @@ def _attach_pulse_angle(speed: SpanSpeed, pv, name: str, low: float) -> None:
                     name, exc)
         return
     ends = (float(at(np.array([t0]))[0]), float(at(np.array([t0 + (n - 1) / fs]))[0]))
+    _attach_mean_rotation(speed, lambda a, b: at(t0 + np.arange(a, b) / fs), ends, low,
+                          reference)
+
+
+def _attach_mean_rotation(speed: SpanSpeed, raw, ends, low, reference) -> None:
+    """``speed.angle``: the mean rotation (:func:`analysis.trend.mean_rotation`) of a measured
+    angle ``raw(a, b)`` (rad of samples a..b-1), each span read with its reach as margin."""
+    from .trend import MEAN_ROTATION_REACH_REVOLUTIONS, mean_rotation
+
+    n, fs = speed.n, speed.fs
     margin = int(np.ceil(1.2 * MEAN_ROTATION_REACH_REVOLUTIONS * 60.0 / low * fs)) + 2
 
     def angle(a, b):
         ra, rb = max(0, a - margin), min(n, b + margin)
-        t = t0 + np.arange(ra, rb) / fs
-        return mean_rotation(at(t), speed(ra, rb), fs, ends=ends)[a - ra:b - ra]
+        return mean_rotation(raw(ra, rb), speed(ra, rb), fs, ends=ends)[a - ra:b - ra]
 
     speed.angle = angle
     speed.angle_reference = reference

@@ -302,3 +302,112 @@ class CycleAveraged(_Spans):
         phi = integrate_angle(r, self.fs, float(self._checkpoints[k]))
         return cycle_average(r[ra - base:], phi[ra - base:], self.fs,
                              ends=(0.0, self._end))[a - ra:b - ra]
+
+
+class EncoderAngle(_Spans):
+    """An encoder angle channel (rad) on the analysed channel's clock as the crankshaft angle
+    and speed per span, as :func:`analysis.speedref.speed_reference` takes it whole: unwrapped
+    (a wrapped channel; the 2π count carried across blocks), turned round if it counts
+    backwards, divided by its ``speed_ratio``, moved by ``tdc_offset_deg``; the speed its
+    central-difference derivative (``np.gradient``, each span read with one sample of margin).
+
+    Parameters
+    ----------
+    data : array_like
+        The channel's samples (numpy or dask), rad.
+    fs, t0 : float
+        Sample rate (Hz), time of the first sample (s).
+    ratio : float
+        Turns of the encoder per crankshaft turn.
+    tdc_deg : float
+        The channel's ``tdc_offset_deg``.
+    source : str
+        Label for messages.
+    block : int, optional
+        Samples read at a time (default :data:`BLOCK`).
+
+    Examples
+    --------
+    >>> t = np.arange(3000) / 1000.0
+    >>> enc = np.mod(2 * np.pi * 20.0 * t, 2 * np.pi)          # 1200 rpm, wrapped
+    >>> e = EncoderAngle(enc, fs=1000.0, t0=0.0, ratio=1.0, tdc_deg=0.0, source="enc",
+    ...                  block=1024)
+    >>> round(float(e.angle(2990, 3000)[-1] / (2 * np.pi)), 6), round(float(e[1500:1501][0]), 6)
+    (59.98, 1200.0)
+    """
+
+    def __init__(self, data, *, fs, t0, ratio, tdc_deg, source, block=None):
+        from .speedref import _not_one_way
+
+        self.data, self.fs, self.t0 = data, float(fs), float(t0)
+        self.ratio, self.tdc, self.source = float(ratio), float(tdc_deg), source
+        self.n = int(data.shape[0])
+        self.block = max(1024, int(BLOCK if block is None else block))
+        lo = hi = None
+        for a in range(0, self.n, self.block):
+            w = self._read(a, min(self.n, a + self.block))
+            lo = float(w.min()) if lo is None else min(lo, float(w.min()))
+            hi = float(w.max()) if hi is None else max(hi, float(w.max()))
+        self.wrapped = hi - lo <= _TWO_PI + 1e-6
+        # per block: the raw value before it and the 2π count to add (np.unwrap carried)
+        self._before, self._offset = [], []
+        before, offset = None, 0.0
+        for a in range(0, self.n, self.block):
+            w = self._read(a, min(self.n, a + self.block))
+            self._before.append(before)
+            self._offset.append(offset)
+            if self.wrapped:
+                u = self._unwrap(w, before, offset)
+                before, offset = float(w[-1]), float(u[-1] - w[-1])
+            else:
+                before = float(w[-1])
+        first = self._unwrapped(0, 1)[0]
+        last = self._unwrapped(self.n - 1, self.n)[0]
+        self.sign = -1.0 if last < first else 1.0
+        self.ends = (self.angle(0, 1)[0], self.angle(self.n - 1, self.n)[0])
+        low = high = None
+        for a in range(0, self.n, self.block):
+            r = self.span(a, min(self.n, a + self.block))
+            j = int(np.argmin(r))
+            if low is None or r[j] < low[0]:
+                low = (float(r[j]), a + j)
+            high = float(r.max()) if high is None else max(high, float(r.max()))
+        if high <= 0 or low[0] < 0:
+            raise _not_one_way(source, low[0], self.t0 + low[1] / self.fs)
+        self.low_rpm, self.high_rpm = low[0], high
+
+    def _read(self, a, b):
+        part = self.data[a:b]
+        part = np.asarray(part.compute() if hasattr(part, "compute") else part, np.float64)
+        if not np.isfinite(part).all():
+            i = a + int(np.flatnonzero(~np.isfinite(part))[0])
+            raise AnalysisError(f"{self.source}: NaN/inf at sample {i}; the streamed trackers "
+                                "need a finite encoder angle")
+        return part
+
+    @staticmethod
+    def _unwrap(w, before, offset):
+        if before is None:
+            return np.unwrap(w)
+        return np.unwrap(np.concatenate([[before], w]))[1:] + offset
+
+    def _unwrapped(self, a, b):
+        """The channel unwrapped as a whole, samples a..b-1."""
+        if not self.wrapped:
+            return self._read(a, b)
+        k = a // self.block
+        base = k * self.block
+        u = self._unwrap(self._read(base, b), self._before[k], self._offset[k])
+        return u[a - base:]
+
+    def angle(self, a, b):
+        """Crankshaft angle (rad) of samples a..b-1, as speedref._channel_angle gives it."""
+        return self.sign * self._unwrapped(a, b) / self.ratio - np.radians(self.tdc)
+
+    def span(self, a, b):
+        """Speed (rpm) of samples a..b-1: the angle's derivative."""
+        ra, rb = max(0, a - 1), min(self.n, b + 1)
+        if rb - ra < 2:
+            return np.zeros(b - a)
+        t = self.t0 + np.arange(ra, rb) / self.fs
+        return np.gradient(self.angle(ra, rb), t)[a - ra:b - ra] * (60.0 / _TWO_PI)
