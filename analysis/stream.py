@@ -19,6 +19,13 @@ speed and the time axis). The functions here take a Record opened lazily by
 * VKF: overlapping segments with ``vkf_overlap`` / B_min seconds (default 8 decay lengths of
   the filter) on either side; only each segment's interior is kept, and the envelope phase is
   referred to the shaft angle from the record start;
+* a speed or IAS channel is prepared as :func:`analysis.speedref.speed_reference` prepares it
+  (counter glitches bridged with a warning, a speed negative throughout taken by its magnitude,
+  a reversal refused, a fast or IAS channel cycle-averaged; an encoder angle channel unwrapped,
+  its mean rotation the phase angle): on its own clock it is read whole and repaired by the
+  same functions, on the analysed channel's clock block by block
+  (:mod:`analysis.stream_speed`: equal to memory, ``tests/analysis/test_stream_speed.py``);
+  a record where the shaft stops is tracked in each running span, as in memory;
 * a pulse train (the speed source, or any wheel with a gap or mark in the record) gives the
   shaft angle per span as :func:`analysis.speedref.speed_reference` gives it in memory: the
   edges' mean rotation (:func:`analysis.trend.mean_rotation`, each span read with its reach as
@@ -59,6 +66,8 @@ from crankbench.predict._validate import check_int, check_option, check_positive
 from crankbench.predict.errors import AnalysisError, RecordError
 from crankbench.predict._deprecate import renamed
 
+from .stream_speed import SpanSpeed, _running_span, _speed_for, _stopped_spans
+
 __all__ = ["SpanSpeed", "decimate_stream", "order_map_stream", "order_track_stream"]
 
 log = logging.getLogger("crankbench")
@@ -66,254 +75,7 @@ log = logging.getLogger("crankbench")
 _TWO_PI = 2.0 * np.pi
 
 
-# ---------------------------------------------------------------------------- speed per span
-
-
-class SpanSpeed:
-    """Shaft speed (rpm) on any span of a channel's samples, without the whole-record array.
-
-    Parameters
-    ----------
-    n : int
-        Samples of the analysed channel.
-    fs : float
-        Its sample rate, Hz.
-    t0 : float
-        Time of its first sample, s.
-    rpm : float or array_like, optional
-        Speed per sample (rpm) or a constant; else taken from ``t_in``/``omega``.
-    t_in, omega : ndarray, optional
-        A speed trace (s, rad/s) interpolated linearly (ends held), as
-        :func:`analysis.speedref.speed_reference` does.
-
-    Examples
-    --------
-    >>> s = SpanSpeed(10, 10.0, 0.0, t_in=np.array([0.0, 1.0]), omega=np.array([0.0, 2 * np.pi]))
-    >>> s(2, 4).tolist()
-    [12.0, 18.0]
-    """
-
-    @renamed(rpm="speed_rpm")
-    def __init__(self, n, fs, t0, *, speed_rpm=None, t_in=None, omega=None):
-        self.n, self.fs, self.t0 = int(n), float(fs), float(t0)
-        if speed_rpm is None or hasattr(speed_rpm, "compute") or hasattr(speed_rpm, "span"):
-            # dask, or computed per span (analysis.stream_speed): sliced per span, never whole
-            self._rpm = speed_rpm
-        else:
-            self._rpm = np.asarray(speed_rpm,
-                                   float) if not np.isscalar(speed_rpm) else float(speed_rpm)
-        self._t_in, self._omega = t_in, omega
-        self.angle = None            # optional angle(a, b) -> shaft angle (rad) of the span
-        self.angle_reference = ("shaft angle 0 at the first sample of the record "
-                                "(speed-reference integration)")
-
-    def __call__(self, a: int, b: int) -> np.ndarray:
-        if self._rpm is not None:
-            if np.ndim(self._rpm) == 0:
-                return np.full(b - a, self._rpm)
-            part = self._rpm[a:b]
-            part = np.asarray(part.compute() if hasattr(part, "compute") else part, float)
-            if not np.isfinite(part).all() or part.min() <= 0:
-                raise AnalysisError(f"speed between samples {a} and {b} is not finite and > 0 "
-                                    "rpm; order analysis needs the shaft turning")
-            return part
-        t = self.t0 + np.arange(a, b) / self.fs
-        return np.interp(t, self._t_in, self._omega) * (60.0 / _TWO_PI)
-
-
-def _speed_for(record, channel, var, *, speed_rpm, speed_channel) -> SpanSpeed:
-    from .speedref import _is_pulses, _pulse_reference_channel, _pulse_speed, _times
-    from .speedref import find_speed_channel
-
-    n, fs = var.shape[0], float(var.attrs["sample_rate"])
-    t0 = _first_time(record, var)
-    if speed_rpm is not None:
-        if not np.isscalar(speed_rpm) and np.shape(speed_rpm)[0] != n:
-            raise AnalysisError(f"speed_rpm has {np.shape(speed_rpm)[0]} samples but channel {channel!r} has "
-                                f"{n}; give one speed per sample, a constant, or speed_channel")
-        speed = SpanSpeed(n, fs, t0, speed_rpm=speed_rpm.data if hasattr(speed_rpm, "coords")
-                          else speed_rpm)
-        coords = getattr(speed_rpm, "coords", {})
-        if "shaft_angle" in coords:              # speed_reference's angle, as in memory
-            angle = speed_rpm["shaft_angle"].data
-            speed.angle = lambda a, b: np.asarray(angle[a:b], float)
-            speed.angle_reference = str(speed_rpm["shaft_angle"].attrs.get(
-                "reference", speed_rpm.attrs.get("angle_reference", "")))
-        return speed
-    name = speed_channel or find_speed_channel(record, channel)
-    if name not in record.data_vars:
-        raise RecordError(f"record has no speed channel {name!r}")
-    sv = record[name]
-    if _is_pulses(sv):
-        t_in, omega = _pulse_speed(sv, name)
-        source = f"pulse train {name!r}"
-    elif sv.attrs.get("quantity") == "angle" and sv.dims == var.dims:
-        return _same_clock_encoder(sv, name, n, fs, t0)
-    else:
-        source = _check_speed_channel(sv, name)
-        if sv.dims == var.dims:       # same clock: read the speed channel span by span
-            return _same_clock_speed(record, var, sv, name, source, n, fs, t0)
-        t_in, omega = _speed_trace(record, sv, name, source)
-    good = np.isfinite(omega)
-    t_in, omega = np.asarray(t_in)[good], np.asarray(omega)[good]
-    if t_in.shape[0] == 0:
-        raise AnalysisError(f"speed source {name!r} holds no usable speed values")
-    speed = SpanSpeed(n, fs, t0, t_in=t_in, omega=omega)
-    low, high = _span_extremes(t_in, omega, t0, t0 + (n - 1) / fs)
-    speed.extremes = (low, high)
-    pulse = name if _is_pulses(sv) else _pulse_reference_channel(record, exclude=name)
-    if pulse is not None and omega.min() > 0:
-        _attach_pulse_angle(speed, record[pulse], pulse, low)
-    if speed.angle is None and not _is_pulses(sv) and low > 0:
-        from .speedref import _averaged, _samples_per_rev
-
-        if _averaged(source, _samples_per_rev(t_in, omega)):
-            speed = _averaged_speed(speed, low)
-    return speed
-
-
-def _same_clock_encoder(sv, name, n, fs, t0) -> SpanSpeed:
-    """An encoder angle channel on the analysed channel's clock: its own angle (the mean
-    rotation) and speed, span by span, as speed_reference takes it whole."""
-    from .speedref import _is_angle_source, _ratio
-    from .stream_speed import EncoderAngle
-
-    if sv.shape[0] >= 8 and not _is_angle_source(sv[:: max(1, sv.shape[0] // 4096)]):
-        raise AnalysisError(f"channel {name!r} (quantity 'angle') does not turn with the "
-                            "shaft (it spans less than 4 revolutions): it is a vibratory "
-                            "angle, not an encoder angle; name a speed channel or pulse train")
-    tdc = float(sv.attrs.get("tdc_offset_deg", 0.0))
-    enc = EncoderAngle(sv.data, fs=fs, t0=t0, ratio=_ratio(sv, name), tdc_deg=tdc,
-                       source=f"encoder angle channel {name!r}")
-    speed = SpanSpeed(n, fs, t0, speed_rpm=enc)
-    speed.extremes = (enc.low_rpm, enc.high_rpm)
-    if enc.low_rpm > 0:
-        reference = (f"zero of encoder angle channel {name!r}" +
-                     (f" moved by tdc_offset_deg {tdc:g}" if tdc else ""))
-        _attach_mean_rotation(speed, enc.angle, enc.ends, enc.low_rpm, reference)
-    return speed
-
-
-def _check_speed_channel(sv, name) -> str:
-    """The label of a speed or IAS channel (rad/s), as speed_reference names it."""
-    if sv.attrs.get("quantity") == "angle":
-        raise AnalysisError(f"channel {name!r} is an encoder angle on another clock than the "
-                            "analysed channel: the streamed trackers take it on the same clock "
-                            "only; give a speed channel or pulse train with --speed-channel, "
-                            "or analyse the record in memory")
-    if sv.attrs.get("units", "rad/s") != "rad/s":
-        raise RecordError(f"speed channel {name!r} has units {sv.attrs.get('units')!r}; "
-                          "expected 'rad/s'")
-    return ("IAS channel" if sv.attrs.get("quantity") == "angular_velocity"
-            else "speed channel") + f" {name!r}"
-
-
-def _speed_trace(record, sv, name, source):
-    """A speed channel on its own clock (small: read whole) as (s, rad/s of the crankshaft),
-    its glitches bridged and its sign rule applied as in memory."""
-    from .speedref import _not_one_way, _one_direction, _ratio, _repair_glitches, _times
-
-    rate = sv.attrs.get("sample_rate")
-    if rate is not None and sv.dims[0] in record.coords:   # regular clock: t0 + i/rate
-        t_in = _first_time(record, sv) + np.arange(sv.shape[0]) / float(rate)
-    else:
-        t_in = np.asarray(_times(record, name), float)
-    omega = np.asarray(sv.values, float) / _ratio(sv, name)
-    good = np.isfinite(omega)
-    if not good.all():
-        log.warning("%s: %d non-finite speed values skipped", source, int((~good).sum()))
-        t_in, omega = t_in[good], omega[good]
-    if t_in.shape[0] == 0:
-        raise AnalysisError(f"{source} holds no usable speed values")
-    omega = _one_direction(_repair_glitches(t_in, omega, source), source)
-    if omega.max() <= 0 or omega.min() < 0:
-        i = int(np.argmin(omega))
-        raise _not_one_way(source, omega[i] * 60.0 / _TWO_PI, t_in[i])
-    return t_in, omega
-
-
-def _same_clock_speed(record, var, sv, name, source, n, fs, t0) -> SpanSpeed:
-    """A speed or IAS channel on the analysed channel's clock, repaired, sign-corrected and
-    (where the in-memory path does) cycle-averaged span by span."""
-    from .speedref import _averaged, _pulse_reference_channel, _ratio
-    from .stream_speed import RepairedChannel
-
-    raw = RepairedChannel(sv.data, fs=fs, t0=t0, ratio=_ratio(sv, name), source=source)
-    speed = SpanSpeed(n, fs, t0, speed_rpm=raw)
-    speed.extremes = (raw.low_rpm, raw.high_rpm)
-    if raw.low_rpm <= 0:              # a stop: tracked per running span, never averaged
-        return speed
-    pulse = _pulse_reference_channel(record, exclude=name)
-    if pulse is not None:
-        _attach_pulse_angle(speed, record[pulse], pulse, raw.low_rpm)
-    median_rev = 60.0 / max(raw.median_rpm, 1e-300) * fs
-    if speed.angle is None and _averaged(source, median_rev):
-        speed = _averaged_speed(speed, raw.low_rpm)
-        speed.extremes = (raw.low_rpm, raw.high_rpm)
-    return speed
-
-
-def _averaged_speed(speed: SpanSpeed, low_rpm: float) -> SpanSpeed:
-    """``speed`` averaged over whole engine cycles (:func:`analysis.trend.cycle_average`), as
-    :func:`analysis.speedref.speed_reference` does for a fast speed or IAS channel."""
-    from .stream_speed import CycleAveraged
-
-    avg = CycleAveraged(speed, n=speed.n, fs=speed.fs, low_rpm=low_rpm)
-    return SpanSpeed(speed.n, speed.fs, speed.t0, speed_rpm=avg)
-
-
-def _span_extremes(t_in, omega, a, b):
-    """Lowest and highest speed (rpm) of a trace interpolated over the times a..b."""
-    inside = omega[(t_in > a) & (t_in < b)]
-    ends = np.interp([a, b], t_in, omega)
-    values = np.concatenate([inside, ends]) * (60.0 / _TWO_PI)
-    return float(values.min()), float(values.max())
-
-
-def _stopped_spans(speed: SpanSpeed):
-    """Sample spans ``[(a, b), ...]`` where the shaft stands (speed ≤ 0.5 % of the highest, the
-    rule of the in-memory tracker), or None when it turns throughout."""
-    low, high = getattr(speed, "extremes", (1.0, 1.0))
-    if high <= 0 or low > 5e-3 * high:
-        return None
-    edges, prev, step = [], False, 1 << 18
-    for a in range(0, speed.n, step):
-        b = min(speed.n, a + step)
-        if speed._rpm is None:
-            part = np.interp(speed.t0 + np.arange(a, b) / speed.fs, speed._t_in,
-                             speed._omega) * (60.0 / _TWO_PI)
-        else:
-            part = np.asarray(speed._rpm[a:b], float)
-        flags = np.concatenate([[prev], part <= 5e-3 * high]).astype(np.int8)
-        edges.extend(a + np.flatnonzero(np.diff(flags)))
-        prev = bool(flags[-1])
-    if prev:
-        edges.append(speed.n)
-    return list(zip(edges[0::2], edges[1::2])) or None
-
-
-class _Shifted:
-    """Samples a..b-1 of a SpanSpeed as a speed of their own (a running span)."""
-
-    ndim = 1
-
-    def __init__(self, speed, a, b):
-        self.speed, self.a, self.n = speed, int(a), int(b - a)
-
-    def span(self, i, j):
-        return self.speed(self.a + i, self.a + j)
-
-    def __getitem__(self, key):
-        start, stop, step = key.indices(self.n)
-        return self.speed(self.a + start, self.a + stop)[::step]
-
-
-def _running_span(speed: SpanSpeed, a: int, b: int) -> SpanSpeed:
-    """The speed of samples a..b-1 (a running span), its angle from the span's start as in
-    memory (:func:`analysis.orders.order_track` on a record that stops)."""
-    sub = SpanSpeed(b - a, speed.fs, speed.t0 + a / speed.fs, speed_rpm=_Shifted(speed, a, b))
-    sub.extremes = (1.0, 1.0)
-    return sub
+# ---------------------------------------------------------------------------- stops
 
 
 def _track_running_spans(record, channel, speed, stops, options):
@@ -353,52 +115,6 @@ def _track_running_spans(record, channel, speed, stops, options):
     out.attrs["stopped_spans_s"] = [v for a, b in stops for v in (t0 + a / fs,
                                                                   t0 + (b - 1) / fs)]
     return out
-
-
-def _attach_pulse_angle(speed: SpanSpeed, pv, name: str, low: float) -> None:
-    """The shaft angle per span from a pulse train's edges, as
-    :func:`analysis.speedref.speed_reference` gives it for the whole channel (the edges' mean
-    rotation, :func:`analysis.trend.mean_rotation`, each span read with its reach as margin),
-    and the phase reference (TDC where the wheel has a gap or mark)."""
-    from crankbench.predict.errors import AnalysisError as _AE
-
-    from .speedref import _pulse_angle_function
-    edges = np.asarray(pv.values, float)
-    n, fs, t0 = speed.n, speed.fs, speed.t0
-    if edges.size <= 8 or edges[0] > t0 + (n - 1) / fs or edges[-1] < t0:
-        return
-    try:
-        at, reference = _pulse_angle_function(pv, name)
-    except _AE as exc:                         # an undecodable wheel: integrate instead
-        log.warning("pulse train %r gives no angle (%s); phases from the integrated speed",
-                    name, exc)
-        return
-    ends = (float(at(np.array([t0]))[0]), float(at(np.array([t0 + (n - 1) / fs]))[0]))
-    _attach_mean_rotation(speed, lambda a, b: at(t0 + np.arange(a, b) / fs), ends, low,
-                          reference)
-
-
-def _attach_mean_rotation(speed: SpanSpeed, raw, ends, low, reference) -> None:
-    """``speed.angle``: the mean rotation (:func:`analysis.trend.mean_rotation`) of a measured
-    angle ``raw(a, b)`` (rad of samples a..b-1), each span read with its reach as margin."""
-    from .trend import MEAN_ROTATION_REACH_REVOLUTIONS, mean_rotation
-
-    n, fs = speed.n, speed.fs
-    margin = int(np.ceil(1.2 * MEAN_ROTATION_REACH_REVOLUTIONS * 60.0 / low * fs)) + 2
-
-    def angle(a, b):
-        ra, rb = max(0, a - margin), min(n, b + margin)
-        return mean_rotation(raw(ra, rb), speed(ra, rb), fs, ends=ends)[a - ra:b - ra]
-
-    speed.angle = angle
-    speed.angle_reference = reference
-
-
-def _first_time(record, var) -> float:
-    dim = var.dims[0]
-    if dim in record.coords and var.shape[0]:
-        return float(record[dim][0].values)
-    return 0.0
 
 
 def _reader(var):

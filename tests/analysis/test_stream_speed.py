@@ -253,3 +253,23 @@ def test_encoder_angle_analysed_against_itself_loses_its_ramp(tmp_path, small_bl
     np.testing.assert_allclose(res.amplitude, mem.amplitude, rtol=1e-9)
     inner = ((res.time > 0.5) & (res.time < T - 0.5)).values
     assert np.abs(res.amplitude.values[0, inner] / 2e-3 - 1).max() < 5e-3
+
+
+def test_speed_channel_covering_part_of_the_record_is_checked_as_in_memory():
+    """A speed channel on its own clock that covers 40 % of the channel is refused, one that
+    stops 0.5 s early (12 revolutions) is held with the in-memory path's warning."""
+    from crankbench.analysis.speedref import SpeedReferenceWarning
+
+    fs = 2000.0
+    x = np.cos(2 * np.pi * 50.0 * np.arange(int(10 * fs)) / fs)
+
+    def record(t0, seconds):
+        return make_record({"acc": dict(data=x, sample_rate=fs, units="m/s^2"),
+                            "n": dict(data=np.full(int(seconds * 100), 157.08), t0=t0,
+                                      sample_rate=100.0, units="rad/s",
+                                      quantity="rotational_speed")})
+
+    with pytest.raises(AnalysisError, match="known for only 39.9 %"):
+        order_track_stream(record(6.0, 4.0), "acc", orders=[2])
+    with pytest.warns(SpeedReferenceWarning, match="held constant"):
+        order_track_stream(record(0.0, 9.5), "acc", orders=[2], revolutions=8)
