@@ -576,7 +576,7 @@ def apply_map(table, cmap: ChannelMap, *, allow_nonfinite=False):
         The data: no time, a pulse channel that cannot be decoded, non-numeric cells —
         naming the file, the column and what was seen.
     """
-    from .readers.table import TIME_NAMES, last_row_cut, split_header
+    from .readers.table import TIME_NAMES, last_row_cut, read_notes_attrs, split_header
 
     file = Path(table.file).name
     src = cmap.source
@@ -648,7 +648,7 @@ def apply_map(table, cmap: ChannelMap, *, allow_nonfinite=False):
         # they round (any other irregularity is left for the record's checks to name)
         from .readers.table import _unrounded
 
-        t = _unrounded(t, file, table.label(time_idx))
+        t = _unrounded(t, file, table.label(time_idx), table)
         if si != "s":
             raise ConfigError(f"{file}: time column {table.label(time_idx)} has unit "
                               f"{time_unit!r}; expected a time unit (s, ms, us)")
@@ -681,6 +681,7 @@ def apply_map(table, cmap: ChannelMap, *, allow_nonfinite=False):
         extra[name] = dict(data=data[i][:n], units=unit, sample_rate=fs, **time,
                            attrs={"column": table.label(i)})
     attrs = {k: src[k] for k in ("engine_id", "test_id") + LOAD_KEYS if k in src}
+    attrs.update(read_notes_attrs(table))
     if clock and "start_time" not in src:  # the first stamp, unless the map states one
         attrs.update(getattr(table, "start_times", {}).get(time_idx, {}))
     return _assemble(cmap, plain, roles, extra, attrs, file, allow_nonfinite)

@@ -333,7 +333,7 @@ def _time_from(table, index, unit, file, t):
         i = int(np.flatnonzero(~np.isfinite(t))[0])
         raise RecordError(f"{file}: time {table.label(index)} is empty or NaN/inf at data row "
                           f"{i + 1}; expected a time in every row")
-    return _unrounded(t, file, table.label(index))
+    return _unrounded(t, file, table.label(index), table)
 
 
 def _printed_resolution(t: np.ndarray) -> tuple:
@@ -361,7 +361,7 @@ def _printed_resolution(t: np.ndarray) -> tuple:
     return fixed, significant
 
 
-def _unrounded(t: np.ndarray, file, label) -> np.ndarray:
+def _unrounded(t: np.ndarray, file, label, table=None) -> np.ndarray:
     """A time column printed with fewer decimals than its sample interval needs is a uniform
     clock rounded: 5 kHz as ``%.3f`` (steps of 0 and 1 ms), or 8 kHz as ``%.6g`` (steps of
     0.1 and 0.2 ms once the stamps pass 10 s). It is rebuilt as the uniform grid it rounds,
@@ -398,36 +398,64 @@ def _unrounded(t: np.ndarray, file, label) -> np.ndarray:
         return t
     import logging
 
-    logging.getLogger("crankbench").warning(
-        "%s: time %s is rounded to %.3g s, and its %.3g s sample interval is not a whole "
-        "number of those steps (stamps irregular by their printed decimals): rebuilt as a "
-        "uniform %.6g Hz clock (every stamp within %.2g s of it, about half the rounding step)", file, label, float(q.max()), dt,
-        1.0 / dt, float(np.abs(r).max()))
+    note = (f"time {label} is rounded to {float(q.max()):.3g} s, and its {dt:.3g} s sample "
+            "interval is not a whole number of those steps (stamps irregular by their printed "
+            f"decimals): rebuilt as a uniform {1.0 / dt:.6g} Hz clock (every stamp within "
+            f"{float(np.abs(r).max()):.2g} s of it, about half the rounding step)")
+    logging.getLogger("crankbench").warning("%s: %s", file, note)
+    if table is not None:
+        read_note(table, note)
     return t0 + grid
 
 
 def last_row_cut(table, last_row: np.ndarray) -> bool:
-    """Whether a table's last row was cut mid-write: a logger stopped while writing leaves a
-    last line without its line break and with cells missing. Such a row is dropped, with a
-    warning, by the callers (its empty cells would otherwise read as NaN, refused further on
-    as a dropout); a complete last row, or one with a line break, is kept whatever it holds."""
+    """Whether a table's last row may have been cut mid-write: a logger stopped while writing
+    leaves a last line without its line break, with cells missing or a number cut short
+    (``76.5564`` written as ``7``) that no check can tell from a real value. Such a row is
+    dropped by the callers, with a warning and a ``read_notes`` entry; it costs one sample
+    of a complete file that merely lacks its final line break. A last line of text (a
+    footer) or one ending in a line break is kept whatever it holds."""
     last_row = np.asarray(last_row, float)
-    if not isinstance(table, TextTable) or np.all(np.isfinite(last_row)):
+    if not isinstance(table, TextTable):
         return False
     try:
         with open(table.file, "rb") as f:
-            f.seek(-1, 2)
-            cut = f.read(1) not in (b"\n", b"\r")
+            f.seek(0, 2)
+            size = f.tell()
+            f.seek(max(0, size - 4096))
+            tail = f.read()
     except OSError:
         return False
-    if cut:
-        import logging
+    if not tail or tail.endswith((b"\n", b"\r")):
+        return False
+    line = tail.rsplit(b"\n", 1)[-1].decode("utf-8", "replace")
+    if any(c.isalpha() and c not in "eE" for c in line):     # a footer, not a data row
+        return False
+    import logging
 
-        logging.getLogger("crankbench").warning(
-            "%s: the last line has no line break and %d empty cell(s): the file was cut "
-            "mid-row (logger stopped while writing?); that row is dropped", table.file,
-            int(np.count_nonzero(~np.isfinite(last_row))))
-    return cut
+    empty = int(np.count_nonzero(~np.isfinite(last_row)))
+    note = ("the last line has no line break: the file was cut while writing (logger stopped?)"
+            f"{f' and the row has {empty} empty cell(s)' if empty else ''}; that row is dropped "
+            "(a number cut short would look valid)")
+    logging.getLogger("crankbench").warning("%s: %s", table.file, note)
+    read_note(table, note)
+    return True
+
+
+def read_note(table, note: str) -> None:
+    """Keep what reading changed (a rebuilt clock, a dropped row) with the table: the record
+    carries it as its ``read_notes`` attr, so an imported or reported record still says so."""
+    notes = getattr(table, "read_notes", None)
+    if notes is None:
+        notes = []
+        table.read_notes = notes
+    notes.append(note)
+
+
+def read_notes_attrs(table) -> dict:
+    """``{"read_notes": "...; ..."}`` for a record read from ``table``, or ``{}``."""
+    notes = getattr(table, "read_notes", None)
+    return {"read_notes": "; ".join(notes)} if notes else {}
 
 
 def duplicate_names(table) -> None:
@@ -544,6 +572,7 @@ def table_record(table: Table, *, channels=None):
         values, attrs = si_channel(name, values, {"units": unit, "sample_rate": fs}, file=file)
         out.append((name, "time", values, attrs))
     attrs = {"units_from_names": "; ".join(from_names)} if from_names else {}
+    attrs.update(read_notes_attrs(table))
     if time_idx in clocks:
         attrs.update(getattr(table, "start_times", {}).get(time_idx, {}))
     return build_dataset(out, {"time": t}, attrs)

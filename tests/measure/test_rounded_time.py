@@ -83,7 +83,26 @@ def test_a_row_cut_mid_write_is_dropped_with_a_warning(tmp_path, caplog):
     with caplog.at_level(logging.WARNING, logger="crankbench"):
         rec = read(path)
     assert rec.sizes["time"] == 1999 and np.all(np.isfinite(rec["acc"].values))
-    assert any("cut mid-row" in r.getMessage() for r in caplog.records)
+    assert any("cut while writing" in r.getMessage() for r in caplog.records)
     # a column headed just "RPM" is a speed in rpm (stored in rad/s)
     assert rec["RPM"].attrs["units"] == "rad/s"
     np.testing.assert_allclose(rec["RPM"].values, (1000 + t[:1999]) * np.pi / 30, rtol=1e-5)
+
+
+def test_what_reading_changed_stays_with_the_record(tmp_path):
+    """A rebuilt clock and a dropped row are kept in the record's ``read_notes`` attr, so an
+    imported record (and the report's metadata) still says so."""
+    from crankbench.measure import write
+
+    fs = 8000.0
+    t = np.arange(int(10.5 * fs)) / fs
+    path = tmp_path / "g.csv"
+    _write_g(path, t, [np.sin(t)], "t,acc [m/s^2]")
+    path.write_text(path.read_text()[:-4])               # cut inside the last row's cell
+    rec = read(path)
+    notes = rec.attrs["read_notes"]
+    assert "rebuilt as a uniform 8000 Hz clock" in notes and "cut while writing" in notes
+    assert rec.sizes["time"] == t.size - 1         # the row with its number cut short
+    out = tmp_path / "g.h5"
+    write(rec, out)
+    assert read(out).attrs["read_notes"] == notes
