@@ -386,12 +386,7 @@ def speed_reference(record, channel: str, *, speed_channel: str | None = None,
         omega = np.asarray(var.values, dtype=float) / _ratio(var, name)
         source = ("IAS channel" if var.attrs.get("quantity") == "angular_velocity"
                   else "speed channel") + f" {name!r}"
-    good = np.isfinite(omega)
-    if not good.all():
-        log.warning("%s: %d non-finite speed values skipped", source, int((~good).sum()))
-        t_in, omega = t_in[good], omega[good]
-    if t_in.shape[0] == 0:
-        raise AnalysisError(f"{source} holds no usable speed values")
+    t_in, omega = _finite_speed(t_in, omega, source)
     if source.startswith(("IAS", "speed channel")):
         omega = _repair_glitches(t_in, omega, source)
         omega = _one_direction(omega, source)
@@ -453,6 +448,18 @@ def speed_reference(record, channel: str, *, speed_channel: str | None = None,
         if np.isfinite(values).all() and values.shape[0] >= 64:
             check_speed_reference(values, fs, rpm, label=channel, source=source)
     return out
+
+
+def _finite_speed(t_in, omega, source):
+    """A speed trace without its non-finite values (skipped with a warning); refused when
+    none is left."""
+    good = np.isfinite(omega)
+    if not good.all():
+        log.warning("%s: %d non-finite speed values skipped", source, int((~good).sum()))
+        t_in, omega = t_in[good], omega[good]
+    if t_in.shape[0] == 0:
+        raise AnalysisError(f"{source} holds no usable speed values")
+    return t_in, omega
 
 
 #: a speed glitch: this many robust standard deviations from the running median, and at least

@@ -119,17 +119,14 @@ def _track_running_spans(record, channel, speed, stops, options):
 
 def _reader(var):
     """``read(a, b)`` -> float64 samples a..b-1 of a (lazy) channel, checked finite."""
+    from .stream_speed import read_finite
+
     data = var.data
-    name = str(var.name)
+    label = f"channel {str(var.name)!r}"
 
     def read(a, b):
-        block = data[a:b]
-        block = np.asarray(block.compute() if hasattr(block, "compute") else block, np.float64)
-        if not np.isfinite(block).all():
-            i = a + int(np.flatnonzero(~np.isfinite(block))[0])
-            raise AnalysisError(f"channel {name!r}: NaN/inf at sample {i}; streamed order "
-                                "tracking needs finite samples (use order_track on a span)")
-        return block
+        return read_finite(data, a, b, label, "streamed order tracking needs finite samples "
+                           "(use order_track on a span)")
     return read
 
 

@@ -53,6 +53,17 @@ _SAMPLE_CAP = 1 << 22
 BLOCK = 1 << 20
 
 
+def read_finite(data, a, b, label, need):
+    """Samples a..b-1 of a (lazy) array as float64, refused with ``need`` (what the caller
+    needs instead) where one is NaN/inf."""
+    part = data[a:b]
+    part = np.asarray(part.compute() if hasattr(part, "compute") else part, np.float64)
+    if not np.isfinite(part).all():
+        i = a + int(np.flatnonzero(~np.isfinite(part))[0])
+        raise AnalysisError(f"{label}: NaN/inf at sample {i}; {need}")
+    return part
+
+
 class _Spans:
     """Array-like speed (rpm) computed per span: ``self[a:b]`` and strided ``self[::q]``."""
 
@@ -131,14 +142,9 @@ class RepairedChannel(_Spans):
     # -- reading
 
     def _raw(self, a, b):
-        part = self.data[a:b]
-        part = np.asarray(part.compute() if hasattr(part, "compute") else part, np.float64)
-        if not np.isfinite(part).all():
-            i = a + int(np.flatnonzero(~np.isfinite(part))[0])
-            raise AnalysisError(f"{self.source}: NaN/inf at sample {i}; the streamed trackers "
-                                "need a finite speed channel on the signal's clock (read the "
-                                "record whole, or give a speed channel on its own clock)")
-        return part / self.ratio
+        return read_finite(self.data, a, b, self.source, "the streamed trackers need a finite "
+                           "speed channel on the signal's clock (read the record whole, or "
+                           "give a speed channel on its own clock)") / self.ratio
 
     def _blocks(self, margin=0):
         """``(a, b, ra, values[ra:rb])`` for consecutive blocks a..b-1 read with ``margin``."""
@@ -388,13 +394,8 @@ class EncoderAngle(_Spans):
         self.low_rpm, self.high_rpm = low[0], high
 
     def _read(self, a, b):
-        part = self.data[a:b]
-        part = np.asarray(part.compute() if hasattr(part, "compute") else part, np.float64)
-        if not np.isfinite(part).all():
-            i = a + int(np.flatnonzero(~np.isfinite(part))[0])
-            raise AnalysisError(f"{self.source}: NaN/inf at sample {i}; the streamed trackers "
-                                "need a finite encoder angle")
-        return part
+        return read_finite(self.data, a, b, self.source,
+                           "the streamed trackers need a finite encoder angle")
 
     @staticmethod
     def _unwrap(w, before, offset):
@@ -576,20 +577,15 @@ def _check_speed_channel(sv, name) -> str:
 def _speed_trace(record, sv, name, source):
     """A speed channel on its own clock (small: read whole) as (s, rad/s of the crankshaft),
     its glitches bridged and its sign rule applied as in memory."""
-    from .speedref import _not_one_way, _one_direction, _ratio, _repair_glitches, _times
+    from .speedref import (_finite_speed, _not_one_way, _one_direction, _ratio,
+                           _repair_glitches, _times)
 
     rate = sv.attrs.get("sample_rate")
     if rate is not None and sv.dims[0] in record.coords:   # regular clock: t0 + i/rate
         t_in = _first_time(record, sv) + np.arange(sv.shape[0]) / float(rate)
     else:
         t_in = np.asarray(_times(record, name), float)
-    omega = np.asarray(sv.values, float) / _ratio(sv, name)
-    good = np.isfinite(omega)
-    if not good.all():
-        log.warning("%s: %d non-finite speed values skipped", source, int((~good).sum()))
-        t_in, omega = t_in[good], omega[good]
-    if t_in.shape[0] == 0:
-        raise AnalysisError(f"{source} holds no usable speed values")
+    t_in, omega = _finite_speed(t_in, np.asarray(sv.values, float) / _ratio(sv, name), source)
     omega = _one_direction(_repair_glitches(t_in, omega, source), source)
     if omega.max() <= 0 or omega.min() < 0:
         i = int(np.argmin(omega))
