@@ -273,3 +273,28 @@ def test_speed_channel_covering_part_of_the_record_is_checked_as_in_memory():
         order_track_stream(record(6.0, 4.0), "acc", orders=[2])
     with pytest.warns(SpeedReferenceWarning, match="held constant"):
         order_track_stream(record(0.0, 9.5), "acc", orders=[2], revolutions=8)
+
+
+def test_fast_speed_channel_on_its_own_clock_is_repaired_and_averaged_as_in_memory(caplog):
+    """A 1 kHz speed channel (30-50 samples a revolution, carrying 0.4 rad/s of order-1.5
+    vibration and a 65535 spike) for a 2 kHz signal: bridged with the warning, interpolated and
+    cycle-averaged on the signal's clock, equal to speed_reference's speed (1e-6 rpm)."""
+    fs, seconds = 2000.0, 8.0
+    prof = ramp(1200.0, 2000.0, duration=seconds)
+    t = np.arange(int(seconds * fs)) / fs
+    ts = np.arange(int(seconds * 1000)) / 1000.0
+    w = prof.speed(ts) + 0.4 * np.cos(1.5 * prof.angle(ts))
+    w[3000] = 65535.0
+    rec = make_record({"acc": dict(data=np.cos(2 * prof.angle(t)), sample_rate=fs,
+                                   units="m/s^2"),
+                       "n": dict(data=w, sample_rate=1000.0, units="rad/s",
+                                 quantity="rotational_speed")})
+    ref = speed_reference(rec, "acc").values
+    with caplog.at_level(logging.WARNING, logger="crankbench"):
+        speed = _speed_for(rec, "acc", rec["acc"], speed_rpm=None, speed_channel=None)
+    assert _warnings(caplog, "1 glitch sample(s)")
+    assert isinstance(speed._rpm, stream_speed.CycleAveraged)
+    got = np.concatenate([speed(a, min(speed.n, a + 2999)) for a in range(0, speed.n, 2999)])
+    np.testing.assert_allclose(got, ref, rtol=0, atol=1e-6)
+    inner = slice(int(fs), -int(fs))
+    assert np.abs(got[inner] - prof.speed(t)[inner] * 60 / (2 * np.pi)).max() < 1.0
