@@ -149,3 +149,23 @@ def test_the_report_digest_is_checked_where_it_is_written(tmp_path, no_cache):
         f.write(b"\0")
     with pytest.raises(RecordError, match=r"run\.h5 changed since the record was read"):
         compare_vibrograph(rec, ENGINE)
+
+
+def test_a_virtual_dataset_is_refused_in_the_single_open(record_file, tmp_path):
+    """The external-data check runs inside the read's own open: a channel turned into a
+    virtual dataset reading another file is refused (its bytes are not this record's)."""
+    import h5py
+
+    other = tmp_path / "elsewhere.h5"
+    with h5py.File(other, "w") as f:
+        f["x"] = np.zeros(4096)
+    with h5py.File(record_file, "a") as f:
+        attrs = dict(f["channels/acc"].attrs)
+        del f["channels/acc"]
+        layout = h5py.VirtualLayout(shape=(4096,), dtype="f8")
+        layout[:] = h5py.VirtualSource(str(other), "x", shape=(4096,))
+        f["channels"].create_virtual_dataset("acc", layout)
+        f["channels/acc"].attrs.update(attrs)
+    with pytest.raises(RecordError, match=r"'channels/acc' is a virtual dataset reading "
+                                          r".*elsewhere\.h5; a record must hold its own data"):
+        io.read(record_file)
