@@ -190,3 +190,22 @@ def test_bad_inputs_name_what_was_expected():
     with pytest.raises(ConfigError, match=r"dpi=0 must be positive"):
         decimate_figure(fig, dpi=0)
     plt.close(fig)
+
+
+def test_dense_map_as_rasterized_svg_is_smaller_than_a_whole_png():
+    # the report's choice for order maps and spectrograms: vector axes and text, the mesh as
+    # an embedded image -- smaller than the whole figure as PNG at the same resolution
+    rng = np.random.default_rng(2)
+    sizes = {}
+    for fmt in ("svg", "png"):
+        fig, ax = plt.subplots(figsize=(7.5, 5.0))
+        mesh = ax.pcolormesh(np.arange(40) * 0.5, np.linspace(200, 760, 120),
+                             rng.random((120, 40)), rasterized=True)
+        fig.colorbar(mesh, ax=ax, label="dB re max")
+        ax.set_xlabel("order")
+        ax.set_ylabel("engine speed (rpm)")
+        rep = Report("r")
+        rep.add_figure(fig, title="map", image_format=fmt)
+        payload = rep._sections[0].items[0].payload
+        sizes[fmt] = len(payload["svg"]) if fmt == "svg" else len(payload["png_b64"])
+    assert sizes["svg"] < sizes["png"]
