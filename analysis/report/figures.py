@@ -37,6 +37,16 @@ __all__ = ["envelope_indices", "pixel_run_indices", "decimate_figure"]
 log = logging.getLogger("crankbench")
 
 
+def _samples(x, y, caller: str):
+    """x and y as float arrays, checked to be 1-D of one length."""
+    x = np.asarray(x, dtype=float)
+    y = np.asarray(y, dtype=float)
+    if x.ndim != 1 or x.shape != y.shape:
+        raise ConfigError(f"{caller}: x and y must be 1-D of one length, got shapes "
+                          f"{x.shape} and {y.shape}")
+    return x, y
+
+
 def _first_per_segment(candidates: np.ndarray, segment: np.ndarray) -> np.ndarray:
     """Index of the first True of ``candidates`` in each segment that has one."""
     idx = np.flatnonzero(candidates)
@@ -83,12 +93,8 @@ def envelope_indices(x, y, *, n_columns: int, x_range=None) -> np.ndarray:
     >>> print(keep.size <= 500, 4321 in keep, float(y[keep].max()))
     True True 7.5
     """
-    x = np.asarray(x, dtype=float)
-    y = np.asarray(y, dtype=float)
+    x, y = _samples(x, y, "envelope_indices")
     n_columns = check_int(n_columns, "n_columns", minimum=1, error=ConfigError)
-    if x.ndim != 1 or x.shape != y.shape:
-        raise ConfigError(f"envelope_indices: x and y must be 1-D of one length, got shapes "
-                          f"{x.shape} and {y.shape}")
     n = x.size
     if n <= 2:
         return np.arange(n)
@@ -152,13 +158,9 @@ def pixel_run_indices(x, y, *, n_columns: int, n_rows: int, x_range, y_range) ->
     >>> print(keep.size < 2000, keep[0], keep[-1])
     True 0 99999
     """
-    x = np.asarray(x, dtype=float)
-    y = np.asarray(y, dtype=float)
+    x, y = _samples(x, y, "pixel_run_indices")
     n_columns = check_int(n_columns, "n_columns", minimum=1, error=ConfigError)
     n_rows = check_int(n_rows, "n_rows", minimum=1, error=ConfigError)
-    if x.ndim != 1 or x.shape != y.shape:
-        raise ConfigError(f"pixel_run_indices: x and y must be 1-D of one length, got shapes "
-                          f"{x.shape} and {y.shape}")
     n = x.size
     if n <= 2:
         return np.arange(n)
