@@ -29,7 +29,8 @@ Rows:
 * ``report figures, 2-process pool`` — rendering the figures of one report in a 2-process
   fork pool (pool start-up and pickling of the figures included) against rendering them one
   after another in this process, by *wall* time (what parallel rendering is for);
-  informational: this is the measurement behind rendering in series (POSIX only).
+  informational: this is the measurement behind rendering in series (POSIX only; full run
+  only, not ``--quick``).
 """
 
 from __future__ import annotations
@@ -191,7 +192,7 @@ def _pool_rows(result, quick: bool) -> list[Row]:
     finally:
         repmod.Report.add_figure = original
     wall = {"pool": [], "serial": []}
-    rounds = 1 if quick else 4
+    rounds = 2 if quick else 4
 
     def serial():
         return [_render(b) for b in blobs]
@@ -233,12 +234,12 @@ def _render(blob: bytes) -> int:
 
 
 def run(quick: bool) -> list[Row]:
-    """Rows described in the module docstring (quick: 3 rounds, 1 for the pool; the demo's
+    """Rows described in the module docstring (quick: 2 rounds and no pool row; the demo's
     synthesis and analysis, about 15 s, come first either way)."""
     from crankbench.analysis.report.build import build_report
 
     result = _demo_result()
-    rounds = 3 if quick else 7
+    rounds = 2 if quick else 7
     per = {"dec": [], "full": []}
     checks: dict = {}
     # warm-up (fonts, caches; the decimated side checked against the data), then
@@ -295,5 +296,6 @@ def run(quick: bool) -> list[Row]:
                     ratio_hi=float(np.percentile(ratio, 75)), paired=True, rounds=rounds,
                     extra={"figure_share": float(np.median(fig_sum["dec"] / totals["dec"]))}))
     rows.append(_trace_row(quick))
-    rows.extend(_pool_rows(result, quick))
+    if not quick:  # 20-40 s more: the measurement behind rendering in series
+        rows.extend(_pool_rows(result, quick))
     return rows
