@@ -78,40 +78,42 @@ _TWO_PI = 2.0 * np.pi
 # ---------------------------------------------------------------------------- stops
 
 
-def _track_running_spans(record, channel, speed, stops, options):
-    """Streamed tracks of each span where the shaft turns, as the in-memory tracker gives them
-    (a warning names the standing spans; their results are absent)."""
+def _track_running_spans(record, channel, speed, stops, options, *, compute=None,
+                         what="orders are tracked"):
+    """Streamed tracks (or, with ``compute=order_map_stream``, the order map) of each span
+    where the shaft turns, as the in-memory tracker gives them (a warning names the standing
+    spans; their results are absent)."""
     import warnings
 
     import xarray as xr
 
     from .orders import OrderWarning
 
+    compute = order_track_stream if compute is None else compute
     n, fs, t0 = speed.n, speed.fs, speed.t0
     bounds = [0] + [v for s in stops for v in s] + [n]
     runs = [(a, b) for a, b in zip(bounds[0::2], bounds[1::2]) if b > a]
     shown = ", ".join(f"{t0 + a / fs:.6g}..{t0 + (b - 1) / fs:.6g} s" for a, b in stops[:5])
     warnings.warn(f"{channel}: the shaft stands (speed <= 0.5 % of {speed.extremes[1]:.6g} "
-                  f"rpm) at {shown}; orders are tracked in each running span separately",
+                  f"rpm) at {shown}; {what} in each running span separately",
                   OrderWarning, stacklevel=3)
-    log.warning("%s: the shaft stands at %s; orders tracked in each running span", channel,
-                shown)
+    log.warning("%s: the shaft stands at %s; %s in each running span", channel, shown, what)
     dim = record[channel].dims[0]
     parts, skipped = [], []
     for a, b in runs:
         sub = record[[channel]].isel({dim: slice(a, b)})
         try:
-            parts.append(order_track_stream(sub, channel, speed_rpm=_running_span(speed, a, b),
-                                            **options))
+            parts.append(compute(sub, channel, speed_rpm=_running_span(speed, a, b), **options))
         except AnalysisError as exc:
             skipped.append(f"{t0 + a / fs:.6g}..{t0 + (b - 1) / fs:.6g} s ({exc})")
     if not parts:
-        raise AnalysisError(f"{channel}: no running span long enough to track: "
+        raise AnalysisError(f"{channel}: no running span long enough to analyse: "
                             f"{'; '.join(skipped)}")
     if skipped:
-        log.info("%s: running spans not tracked: %s", channel, "; ".join(skipped))
-    out = xr.concat(parts, dim="time", data_vars="minimal", coords="minimal",
-                    combine_attrs="override") if len(parts) > 1 else parts[0]
+        log.info("%s: running spans not analysed: %s", channel, "; ".join(skipped))
+    extra = {} if isinstance(parts[0], xr.DataArray) else {"data_vars": "minimal"}
+    out = xr.concat(parts, dim="time", coords="minimal", combine_attrs="override",
+                    **extra) if len(parts) > 1 else parts[0]
     out.attrs["stopped_spans_s"] = [v for a, b in stops for v in (t0 + a / fs,
                                                                   t0 + (b - 1) / fs)]
     return out
@@ -540,9 +542,23 @@ def order_map_stream(record, channel: str, *, speed_rpm=None, speed_channel=None
                                                              error=AnalysisError)
     if top > spr / 2 + 1e-12:
         raise AnalysisError(f"max_order {top:g} exceeds samples_per_rev/2 = {spr / 2:g}")
+    if not isinstance(speed_rpm, SpanSpeed):
+        speed = _speed_for(record, channel, _channel(record, channel), speed_rpm=speed_rpm,
+                           speed_channel=speed_channel)
+        stops = _stopped_spans(speed)
+        if stops is not None:      # a record that stops: the map of each running span
+            return _track_running_spans(record, channel, speed, stops, dict(
+                segment_seconds=segment_seconds, samples_per_rev=samples_per_rev,
+                revolutions=revolutions, overlap=overlap, window=window, amplitude=amplitude,
+                scaling=scaling, max_order=max_order, interpolation=interpolation,
+                chunk=chunk, trend=trend), compute=order_map_stream,
+                what="the order map is computed")
+        speed_rpm = speed
     var, label, speed, segment, reader = _prepare(
-        record, channel, speed_rpm=speed_rpm, speed_channel=speed_channel, chunk=chunk,
-        trend=trend, segment_seconds=segment_seconds)
+        record, channel, speed_rpm=None if isinstance(speed_rpm, SpanSpeed) else speed_rpm,
+        speed_channel=speed_channel, chunk=chunk, trend=trend,
+        segment_seconds=segment_seconds,
+        speed=speed_rpm if isinstance(speed_rpm, SpanSpeed) else None)
     length = spr * int(revolutions)
     n_orders = min(length // 2 + 1, int(np.floor(top * int(revolutions))) + 1)
     spectra = MapSpectra(length, window, scaling, factor, n_orders)

@@ -298,3 +298,38 @@ def test_fast_speed_channel_on_its_own_clock_is_repaired_and_averaged_as_in_memo
     np.testing.assert_allclose(got, ref, rtol=0, atol=1e-6)
     inner = slice(int(fs), -int(fs))
     assert np.abs(got[inner] - prof.speed(t)[inner] * 60 / (2 * np.pi)).max() < 1.0
+
+
+def test_a_record_that_stops_gets_its_order_map_and_plots(tmp_path, small_blocks, monkeypatch):
+    """The order map of a record that stops is the map of each running span (it was refused,
+    in memory and streamed, so `analyse --plot` failed on the run that had tracked fine): no
+    block inside the stop, order 2 at its true 0.5 in both spans, the two paths equal; the
+    Campbell map (time frames) takes the standing frames at 0 rpm."""
+    from crankbench.analysis import order_map
+    from crankbench.analysis.cli import main
+    from crankbench.analysis.commands import analyse
+    from crankbench.analysis.orders import OrderWarning
+    from crankbench.analysis.stream import order_map_stream
+
+    rec, _ = _bench("stop")
+    path = tmp_path / "stop.h5"
+    measure.write(rec, path)
+    full = measure.read(path)
+    with pytest.warns(OrderWarning, match="order map is computed in each running span"):
+        mem = order_map(full["acc"], speed_rpm=speed_reference(full, "acc"), revolutions=8)
+    t = mem["time"].values
+    assert not np.any((t > 5.0) & (t < 5.5))
+    assert np.median(mem.sel(order=2.0).values) == pytest.approx(A2, rel=0.01)
+    with pytest.warns(OrderWarning):
+        lazy = order_map_stream(measure.open(path, chunk_seconds=1.0), "acc", revolutions=8,
+                                segment_seconds=1.5)
+    np.testing.assert_allclose(lazy.sel(order=2.0).values, mem.sel(order=2.0).values,
+                               rtol=1e-6)
+    for streamed in (False, True):
+        if streamed:
+            monkeypatch.setattr(analyse, "STREAM_BYTES", 0)
+        out = tmp_path / f"plots{int(streamed)}"
+        assert main(["analyse", str(path), "--channel", "acc", "--orders", "2,4.5",
+                     "--plot", str(out), "-q"]) == 0
+        assert sorted(p.name for p in out.iterdir()) == ["campbell.png", "order_map.png",
+                                                         "order_tracks.png"]
