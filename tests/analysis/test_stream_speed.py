@@ -333,3 +333,19 @@ def test_a_record_that_stops_gets_its_order_map_and_plots(tmp_path, small_blocks
                      "--plot", str(out), "-q"]) == 0
         assert sorted(p.name for p in out.iterdir()) == ["campbell.png", "order_map.png",
                                                          "order_tracks.png"]
+
+
+def test_allow_nonfinite_on_a_streamed_file_is_refused_up_front(tmp_path, monkeypatch, capsys):
+    """The streamed trackers refuse NaN runs; --allow-nonfinite on a file streamed must say so
+    (and what to do) before any work, not fail mid-stream with advice to use the option given."""
+    from crankbench.analysis.cli import main
+    from crankbench.analysis.commands import analyse
+
+    rec, _ = _bench()
+    path = tmp_path / "r.h5"
+    measure.write(rec, path)
+    monkeypatch.setattr(analyse, "STREAM_BYTES", 0)
+    assert main(["analyse", str(path), "--channel", "acc", "--orders", "2",
+                 "--allow-nonfinite"]) == 2
+    err = capsys.readouterr().err
+    assert "--allow-nonfinite" in err and "do not mask NaN/inf runs" in err
