@@ -64,15 +64,14 @@ from crankbench.predict._validate import check_int, check_option, check_positive
 from crankbench.predict.errors import AnalysisError
 from crankbench.predict._threads import single_threaded_blas
 
-from .resample import _as_angle, _as_rpm, _as_signal, _fft_lowpass
+from . import _vkf_kernels
+from .resample import _as_angle, _as_rpm, _as_signal
 from .resample import shaft_angle as _integrate_speed
 
 __all__ = ["vold_kalman", "vkf_weight", "enbw_hz", "smearing_constant"]
 
 log = logging.getLogger("crankbench")
 
-_DIFF = {1: np.array([-1.0, 1.0]), 2: np.array([1.0, -2.0, 1.0])}
-_TWO_PI = 2.0 * np.pi
 
 
 def vkf_weight(bandwidth_hz, fs: float, filter_order: int):
@@ -147,176 +146,101 @@ def smearing_constant(filter_order: int) -> float:
     return float(c * 2.0 ** (2 * filter_order) * math.factorial(2 * filter_order))
 
 
-def _decimate(values: np.ndarray, fs: float, f_max: float):
-    """Low-pass and decimate (in the frequency domain) so that ``f_max`` stays flat (ripple
-    ≈ 1e-5, 100 dB above ``fs_new/2``).
+#: Kaiser design of each decimation stage: 106 dB, i.e. ripple δ = 5e-6 in its pass band and
+#: stop band, so a cascade of two stages is flat to 1e-5 (the one-stage 100 dB figure)
+_DECIMATION_DB = 106.0
 
-    Returns (decimated values, input index of each output sample, new rate)."""
+
+def _kaiser_lowpass(f_pass: float, f_stop: float, fs: float) -> np.ndarray:
+    """Symmetric odd-length Kaiser-windowed ideal low-pass (cut-off midway between ``f_pass``
+    and ``f_stop``; β and length from Kaiser's formulas for ``_DECIMATION_DB``), unit DC gain."""
+    beta = 0.1102 * (_DECIMATION_DB - 8.7)
+    half = int(math.ceil(beta / (np.pi * (f_stop - f_pass)) * fs))
+    f_cut = 0.5 * (f_pass + f_stop)
+    n = np.arange(-half, half + 1)
+    h = np.sinc(2.0 * f_cut / fs * n) * np.kaiser(2 * half + 1, beta)
+    return h / h.sum()
+
+
+@functools.lru_cache(maxsize=64)
+def _decimator(fs: float, f_max: float, q: int):
+    """Stages ``((q_s, h_s), …)`` of an FIR cascade decimating by ``q`` that keeps
+    ``[0, f_max]`` flat (|H − 1| ≤ 1e-5) and attenuates by ≥ 106 dB all that would alias into
+    the output band ``[0, fs/(2q)]``: stage ``s`` (output rate ``f_s``) stops from
+    ``f_s − fs/(2q)`` (what lies between its pass and stop edges folds above ``fs/(2q)`` and is
+    removed by the next stage). Of the orderings of the factorisations of ``q`` into ≤ 3
+    factors, the one with the fewest multiply-adds per input sample."""
+    fs_out = fs / q
+    best = None
+    for factors in _factorisations(q):
+        rate, cost, stages = fs, 0.0, []
+        for qs in factors:
+            rate /= qs
+            h = _kaiser_lowpass(f_max, rate - 0.5 * fs_out, rate * qs)
+            cost += h.shape[0] * rate / fs           # multiply-adds per input sample
+            stages.append((qs, h))
+        if best is None or cost < best[0]:
+            best = (cost, tuple(stages))
+    return best[1]
+
+
+def _factorisations(q: int):
+    """Ordered factorisations of ``q`` into one, two or three factors ≥ 2."""
+    out = [(q,)]
+    for a in range(2, q):
+        if q % a:
+            continue
+        b = q // a
+        out.append((a, b))
+        for c in range(2, b):
+            if b % c == 0:
+                out.append((a, c, b // c))
+    return out
+
+
+def _decimate(values: np.ndarray, fs: float, f_max: float):
+    """Low-pass and decimate by ``q = floor(fs/(4 f_max))`` with the FIR cascade of
+    :func:`_decimator` (zero phase: each output is centred on an input sample; pass band flat
+    to 1e-5, ≥ 106 dB stop band; polyphase, so the work is the taps per *output* sample).
+
+    Returns (decimated values, input index of each output sample, new rate); the record ends
+    that the filters do not cover fully are dropped."""
     q = int(max(1, math.floor(fs / (4.0 * f_max))))
     if q == 1:
         return values, np.arange(values.shape[0]), fs
-    from .resample import _aa_half_length
-
-    fs_new = fs / q
-    f_stop = 0.5 * fs_new
-    half = int(math.ceil(_aa_half_length(f_max, f_stop) * fs)) + 1
-    if values.shape[0] <= 2 * half + 4 * q:
+    stages = _decimator(float(fs), float(f_max), q)
+    reach, step = 0, 1                       # half-length of the cascade, in input samples
+    for qs, h in stages:
+        reach += step * (h.shape[0] // 2)
+        step *= qs
+    if values.shape[0] <= 2 * reach + 4 * q:
         return values, np.arange(values.shape[0]), fs
-    from .resample import _good_size
-
-    n_out = _good_size(-(-values.shape[0] // q))
-    filtered = _fft_lowpass(values, fs, f_max, f_stop, q * n_out, n_out)
-    first = -(-half // q)                          # first complete output
-    last = (values.shape[0] - 1 - half) // q        # last complete output
-    index = q * np.arange(first, last + 1)
-    return filtered[first:last + 1], index, fs_new
-
-
-def _spline_weights(n: int, m: int):
-    """Envelope representation on knots every ``m`` samples.
-
-    ``m == 1``: one unknown per sample (the classical VKF). ``m > 1``: uniform cubic B-spline
-    coefficients; sample ``i`` uses coefficients ``q_i … q_i + 3``. Returns (q, W, n_coef)."""
-    if m == 1:
-        return np.arange(n), np.ones((n, 1)), n
-    pos = np.arange(n) / m
-    q = np.floor(pos).astype(np.int64)
-    f = pos - q
-    f2, f3 = f * f, f * f * f
-    w = np.empty((n, 4))
-    w[:, 0] = (1.0 - f) ** 3 / 6.0
-    w[:, 1] = (3.0 * f3 - 6.0 * f2 + 4.0) / 6.0
-    w[:, 2] = (-3.0 * f3 + 3.0 * f2 + 3.0 * f + 1.0) / 6.0
-    w[:, 3] = f3 / 6.0
-    return q, w, int(q[-1]) + 4
+    y, offset, step = values, 0, 1           # y[l] is centred on input offset + step·l
+    for qs, h in stages:
+        half = h.shape[0] // 2
+        first = -(-half // qs)                          # first complete output
+        last = (y.shape[0] - 1 - half) // qs            # last complete output
+        y = _vkf_kernels.fir_decimate(y, h, qs, first, last - first + 1)
+        offset += step * qs * first
+        step *= qs
+    return y, offset + step * np.arange(y.shape[0]), fs / q
 
 
-@functools.lru_cache(maxsize=32)
-def _layout(m: int, s: int, u: int):
-    """Where each (slot a, slot b, column j, column jj) product goes in upper banded storage
-    of ``m`` unknowns per knot and ``s`` knots per sample: for slot pairs a ≤ b, the row
-    ``u − d`` and column offset of every entry, with the index of its symmetric column pair."""
-    pairs = [(j, jj) for j in range(m) for jj in range(j, m)]
-    pair_index = {pr: i for i, pr in enumerate(pairs)}
-    slot_pairs = [(a, b) for a in range(s) for b in range(a, s)]
-    rows, col_off, src_slot, src_pair = [], [], [], []
-    for ia, (a, b) in enumerate(slot_pairs):
-        for j in range(m):
-            for jj in range(m):
-                d = (b - a) * m + (jj - j)
-                if d < 0 or (a == b and jj < j):
-                    continue
-                rows.append(u - d)
-                col_off.append(b * m + jj)
-                src_slot.append(ia)
-                src_pair.append(pair_index[(min(j, jj), max(j, jj))])
-    return (np.array(pairs), slot_pairs, np.array(rows), np.array(col_off),
-            np.array(src_slot), np.array(src_pair))
-
-
-def _assemble(basis, x, q, w, n_coef, weights, p):
-    """Banded upper form of A = CᵀC + Σ_k r_k² D_pᵀ D_p and the right side Cᵀx.
-
-    ``basis``: (N, m) columns; ``q, w``: envelope representation (:func:`_spline_weights`; the
-    knots are uniform, so samples of one knot interval share their weight pattern);
-    ``weights``: (n_coef − p, m) squared weights per difference row and column. Unknown
-    (coefficient c, j) has flat index m c + j. Work: one product of the ``m(m+1)/2`` basis
-    products per sample with the ``s(s+1)/2`` weight products per position in a knot interval.
-    """
-    n, m = basis.shape
-    s = w.shape[1]
-    u = m * max(p, s - 1) + m - 1
-    size = n_coef * m
-    pairs, slot_pairs, rows, col_off, src_slot, src_pair = _layout(m, s, u)
-    prod = basis[:, pairs[:, 0]] * basis[:, pairs[:, 1]]            # (N, P)
-    groups = int(q[-1]) + 1
-    if s > 1:
-        span = int(np.max(np.bincount(q)))
-        # sample i sits at position i - span*q_i of its knot interval (uniform knots): lay the
-        # products out as (position, interval, pair) and sum each interval with the spline
-        # weights of every position in one matrix product
-        pos = np.arange(n) - span * q
-        lay = np.zeros((span, groups, prod.shape[1]))
-        lay[pos, q] = prod
-        wpat = np.zeros((len(slot_pairs), span))
-        wpat[:, pos[:span]] = np.stack([w[:span, a] * w[:span, b] for a, b in slot_pairs])
-        sums = (wpat @ lay.reshape(span, -1)).reshape(len(slot_pairs), groups, -1)
-        lay_x = np.zeros((span, groups, m))
-        lay_x[pos, q] = basis * x[:, None]
-        wv = np.zeros((s, span))
-        wv[:, pos[:span]] = w[:span].T
-        rsum = (wv @ lay_x.reshape(span, -1)).reshape(s, groups, m)
-    else:
-        sums = prod[None]                                            # (1, N, P)
-        rsum = (basis * x[:, None])[None]                            # (1, N, m)
-    # scatter: entry (row, g m + col_off) gets sums[src_slot, g, src_pair]
-    g = np.arange(groups)
-    flat_cols = (g[:, None] * m + col_off[None, :]).ravel()
-    flat_rows = np.broadcast_to(rows, (groups, rows.shape[0])).ravel()
-    vals = sums[src_slot, :, src_pair].T.ravel()
-    ab = np.bincount(flat_rows * size + flat_cols, weights=vals,
-                     minlength=(u + 1) * size).reshape(u + 1, size)
-    c = _DIFF[p]
-    rowsd = np.arange(weights.shape[0])
-    for a in range(p + 1):
-        for b in range(a, p + 1):
-            cols = ((rowsd[:, None] + b) * m + np.arange(m)[None, :]).ravel()
-            ab[u - (b - a) * m, cols] += c[a] * c[b] * weights.ravel()
-    rhs = np.bincount(((g[None, :, None] + np.arange(s)[:, None, None]) * m
-                       + np.arange(m)[None, None, :]).ravel(), weights=rsum.ravel(),
-                      minlength=size)
-    return ab, rhs
-
-
-def _banded_matvec(ab, z, u):
-    """y = A z for a symmetric matrix in upper banded storage."""
-    y = ab[u] * z
-    for d in range(1, u + 1):
-        diag = ab[u - d, d:]
-        y[:-d] += diag * z[d:]
-        y[d:] += diag * z[:-d]
-    return y
-
-
-def _solve_block(x, phase, knot_weights, p, m, trend):
-    """Solve one block; ``knot_weights``: (n_coef - p, K [+1]) r² per difference row."""
-    from scipy.linalg import cho_solve_banded, cholesky_banded
-
-    n, k = phase.shape
-    cols = 2 * k + (1 if trend else 0)
-    basis = np.empty((n, cols))
-    basis[:, 0:2 * k:2] = np.cos(phase)
-    basis[:, 1:2 * k:2] = -np.sin(phase)
-    if trend:
-        basis[:, -1] = 1.0
-    q, w, n_coef = _spline_weights(n, m)
+def _solve_block(x, cosp, sinp, knot_weights, p, m, trend):
+    """Solve one block; ``knot_weights``: (n_coef - p, K [+1]) r² per difference row.
+    Returns (envelopes (n, K), trend (n,), model (n,))."""
+    n, k = cosp.shape
+    n_coef = n if m == 1 else (n - 1) // m + 4
     col_w = np.repeat(knot_weights[:, :k], 2, axis=1)
     if trend:
         col_w = np.concatenate([col_w, knot_weights[:, k:]], axis=1)
-    ab, rhs = _assemble(basis, x, q, w, n_coef, col_w, p)
-    u = ab.shape[0] - 1
-    # factor in LAPACK's lower band form (dpbtrf 'L'): same matrix, and OpenBLAS's threaded
-    # upper-form path can be ~100x slower on a busy machine
-    low = np.zeros_like(ab)
-    for d in range(u + 1):
-        low[d, : ab.shape[1] - d] = ab[u - d, d:]
+    band, rhs = _vkf_kernels.assemble(x, cosp, sinp, trend, m, n_coef, p, col_w)
     try:
-        factor = cholesky_banded(low, lower=True, check_finite=False)
-    except np.linalg.LinAlgError:
+        z = _vkf_kernels.solve(band, rhs)
+    except _vkf_kernels.NotPositiveDefinite:
         raise AnalysisError("Vold-Kalman system is not positive definite; the bandwidth is "
                             "too narrow for float64 at this sample rate (widen bandwidth)") from None
-    z = cho_solve_banded((factor, True), rhs, check_finite=False)
-    z += cho_solve_banded((factor, True), rhs - _banded_matvec(ab, z, u), check_finite=False)
-    coef = z.reshape(n_coef, cols)
-    cplx = coef[:, 0:2 * k:2] + 1j * coef[:, 1:2 * k:2]          # (n_coef, K)
-    env = np.zeros((n, k), dtype=complex)
-    mean = np.zeros(n)
-    for a in range(w.shape[1]):
-        env += w[:, a:a + 1] * cplx[q + a]
-        if trend:
-            mean += w[:, a] * coef[q + a, -1]
-    model = np.real(env * np.exp(1j * phase)).sum(axis=1) + mean
-    return env, mean, model
+    return _vkf_kernels.envelopes(z.reshape(n_coef, -1), cosp, sinp, m, trend)
 
 
 def _bandwidths(bandwidth_hz, bandwidth_orders, orders, speeds, n):
@@ -354,7 +278,6 @@ def _bandwidths(bandwidth_hz, bandwidth_orders, orders, speeds, n):
 
 
 @renamed(rpm="speed_rpm")
-@single_threaded_blas  # banded solves per block: BLAS threads only cost (issue 21)
 def vold_kalman(x, *, fs=None, speed_rpm, orders, bandwidth_hz=None, bandwidth_orders=None,
                 filter_order: int = 2, decimate: bool = True, block: int = 1 << 15,
                 knots_per_bandwidth: float | None = 40.0, shaft_angle=None,
@@ -424,6 +347,43 @@ def vold_kalman(x, *, fs=None, speed_rpm, orders, bandwidth_hz=None, bandwidth_o
     >>> np.round(amp.mean("time").values, 4), round(float(res["mean"].mean()), 4)
     (array([1. , 0.2]), 5.0)
     """
+    res = _vold_kalman_arrays(x, fs=fs, speed_rpm=speed_rpm, orders=orders,
+                              bandwidth_hz=bandwidth_hz, bandwidth_orders=bandwidth_orders,
+                              filter_order=filter_order, decimate=decimate, block=block,
+                              knots_per_bandwidth=knots_per_bandwidth, shaft_angle=shaft_angle,
+                              trend=trend)
+    import xarray as xr
+
+    units = res["units"]
+    env = res["envelope"]
+    recon = env.real * res["cos"] - env.imag * res["sin"]
+    ds = xr.Dataset(
+        {"envelope": (("order", "time"), env.T, {"units": units, "long_name":
+                                                  "complex envelope A of Re{A exp(i o phi)}"}),
+         "reconstruction": (("order", "time"), recon.T, {"units": units}),
+         "mean": (("time",), res["mean"], {"units": units, "long_name":
+                                           "order 0: trend envelope (the channel's mean)"}),
+         "residual": (("time",), res["residual"], {"units": units}),
+         "amplitude_noise": (("order", "time"), res["noise"].T, {"units": units, "long_name":
+                                                                 "1-sigma amplitude noise"}),
+         "amplitude_uncertainty": (("order", "time"), res["uncertainty"].T,
+                                   {"units": units, "long_name": "1-sigma amplitude noise and "
+                                    "estimated envelope smearing"})},
+        coords={"order": ("order", res["orders"], {"units": "1"}),
+                "time": ("time", res["time"], {"units": "s"}),
+                "rpm": ("time", res["rpm"], {"units": "rpm"})},
+        attrs=res["attrs"])
+    return ds
+
+
+@single_threaded_blas  # the numpy forms' banded solves per block: BLAS threads only cost
+def _vold_kalman_arrays(x, *, fs, speed_rpm, orders, bandwidth_hz, bandwidth_orders,
+                        filter_order, decimate=True, block=1 << 15, knots_per_bandwidth=40.0,
+                        shaft_angle=None, trend=True, angle_checked=False):
+    """:func:`vold_kalman` as plain arrays (dict): ``envelope`` (N, K) complex, ``mean``,
+    ``residual``, ``noise`` and ``uncertainty`` (N, K), ``time``, ``rpm``, ``orders``, the
+    basis ``cos``/``sin`` (N, K) of ``o_k φ``, ``units``, ``label`` and the Dataset's
+    ``attrs``. ``angle_checked``: ``shaft_angle`` was validated by the caller."""
     values, fs, units, label = _as_signal(x, fs)
     n = values.shape[0]
     orders = np.atleast_1d(np.asarray(orders, dtype=float))
@@ -444,7 +404,10 @@ def vold_kalman(x, *, fs=None, speed_rpm, orders, bandwidth_hz=None, bandwidth_o
     else:
         single = _as_rpm(speed_rpm, n, fs)
         speeds = None
-        angle = _as_angle(shaft_angle, n)
+        if angle_checked and shaft_angle is not None:
+            angle = np.asarray(shaft_angle, dtype=float)
+        else:
+            angle = _as_angle(shaft_angle, n)
         if angle is None and hasattr(speed_rpm, "coords") and "shaft_angle" in speed_rpm.coords:
             angle = _as_angle(speed_rpm.coords["shaft_angle"].values, n)
     speed_at = (lambda i: single if i is None else single[i]) if speeds is None else None
@@ -469,6 +432,7 @@ def vold_kalman(x, *, fs=None, speed_rpm, orders, bandwidth_hz=None, bandwidth_o
         phase = np.stack([_integrate_speed(s, fs)[index] for s in speeds], axis=1) * orders
         rpm_d = speeds[0, index]
         low_speed = float(speeds[:, index].min())
+    cosp, sinp = np.cos(phase), np.sin(phase)
     bw_d = bw_at(index)                                        # (Nd, K)
     if (bw_d >= fs_d).any():
         raise AnalysisError(f"bandwidth up to {bw_d.max():.6g} Hz is too wide for the solve rate "
@@ -502,46 +466,30 @@ def vold_kalman(x, *, fs=None, speed_rpm, orders, bandwidth_hz=None, bandwidth_o
         at_knots = np.clip(a + (np.arange(n_coef - p) + 0.5 * p - (0 if m == 1 else 1)) * m,
                            a, b - 1).astype(np.int64)
         r2 = vkf_weight(bw_all[at_knots], fs_d, p) ** 2 * float(m) ** (1 - 2 * p)
-        e, mn, mdl = _solve_block(xd[a:b], phase[a:b], r2, p, m, trend)
+        e, mn, mdl = _solve_block(xd[a:b], cosp[a:b], sinp[a:b], r2, p, m, trend)
         env[start:stop] = e[start - a: stop - a]
         mean[start:stop] = mn[start - a: stop - a]
         model[start:stop] = mdl[start - a: stop - a]
     residual = xd - model
     noise, smear = _uncertainty(env, residual, fs_d, orders, rpm_d if speeds is None
                                 else speeds[:, index].T, bw_d, p, f_max)
-    t = index / fs
-    import xarray as xr
-
-    recon = np.real(env * np.exp(1j * phase)).T
     std = np.sqrt(np.mean(noise ** 2, axis=0))
-    ds = xr.Dataset(
-        {"envelope": (("order", "time"), env.T, {"units": units, "long_name":
-                                                  "complex envelope A of Re{A exp(i o phi)}"}),
-         "reconstruction": (("order", "time"), recon, {"units": units}),
-         "mean": (("time",), mean, {"units": units, "long_name":
-                                    "order 0: trend envelope (the channel's mean)"}),
-         "residual": (("time",), residual, {"units": units}),
-         "amplitude_noise": (("order", "time"), noise.T, {"units": units, "long_name":
-                                                          "1-sigma amplitude noise"}),
-         "amplitude_uncertainty": (("order", "time"), np.hypot(noise, smear).T,
-                                   {"units": units, "long_name": "1-sigma amplitude noise and "
-                                    "estimated envelope smearing"})},
-        coords={"order": ("order", orders, {"units": "1"}),
-                "time": ("time", t, {"units": "s"}),
-                "rpm": ("time", rpm_d, {"units": "rpm"})},
-        attrs={"method": "Vold-Kalman filter (joint with an order-0 trend, banded Cholesky)"
-                         if trend else "Vold-Kalman filter (joint, banded Cholesky)",
-               "channel": label, "bandwidth": kind, "filter_order": p,
-               "bandwidth_hz_min": float(np.min(bw_low)), "bandwidth_hz_max": float(np.max(bw_top)),
-               "trend_bandwidth_hz": b_trend if trend else float("nan"),
-               "solve_rate_hz": fs_d, "decimation": int(round(fs / fs_d)),
-               "block_samples": block, "overlap_samples": overlap, "knot_spacing_samples": m,
-               "amplitude_std_estimate": std.tolist(),
-               "error_note": "amplitude_uncertainty = noise sqrt(N0*ENBW) and the smearing of "
-                             "the envelope estimated from its second derivative "
-                             f"(K_p/(pi T B)^(2p), K_p = {smearing_constant(p):.4g})"})
+    attrs = {"method": "Vold-Kalman filter (joint with an order-0 trend, banded Cholesky)"
+                       if trend else "Vold-Kalman filter (joint, banded Cholesky)",
+             "channel": label, "bandwidth": kind, "filter_order": p,
+             "bandwidth_hz_min": float(np.min(bw_low)), "bandwidth_hz_max": float(np.max(bw_top)),
+             "trend_bandwidth_hz": b_trend if trend else float("nan"),
+             "solve_rate_hz": fs_d, "decimation": int(round(fs / fs_d)),
+             "block_samples": block, "overlap_samples": overlap, "knot_spacing_samples": m,
+             "amplitude_std_estimate": std.tolist(),
+             "error_note": "amplitude_uncertainty = noise sqrt(N0*ENBW) and the smearing of "
+                           "the envelope estimated from its second derivative "
+                           f"(K_p/(pi T B)^(2p), K_p = {smearing_constant(p):.4g})"}
     log.debug("vold_kalman %s: %d orders, %d samples at %.6g Hz", label, k, nd, fs_d)
-    return ds
+    return {"envelope": env, "mean": mean, "residual": residual, "noise": noise,
+            "uncertainty": np.hypot(noise, smear), "time": index / fs, "rpm": rpm_d,
+            "orders": orders, "cos": cosp, "sin": sinp, "units": units, "label": label,
+            "attrs": attrs}
 
 
 def _uncertainty(env, residual, fs_d, orders, rpm_d, bw_d, p, f_pass):
@@ -568,17 +516,20 @@ def _uncertainty(env, residual, fs_d, orders, rpm_d, bw_d, p, f_pass):
     d2[0], d2[-1] = d2[1], d2[-2]
     # noise part of |A''|²: N0 ∫ (2 sin(πν/fs)·fs)^4 |H(ν)|² dν over the solve band
     nu = np.linspace(-0.5 * fs_d, 0.5 * fs_d, 4097)
-    gain4 = (2.0 * np.sin(np.pi * nu / fs_d) * fs_d) ** 4
+    d2nu = (2.0 * np.sin(np.pi * nu / fs_d)) ** 2          # (2 sin(πν/fs))², once for all orders
+    gain4 = d2nu * d2nu * fs_d ** 4
+    d2p = d2nu if p == 1 else d2nu * d2nu                  # (2 sin(πν/fs))^{2p}
     out = np.zeros_like(noise)
     amp = np.abs(env)
+    b_med = np.median(bw_d, axis=0)
     for j in range(k):
         bw = bw_d[:, j]
         # the integral scales as B^5 for p = 2 (B^3 for p = 1 within the band): evaluate at the
         # median bandwidth and scale
-        b0 = float(np.median(bw))
+        b0 = float(b_med[j])
         r = vkf_weight(b0, fs_d, p)
-        h2 = (1.0 / (1.0 + 2.0 * r ** 2 * (2.0 * np.sin(np.pi * nu / fs_d)) ** (2 * p))) ** 2
-        per_n0 = np.trapezoid(gain4 * h2, nu) * (bw / b0) ** (5 if p == 2 else 4)
+        h = 1.0 / (1.0 + 2.0 * r ** 2 * d2p)
+        per_n0 = np.trapezoid(gain4 * h * h, nu) * (bw / b0) ** (5 if p == 2 else 4)
         # |A''|² averaged over the filter's response time, less ten times its expected
         # noise part (E|A''_noise|² = 2 N0 ∫ D⁴|H|²): only curvature well above the noise
         # counts (noise alone would otherwise read as smearing that grows with B)
@@ -608,19 +559,15 @@ def _local_noise(residual, fs_d, f_ord, bw_d, f_pass):
     centre = starts + 0.5 * frames.shape[1]
     flat = (freq > 0) & (freq <= f_pass)
     out = np.empty((nd, k))
+    b_med = np.median(bw_d, axis=0)
     for j in range(k):
-        b = float(np.median(bw_d[:, j]))
+        b = float(b_med[j])
         reach = max(8.0 * b, 20.0 * df)
-        level = np.empty(starts.shape[0])
         f_frame = np.interp(centre, np.arange(nd), f_ord[:, j])
-        for i, f0 in enumerate(f_frame):
-            near = flat & (np.abs(freq - f0) <= reach) & (np.abs(freq - f0) > 2.0 * b)
-            if near.sum() < 5:
-                near = flat
-            # lower quartile of an exponential variable: ln(4/3) of its mean (robust to up to
-            # three quarters of the bins holding lines of orders not tracked)
-            level[i] = (float(np.percentile(spec[i, near], 25.0)) / np.log(4.0 / 3.0)
-                        if near.any() else 0.0)
+        # lower quartile of an exponential variable: ln(4/3) of its mean (robust to up to
+        # three quarters of the bins holding lines of orders not tracked)
+        level = _vkf_kernels.lower_quartiles(spec, freq, flat, f_frame, reach,
+                                             2.0 * b) / np.log(4.0 / 3.0)
         out[:, j] = np.interp(np.arange(nd), centre, level)
     return out
 
