@@ -14,7 +14,8 @@ passes and library calls:
   of iterative refinement (twin: LAPACK ``dpbtrf``/``dpbtrs`` through SciPy, one BLAS thread);
 * :func:`envelopes` — the complex envelopes, the trend and the model at every sample;
 * :func:`lower_quartiles` — the lower quartile of the residual's spectrum beside each order
-  (twin: ``np.percentile`` frame by frame).
+  (twin: ``np.percentile`` frame by frame);
+* :func:`smearing` — the envelope-smearing estimate from the envelopes' second differences.
 
 Matrix storage: a symmetric band matrix of half-bandwidth ``u`` is held by columns,
 ``band[j, d] = A[j + d, j]`` for ``0 ≤ d ≤ u`` (the transpose of LAPACK's lower band form), so
@@ -31,7 +32,7 @@ import functools
 import numpy as np
 
 __all__ = ["accelerated", "fir_decimate", "assemble", "solve", "envelopes",
-           "lower_quartiles", "NotPositiveDefinite"]
+           "lower_quartiles", "smearing", "NotPositiveDefinite"]
 
 _DIFF = {1: np.array([-1.0, 1.0]), 2: np.array([1.0, -2.0, 1.0])}
 
@@ -100,13 +101,26 @@ def _numba():
         rsum = np.zeros((s, cols))
         b = np.empty(cols)
         prod = np.empty(npair)
+        # the knots are uniform: every interval has the first one's weight pattern (as the
+        # numpy form)
         w = np.ones(4)
-        ww = np.empty(nslot)
+        wpat = np.ones((min(m, n), nslot))
+        wv = np.ones((min(m, n), s))
+        if s > 1:
+            for t in range(min(m, n)):
+                spline_w(t, m, w)
+                idx = 0
+                for a in range(s):
+                    wv[t, a] = w[a]
+                    for c in range(a, s):
+                        wpat[t, idx] = w[a] * w[c]
+                        idx += 1
         groups = (n - 1) // m + 1
         for g in range(groups):
             sums[:, :] = 0.0
             rsum[:, :] = 0.0
             for i in range(g * m, min(n, g * m + m)):
+                t = i - g * m
                 for j in range(k):
                     b[2 * j] = cosp[i, j]
                     b[2 * j + 1] = -sinp[i, j]
@@ -114,23 +128,17 @@ def _numba():
                     b[cols - 1] = 1.0
                 idx = 0
                 for j in range(cols):
+                    bj = b[j]
                     for jj in range(j, cols):
-                        prod[idx] = b[j] * b[jj]
-                        idx += 1
-                if s > 1:
-                    spline_w(i, m, w)
-                idx = 0
-                for a in range(s):
-                    for c in range(a, s):
-                        ww[idx] = w[a] * w[c]
+                        prod[idx] = bj * b[jj]
                         idx += 1
                 for ab in range(nslot):
-                    wab = ww[ab]
-                    for t in range(npair):
-                        sums[ab, t] += wab * prod[t]
+                    wab = wpat[t, ab]
+                    for e in range(npair):
+                        sums[ab, e] += wab * prod[e]
                 xi = x[i]
                 for a in range(s):
-                    wa = w[a] * xi
+                    wa = wv[t, a] * xi
                     for j in range(cols):
                         rsum[a, j] += wa * b[j]
             # scatter the interval's sums: A[J, I] (J >= I) at band[I, J - I]
@@ -286,8 +294,46 @@ def _numba():
             level[i] = v[lo] + (v[hi] - v[lo]) * frac
         return level
 
+    @njit(cache=True)
+    def smearing(env, n0, bw_d, per_n0, b_med, span, p, kp, fs_d):  # pragma: no cover
+        n, k = env.shape
+        out = np.zeros((n, k))
+        a2 = np.empty(n)
+        x2 = np.empty(n)
+        c = np.empty(n + 1)
+        expo = 5 if p == 2 else 4
+        fs2 = fs_d * fs_d
+        for j in range(k):
+            # |A''|² by central differences (ends: their neighbours'), cumulated
+            c[0] = 0.0
+            for i in range(n):
+                ii = min(max(i, 1), n - 2)
+                d = (env[ii + 1, j] - 2.0 * env[ii, j] + env[ii - 1, j]) * fs2
+                x2[i] = d.real * d.real + d.imag * d.imag
+                c[i + 1] = c[i] + x2[i]
+            length = span[j]
+            if length <= 1 or n <= length:
+                a2[:] = x2
+            else:
+                pad = (length - 1) // 2
+                n_mid = n - length + 1
+                for i in range(n):
+                    t = min(max(i - pad, 0), n_mid - 1)
+                    a2[i] = (c[t + length] - c[t]) / length
+            for i in range(n):
+                bw = bw_d[i, j]
+                rel = bw / b_med[j]
+                val = a2[i] - 20.0 * n0[i, j] * per_n0[j] * rel ** expo
+                amp = abs(env[i, j])
+                if val <= 0.0:
+                    continue
+                ratio = np.sqrt(val) / max(amp, 1e-300)
+                loss = kp * (ratio / 8.0) ** p / (np.pi * bw) ** (2 * p)
+                out[i, j] = min(loss, 1.0) * amp
+        return out
+
     return {"fir": fir, "assemble": assemble, "solve": solve, "envelopes": envelopes,
-            "quartiles": quartiles}
+            "quartiles": quartiles, "smearing": smearing}
 
 
 def accelerated() -> bool:
@@ -534,3 +580,44 @@ def lower_quartiles(spec, freq, flat, f_frame, reach: float, notch: float) -> np
         if near.any():
             level[i] = float(np.percentile(spec[i, near], 25.0))
     return level
+
+
+# ---------------------------------------------------------------------------- smearing
+
+
+def smearing(env, n0, bw_d, per_n0, b_med, span, p: int, kp: float, fs_d: float):
+    """Smearing bias (N, K) of each envelope: ``min(K_p (|A''|/(8|A|))^p/(πB)^{2p}, 1)·|A|``
+    with ``|A''|²`` (central differences) averaged over ``span[j]`` samples, less ten times its
+    expected noise part ``2 n0 · per_n0[j] (B/b_med[j])^{5 (p = 2) or 4}``.
+    See :func:`analysis.vkf._uncertainty`."""
+    kernels = _numba()
+    if kernels is not None:
+        return kernels["smearing"](np.ascontiguousarray(env), np.ascontiguousarray(n0),
+                                   np.ascontiguousarray(bw_d, dtype=float),
+                                   np.asarray(per_n0, float), np.asarray(b_med, float),
+                                   np.asarray(span, np.int64), int(p), float(kp), float(fs_d))
+    n, k = env.shape
+    d2 = np.zeros_like(env)
+    d2[1:-1] = (env[2:] - 2.0 * env[1:-1] + env[:-2]) * fs_d ** 2
+    d2[0], d2[-1] = d2[1], d2[-2]
+    out = np.zeros((n, k))
+    amp = np.abs(env)
+    for j in range(k):
+        bw = bw_d[:, j]
+        noise2 = 20.0 * n0[:, j] * per_n0[j] * (bw / b_med[j]) ** (5 if p == 2 else 4)
+        a2 = np.maximum(_moving_mean(np.abs(d2[:, j]) ** 2, int(span[j])) - noise2, 0.0)
+        ratio = np.sqrt(a2) / np.maximum(amp[:, j], 1e-300)
+        loss = kp * (ratio / 8.0) ** p / (np.pi * bw) ** (2 * p)
+        out[:, j] = np.minimum(loss, 1.0) * amp[:, j]
+    return out
+
+
+def _moving_mean(x, length):
+    """Centred moving mean over ``length`` samples (the ends hold the first/last full mean)."""
+    if length <= 1 or x.shape[0] <= length:
+        return x
+    c = np.concatenate([[0.0], np.cumsum(x)])
+    out = (c[length:] - c[:-length]) / length
+    pad_a = (length - 1) // 2
+    return np.concatenate([np.full(pad_a, out[0]), out,
+                           np.full(x.shape[0] - out.shape[0] - pad_a, out[-1])])

@@ -494,7 +494,7 @@ def _vkf_track(context, orders, *, bandwidth_hz, bandwidth_orders, filter_order)
     res = _vold_kalman_arrays(context["values"], fs=context["fs"], speed_rpm=context["speed"],
                               orders=orders, bandwidth_hz=bandwidth_hz,
                               bandwidth_orders=bandwidth_orders, filter_order=filter_order,
-                              shaft_angle=context["phi"], angle_checked=True)
+                              shaft_angle=context["phi"], checked=True)
     return _vkf_dataset(res, context, orders)
 
 

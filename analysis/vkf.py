@@ -146,15 +146,16 @@ def smearing_constant(filter_order: int) -> float:
     return float(c * 2.0 ** (2 * filter_order) * math.factorial(2 * filter_order))
 
 
-#: Kaiser design of each decimation stage: 106 dB, i.e. ripple δ = 5e-6 in its pass band and
-#: stop band, so a cascade of two stages is flat to 1e-5 (the one-stage 100 dB figure)
-_DECIMATION_DB = 106.0
+#: Kaiser design of each decimation stage (dB): ripple ≈ 2.5e-6 in its pass and stop bands by
+#: Kaiser's formula, raised where the cascade's computed pass band is not flat to 1e-5 (short
+#: stages miss the formula)
+_DECIMATION_DB = 112.0
 
 
-def _kaiser_lowpass(f_pass: float, f_stop: float, fs: float) -> np.ndarray:
+def _kaiser_lowpass(f_pass: float, f_stop: float, fs: float, db: float) -> np.ndarray:
     """Symmetric odd-length Kaiser-windowed ideal low-pass (cut-off midway between ``f_pass``
-    and ``f_stop``; β and length from Kaiser's formulas for ``_DECIMATION_DB``), unit DC gain."""
-    beta = 0.1102 * (_DECIMATION_DB - 8.7)
+    and ``f_stop``; β and length from Kaiser's formulas for ``db``), unit DC gain."""
+    beta = 0.1102 * (db - 8.7)
     half = int(math.ceil(beta / (np.pi * (f_stop - f_pass)) * fs))
     f_cut = 0.5 * (f_pass + f_stop)
     n = np.arange(-half, half + 1)
@@ -165,56 +166,51 @@ def _kaiser_lowpass(f_pass: float, f_stop: float, fs: float) -> np.ndarray:
 @functools.lru_cache(maxsize=64)
 def _decimator(fs: float, f_max: float, q: int):
     """Stages ``((q_s, h_s), …)`` of an FIR cascade decimating by ``q`` that keeps
-    ``[0, f_max]`` flat (|H − 1| ≤ 1e-5) and attenuates by ≥ 106 dB all that would alias into
-    the output band ``[0, fs/(2q)]``: stage ``s`` (output rate ``f_s``) stops from
-    ``f_s − fs/(2q)`` (what lies between its pass and stop edges folds above ``fs/(2q)`` and is
-    removed by the next stage). Of the orderings of the factorisations of ``q`` into ≤ 3
-    factors, the one with the fewest multiply-adds per input sample."""
+    ``[0, f_max]`` flat (|H − 1| ≤ 1e-5, checked on the designed taps) and attenuates by
+    ≥ 100 dB all that would alias into the output band ``[0, fs/(2q)]``: stage ``s`` (output
+    rate ``f_s``) stops from ``f_s − fs/(2q)`` (what lies between its pass and stop edges
+    folds above ``fs/(2q)`` and is removed by the next stage). Of ``q`` itself and its
+    two-factor splits, the one with the fewest multiply-adds per input sample."""
     fs_out = fs / q
+    probe = np.linspace(0.0, f_max, 1025)
     best = None
-    for factors in _factorisations(q):
-        rate, cost, stages = fs, 0.0, []
-        for qs in factors:
-            rate /= qs
-            h = _kaiser_lowpass(f_max, rate - 0.5 * fs_out, rate * qs)
-            cost += h.shape[0] * rate / fs           # multiply-adds per input sample
-            stages.append((qs, h))
+    for factors in [(q,)] + [(a, q // a) for a in range(2, q) if q % a == 0]:
+        db = _DECIMATION_DB
+        while True:
+            rate, cost, stages, gain = fs, 0.0, [], np.ones_like(probe)
+            for qs in factors:
+                rate /= qs
+                h = _kaiser_lowpass(f_max, rate - 0.5 * fs_out, rate * qs, db)
+                n = np.arange(h.shape[0]) - h.shape[0] // 2
+                gain *= np.cos(2.0 * np.pi * np.outer(probe, n) / (rate * qs)) @ h
+                cost += h.shape[0] * rate / fs           # multiply-adds per input sample
+                stages.append((qs, h))
+            if np.abs(gain - 1.0).max() <= 1e-5 or db > _DECIMATION_DB + 20:
+                break
+            db += 6.0
         if best is None or cost < best[0]:
             best = (cost, tuple(stages))
     return best[1]
 
 
-def _factorisations(q: int):
-    """Ordered factorisations of ``q`` into one, two or three factors ≥ 2."""
-    out = [(q,)]
-    for a in range(2, q):
-        if q % a:
-            continue
-        b = q // a
-        out.append((a, b))
-        for c in range(2, b):
-            if b % c == 0:
-                out.append((a, c, b // c))
-    return out
-
-
 def _decimate(values: np.ndarray, fs: float, f_max: float):
     """Low-pass and decimate by ``q = floor(fs/(4 f_max))`` with the FIR cascade of
     :func:`_decimator` (zero phase: each output is centred on an input sample; pass band flat
-    to 1e-5, ≥ 106 dB stop band; polyphase, so the work is the taps per *output* sample).
+    to 1e-5, aliases ≥ 100 dB down; polyphase, so the work is the taps per *output* sample).
 
     Returns (decimated values, input index of each output sample, new rate); the record ends
     that the filters do not cover fully are dropped."""
     q = int(max(1, math.floor(fs / (4.0 * f_max))))
     if q == 1:
         return values, np.arange(values.shape[0]), fs
-    stages = _decimator(float(fs), float(f_max), q)
-    reach, step = 0, 1                       # half-length of the cascade, in input samples
-    for qs, h in stages:
-        reach += step * (h.shape[0] // 2)
-        step *= qs
-    if values.shape[0] <= 2 * reach + 4 * q:
+    # records shorter than a one-stage filter are solved at their own rate (checked before any
+    # design: an extremely low speed asks for a huge q)
+    from .resample import _aa_half_length
+
+    half = int(math.ceil(_aa_half_length(f_max, 0.5 * fs / q) * fs)) + 1
+    if values.shape[0] <= 2 * half + 4 * q:
         return values, np.arange(values.shape[0]), fs
+    stages = _decimator(float(fs), float(f_max), q)
     y, offset, step = values, 0, 1           # y[l] is centred on input offset + step·l
     for qs, h in stages:
         half = h.shape[0] // 2
@@ -379,12 +375,16 @@ def vold_kalman(x, *, fs=None, speed_rpm, orders, bandwidth_hz=None, bandwidth_o
 @single_threaded_blas  # the numpy forms' banded solves per block: BLAS threads only cost
 def _vold_kalman_arrays(x, *, fs, speed_rpm, orders, bandwidth_hz, bandwidth_orders,
                         filter_order, decimate=True, block=1 << 15, knots_per_bandwidth=40.0,
-                        shaft_angle=None, trend=True, angle_checked=False):
+                        shaft_angle=None, trend=True, checked=False):
     """:func:`vold_kalman` as plain arrays (dict): ``envelope`` (N, K) complex, ``mean``,
     ``residual``, ``noise`` and ``uncertainty`` (N, K), ``time``, ``rpm``, ``orders``, the
     basis ``cos``/``sin`` (N, K) of ``o_k φ``, ``units``, ``label`` and the Dataset's
-    ``attrs``. ``angle_checked``: ``shaft_angle`` was validated by the caller."""
-    values, fs, units, label = _as_signal(x, fs)
+    ``attrs``. ``checked``: the caller has validated ``x`` (float array), ``fs``, a 1-D
+    ``speed_rpm`` and ``shaft_angle`` (``order_track`` has)."""
+    if checked:
+        values, units, label = np.asarray(x, dtype=float), "", "x"
+    else:
+        values, fs, units, label = _as_signal(x, fs)
     n = values.shape[0]
     orders = np.atleast_1d(np.asarray(orders, dtype=float))
     if orders.ndim != 1 or orders.size == 0 or not np.all(np.isfinite(orders)) or (orders <= 0).any():
@@ -402,11 +402,12 @@ def _vold_kalman_arrays(x, *, fs, speed_rpm, orders, bandwidth_hz, bandwidth_ord
         speeds = np.stack([_as_rpm(r, n, fs) for r in rpm_arr])
         single = None
     else:
-        single = _as_rpm(speed_rpm, n, fs)
         speeds = None
-        if angle_checked and shaft_angle is not None:
-            angle = np.asarray(shaft_angle, dtype=float)
+        if checked:
+            single = rpm_arr
+            angle = None if shaft_angle is None else np.asarray(shaft_angle, dtype=float)
         else:
+            single = _as_rpm(speed_rpm, n, fs)
             angle = _as_angle(shaft_angle, n)
         if angle is None and hasattr(speed_rpm, "coords") and "shaft_angle" in speed_rpm.coords:
             angle = _as_angle(speed_rpm.coords["shaft_angle"].values, n)
@@ -510,36 +511,25 @@ def _uncertainty(env, residual, fs_d, orders, rpm_d, bw_d, p, f_pass):
     noise = np.sqrt(n0 * enbw_hz(bw_d, p))
     if nd < 8:
         return noise, np.zeros_like(noise)
-    dt = 1.0 / fs_d
-    d2 = np.zeros_like(env)
-    d2[1:-1] = (env[2:] - 2.0 * env[1:-1] + env[:-2]) / dt ** 2
-    d2[0], d2[-1] = d2[1], d2[-2]
     # noise part of |A''|²: N0 ∫ (2 sin(πν/fs)·fs)^4 |H(ν)|² dν over the solve band
     nu = np.linspace(-0.5 * fs_d, 0.5 * fs_d, 4097)
     d2nu = (2.0 * np.sin(np.pi * nu / fs_d)) ** 2          # (2 sin(πν/fs))², once for all orders
     gain4 = d2nu * d2nu * fs_d ** 4
     d2p = d2nu if p == 1 else d2nu * d2nu                  # (2 sin(πν/fs))^{2p}
-    out = np.zeros_like(noise)
-    amp = np.abs(env)
     b_med = np.median(bw_d, axis=0)
+    per_n0 = np.empty(k)
+    span = np.empty(k, np.int64)
     for j in range(k):
-        bw = bw_d[:, j]
         # the integral scales as B^5 for p = 2 (B^3 for p = 1 within the band): evaluate at the
         # median bandwidth and scale
-        b0 = float(b_med[j])
-        r = vkf_weight(b0, fs_d, p)
-        h = 1.0 / (1.0 + 2.0 * r ** 2 * d2p)
-        per_n0 = np.trapezoid(gain4 * h * h, nu) * (bw / b0) ** (5 if p == 2 else 4)
-        # |A''|² averaged over the filter's response time, less ten times its expected
+        h = 1.0 / (1.0 + 2.0 * vkf_weight(float(b_med[j]), fs_d, p) ** 2 * d2p)
+        per_n0[j] = np.trapezoid(gain4 * h * h, nu)
+        # |A''|² is averaged over the filter's response time, less ten times its expected
         # noise part (E|A''_noise|² = 2 N0 ∫ D⁴|H|²): only curvature well above the noise
         # counts (noise alone would otherwise read as smearing that grows with B)
-        span = max(1, int(round(fs_d / (2.0 * bw.min()))))
-        a2 = _moving_mean(np.abs(d2[:, j]) ** 2, span) - 10.0 * 2.0 * n0[:, j] * per_n0
-        a2 = np.maximum(a2, 0.0)
-        ratio = np.sqrt(a2) / np.maximum(amp[:, j], 1e-300)
-        loss = smearing_constant(p) * (ratio / 8.0) ** p / (np.pi * bw) ** (2 * p)
-        out[:, j] = np.minimum(loss, 1.0) * amp[:, j]
-    return noise, out
+        span[j] = max(1, int(round(fs_d / (2.0 * bw_d[:, j].min()))))
+    return noise, _vkf_kernels.smearing(env, n0, bw_d, per_n0, b_med, span, p,
+                                        smearing_constant(p), fs_d)
 
 
 def _local_noise(residual, fs_d, f_ord, bw_d, f_pass):
@@ -570,13 +560,3 @@ def _local_noise(residual, fs_d, f_ord, bw_d, f_pass):
                                              2.0 * b) / np.log(4.0 / 3.0)
         out[:, j] = np.interp(np.arange(nd), centre, level)
     return out
-
-
-def _moving_mean(x, length):
-    if length <= 1 or x.shape[0] <= length:
-        return x
-    c = np.concatenate([[0.0], np.cumsum(x)])
-    out = (c[length:] - c[:-length]) / length
-    pad_a = (length - 1) // 2
-    return np.concatenate([np.full(pad_a, out[0]), out,
-                           np.full(x.shape[0] - out.shape[0] - pad_a, out[-1])])
