@@ -143,7 +143,10 @@ def place_sensors(record, mounted, *, channels=None):
         if pos is None:
             skipped.append((name, "no sensor position: give the channel attr 'position' = "
                                   "[x, y, z] (m, engine frame) or a 'location' naming a mount "
-                                  f"({', '.join(m.name for m in mounted.mounts)})"))
+                                  f"({', '.join(m.name for m in mounted.mounts)}); for a "
+                                  f"text or raw export, in a channel map: [channel.{name}] "
+                                  "position = [x, y, z] or mount = \"...\", direction = "
+                                  "\"z\" (--map MAP.toml)"))
             continue
         raw = var.attrs.get("direction")
         if raw is None or (isinstance(raw, str) and not raw.strip()):

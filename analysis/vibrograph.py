@@ -341,7 +341,7 @@ def _measured_excitation(rec, engine, indicator, orders, load):
 def compare_vibrograph(record, model, *, load=None, speed_channel=None, orders=None,
                        max_order=12.0, tolerance=0.5, revolutions=8, significant_fraction=0.02,
                        min_snr=10.0, channels=None, residual_orders=None, speed_rpm=None,
-                       indicator="auto", progress=None) -> VibrographResult:
+                       indicator="auto", channel_map=None, progress=None) -> VibrographResult:
     """Compare a record's vibrograph channels with the engine model on its mounts.
 
     Parameters
@@ -381,6 +381,9 @@ def compare_vibrograph(record, model, *, load=None, speed_channel=None, orders=N
         has ``predicted_measured_excitation`` and ``ratio_measured_excitation`` (measured
         peak over that prediction's peak, same speeds) beside ``predicted``; the verdicts
         stay on the model's prediction.
+    channel_map : path-like or ChannelMap, optional
+        How to read ``record`` when it is a path (columns, units, sensor placement of a text
+        or raw export: :func:`measure.read`'s ``map``).
     progress : callable, optional
 
     Returns
@@ -424,7 +427,7 @@ def compare_vibrograph(record, model, *, load=None, speed_channel=None, orders=N
             progress(name)
 
     step("read")
-    rec, source = _load_record(record)
+    rec, source = _load_record(record, channel_map)
     engine, mounted, spec, model_path = load_engine_model(model)
     if load is None:
         load = LoadCase.from_record(rec, engine)      # the load the record states, if any

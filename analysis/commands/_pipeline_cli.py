@@ -166,11 +166,29 @@ def options_from_args(args, record_path=None) -> dict:
                 vibration_tolerance=getattr(args, "vibration_tolerance", 0.5))
 
 
+#: options of the shaft-line comparison with their defaults; given with an engine model they
+#: have no effect, which is said rather than passed over
+_TORSIONAL_ONLY = {"method": "vkf", "bandwidth_orders": None, "gate": 0.15, "tolerance": 0.03}
+
+
 def vibrograph_options(options) -> dict:
     """The options of :func:`analysis.vibrograph.compare_vibrograph` among those of
-    :func:`options_from_args` (an engine model: no torsional channel, no criticals)."""
+    :func:`options_from_args` (an engine model: no torsional channel, no criticals). The
+    channel map reads the record; ``--channel`` selects the one vibrograph channel compared;
+    an option that only a shaft-line comparison uses is named in a warning, not dropped
+    silently."""
+    unused = [f"--{key.replace('_', '-')} {options[key]}" for key, default
+              in _TORSIONAL_ONLY.items() if options.get(key, default) != default]
+    unused += [f"--{key.replace('_', '-')} {options[key]}"
+               for key in ("machine_class", "vibration_standard") if options.get(key)]
+    if unused:
+        log.warning("%s: not used with an engine model (block/mount vibration per order is "
+                    "compared with a fixed %d-revolution order track, and no severity zone is "
+                    "judged); these apply to a shaft-line model", ", ".join(unused), 8)
+    channel = options.get("channel")
     return dict(load=options.get("load"), speed_channel=options.get("speed_channel"),
-                orders=options.get("orders"),
+                orders=options.get("orders"), channel_map=options.get("channel_map"),
+                channels=None if channel is None else [channel],
                 tolerance=options.get("vibration_tolerance", 0.5))
 
 

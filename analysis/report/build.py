@@ -171,6 +171,10 @@ def build_report(result, *, title=None, parameters=None, record_path=None, model
             "measured": f"{len(result.resonances)} resonances found; "
                         f"{len(result.comparison.matched)} matched to predicted criticals",
             "synthetic record": "yes" if rec.attrs.get("synthetic") else "no"}
+    read = "; ".join(str(rec.attrs[k]) for k in ("read_notes", "units_from_names")
+                     if rec.attrs.get(k))
+    if read:   # what reading the export changed or assumed: a signer must see it
+        meta["as read"] = read
     rep.add_metadata(meta)
     files = []
     rp = Path(record_path or result.source)

@@ -55,6 +55,25 @@ def suffix_unit(name):
     return tail if _lookup(tail) is not None else None
 
 
+#: column names that are themselves a speed unit (a rig's "RPM" column): taken as that unit
+_SPEED_NAMES = {"rpm", "1/min", "u/min", "r/min", "min-1", "min^-1"}
+
+
+def name_is_unit(name):
+    """The unit a column name *is* (``"RPM"`` -> ``"rpm"``), for rotational speed only, or None.
+
+    A rig's speed column is often headed just ``RPM``; other bare unit words (``"g"``,
+    ``"V"``) say nothing about what was measured and are not taken.
+
+    Examples
+    --------
+    >>> name_is_unit("RPM"), name_is_unit("U/min"), name_is_unit("g")
+    ('rpm', 'rpm', None)
+    """
+    key = str(name or "").strip().lower()
+    return "rpm" if key in _SPEED_NAMES else None
+
+
 def split_header(text):
     """``"p [bar]"`` or ``"p (bar)"`` -> ``("p", "bar")``; no unit -> ``(text, None)``.
 
@@ -314,40 +333,129 @@ def _time_from(table, index, unit, file, t):
         i = int(np.flatnonzero(~np.isfinite(t))[0])
         raise RecordError(f"{file}: time {table.label(index)} is empty or NaN/inf at data row "
                           f"{i + 1}; expected a time in every row")
-    return _unrounded(t, file, table.label(index))
+    return _unrounded(t, file, table.label(index), table)
 
 
-def _unrounded(t: np.ndarray, file, label) -> np.ndarray:
-    """A time column printed with fewer decimals than its sample interval needs (5 kHz as
-    ``%.3f``: steps of 0 and 1 ms) is a uniform clock rounded: rebuilt as the uniform grid it
-    rounds, with a warning, when every stamp is within half the rounding step of that grid;
-    any other irregular column is returned as read (the record's checks name its fault)."""
+def _printed_resolution(t: np.ndarray) -> tuple:
+    """The printed step of each stamp (s) under the two ways loggers print time: fixed decimals
+    (``%.3f``: one step for the column, ``10**-k`` with ``k`` the most decimals any stamp
+    needs) and significant digits (``%.6g``: ``9.99988`` then ``10.0001``, the step growing
+    tenfold at each power of ten, ``S`` = the most significant digits any stamp needs).
+    Returns ``(fixed, significant)``, each an array like ``t``."""
+    digits = np.full(t.size, 15, dtype=np.int64)
+    undecided = np.ones(t.size, bool)
+    for k in range(15):
+        scaled = t[undecided] * 10.0 ** k
+        exact = np.abs(scaled - np.rint(scaled)) <= 1e-6 + 1e-12 * np.abs(scaled)
+        idx = np.flatnonzero(undecided)[exact]
+        digits[idx] = k
+        undecided[idx] = False
+        if not undecided.any():
+            break
+    fixed = np.full(t.size, 10.0 ** -int(digits.max()))
+    nonzero = t != 0
+    exponent = np.zeros(t.size, dtype=np.int64)
+    exponent[nonzero] = np.floor(np.log10(np.abs(t[nonzero]))).astype(np.int64)
+    sig = int((digits + exponent + 1)[nonzero].max()) if nonzero.any() else 0
+    significant = np.where(nonzero, 10.0 ** (exponent + 1 - sig), fixed)
+    return fixed, significant
+
+
+def _unrounded(t: np.ndarray, file, label, table=None) -> np.ndarray:
+    """A time column printed with fewer decimals than its sample interval needs is a uniform
+    clock rounded: 5 kHz as ``%.3f`` (steps of 0 and 1 ms), or 8 kHz as ``%.6g`` (steps of
+    0.1 and 0.2 ms once the stamps pass 10 s). It is rebuilt as the uniform grid it rounds,
+    with a warning, when every stamp is within (0.6 ×) its printed resolution's half-step of
+    that grid; any other irregular column is returned as read (the record's checks name its
+    fault: a gap, jitter, a reversal)."""
     step = np.diff(t)
-    if t.size < 3 or np.all(step > 0) or np.any(step < 0):
+    if t.size < 3 or np.any(step < 0) or not np.all(np.isfinite(t)):
         return t
-    levels = np.unique(step[step > 0])
-    q = float(levels.min())                     # the printed resolution
     dt = (t[-1] - t[0]) / (t.size - 1)
-    if not (q > dt and np.allclose(levels / q, np.round(levels / q), rtol=0, atol=1e-6)):
+    if not dt > 0 or np.all(np.abs(step - dt) <= 1e-3 * dt):
         return t
+    fixed, significant = _printed_resolution(t)
     # least-squares clock through every stamp (the end points alone are off by up to q/2)
     i = np.arange(t.size, dtype=float)
     dt = np.polyfit(i, t - t[0], 1)[0]
     grid = i * dt
     r = t - t[0] - grid
     t0 = t[0] + 0.5 * float(r.max() + r.min())   # the offset with the smallest worst deviation
-    deviation = 0.5 * float(r.max() - r.min())
+    r = t - t0 - grid
     # the true clock is within q/2 of every stamp; the least-squares slope can be pulled a
     # little by how the exact half-step stamps happened to round: allow 0.6 q
-    if deviation > 0.6 * q:
+    # (+ 1e-4 of a sample interval: the fit's own slope and offset error, far below anything
+    # an analysis can see, where fine stamps near t = 0 are printed almost exactly)
+    q = next((q for q in (fixed, significant) if np.all(np.abs(r) <= 0.6 * q + 1e-4 * dt)),
+             None)
+    if q is None or not q.max() > 1e-3 * dt:   # printed finely: the clock itself is irregular
+        return t
+    # a clock whose interval is a whole number of printed steps prints uniformly: any
+    # irregular step there (a repeated stamp at 1 kHz printed to 1 ms) is the logger's own
+    odd = np.flatnonzero(np.abs(np.diff(t) - dt) > 1e-3 * dt)
+    ratio = dt / q[odd]
+    if np.any(np.abs(ratio - np.rint(ratio)) < 1e-3):
         return t
     import logging
 
-    logging.getLogger("crankbench").warning(
-        "%s: time %s is rounded to %.3g s, coarser than its %.3g s sample interval (repeated "
-        "stamps): rebuilt as a uniform %.6g Hz clock (every stamp within %.2g s of it, about "
-        "half the rounding step)", file, label, q, dt, 1.0 / dt, deviation)
+    note = (f"time {label} is rounded to {float(q.max()):.3g} s, and its {dt:.3g} s sample "
+            "interval is not a whole number of those steps (stamps irregular by their printed "
+            f"decimals): rebuilt as a uniform {1.0 / dt:.6g} Hz clock (every stamp within "
+            f"{float(np.abs(r).max()):.2g} s of it, about half the rounding step)")
+    logging.getLogger("crankbench").warning("%s: %s", file, note)
+    if table is not None:
+        read_note(table, note)
     return t0 + grid
+
+
+def last_row_cut(table, last_row: np.ndarray) -> bool:
+    """Whether a table's last row may have been cut mid-write: a logger stopped while writing
+    leaves a last line without its line break, with cells missing or a number cut short
+    (``76.5564`` written as ``7``) that no check can tell from a real value. Such a row is
+    dropped by the callers, with a warning and a ``read_notes`` entry; it costs one sample
+    of a complete file that merely lacks its final line break. A last line of text (a
+    footer) or one ending in a line break is kept whatever it holds."""
+    last_row = np.asarray(last_row, float)
+    if not isinstance(table, TextTable):
+        return False
+    try:
+        with open(table.file, "rb") as f:
+            f.seek(0, 2)
+            size = f.tell()
+            f.seek(max(0, size - 4096))
+            tail = f.read()
+    except OSError:
+        return False
+    if not tail or tail.endswith((b"\n", b"\r")):
+        return False
+    line = tail.rsplit(b"\n", 1)[-1].decode("utf-8", "replace")
+    if any(c.isalpha() and c not in "eE" for c in line):     # a footer, not a data row
+        return False
+    import logging
+
+    empty = int(np.count_nonzero(~np.isfinite(last_row)))
+    note = ("the last line has no line break: the file was cut while writing (logger stopped?)"
+            f"{f' and the row has {empty} empty cell(s)' if empty else ''}; that row is dropped "
+            "(a number cut short would look valid)")
+    logging.getLogger("crankbench").warning("%s: %s", table.file, note)
+    read_note(table, note)
+    return True
+
+
+def read_note(table, note: str) -> None:
+    """Keep what reading changed (a rebuilt clock, a dropped row) with the table: the record
+    carries it as its ``read_notes`` attr, so an imported or reported record still says so."""
+    notes = getattr(table, "read_notes", None)
+    if notes is None:
+        notes = []
+        table.read_notes = notes
+    notes.append(note)
+
+
+def read_notes_attrs(table) -> dict:
+    """``{"read_notes": "...; ..."}`` for a record read from ``table``, or ``{}``."""
+    notes = getattr(table, "read_notes", None)
+    return {"read_notes": "; ".join(notes)} if notes else {}
 
 
 def duplicate_names(table) -> None:
@@ -398,11 +506,14 @@ def table_record(table: Table, *, channels=None):
         if unit is None and suffix_unit(name) is not None:
             unit = suffix_unit(name)
             from_names.append(f"{name} -> {unit}")
+        elif unit is None and name_is_unit(name) is not None:
+            unit = name_is_unit(name)
+            from_names.append(f"{name} -> {unit}")
         parsed.append((name or f"column {i + 1}", unit))
     if from_names:
         import logging
 
-        logging.getLogger("crankbench").info("%s: units read from the column names' last word: "
+        logging.getLogger("crankbench").info("%s: units read from the column names: "
                                              "%s", file, ", ".join(from_names))
     headers = [str(h) for h in table.names]
 
@@ -438,6 +549,8 @@ def table_record(table: Table, *, channels=None):
                               f"'{name} [unit]', e.g. '{name} [g]', or a channel map giving its "
                               "units")
     both = table.read(([time_idx] if time_idx is not None else []) + idx)  # one pass
+    if both.ndim == 2 and both.shape[1] > 1 and last_row_cut(table, both[:, -1]):
+        both = both[:, :-1]
     t = None
     if time_idx is not None:
         t = _time_from(table, time_idx, parsed[time_idx][1], file, both[0])
@@ -459,6 +572,7 @@ def table_record(table: Table, *, channels=None):
         values, attrs = si_channel(name, values, {"units": unit, "sample_rate": fs}, file=file)
         out.append((name, "time", values, attrs))
     attrs = {"units_from_names": "; ".join(from_names)} if from_names else {}
+    attrs.update(read_notes_attrs(table))
     if time_idx in clocks:
         attrs.update(getattr(table, "start_times", {}).get(time_idx, {}))
     return build_dataset(out, {"time": t}, attrs)

@@ -235,3 +235,38 @@ def test_channel_map_states_the_runs_load(tmp_path):
                                        '[channel.acc]\ncolumn = "acc"\nunits = "m/s^2"\n')
     with pytest.raises(ConfigError, match="load_law"):
         read(path, map=tmp_path / "bad.toml")
+
+
+def test_a_rig_export_is_placed_by_its_channel_map(tmp_path, capsys):
+    """A rig's own CSV of the shipped record (``%.6g`` numbers, a bare ``RPM`` column, no
+    sensor attrs) is compared with the engine model once a channel map places the sensor and
+    states the load: order 2 as from the native record (within 1 %); without the map the
+    refusal says which map lines place it; an option only a shaft-line comparison uses is
+    named in a warning (it used to be dropped silently, and so was --map)."""
+    from crankbench import measure
+    from crankbench.analysis.cli import main
+
+    rec = measure.read(RECORD)
+    t = rec["time"].values
+    rpm = np.interp(t, rec["time_speed"].values, rec["speed"].values) * 30 / np.pi
+    acc = rec["acc_block_z"].values
+    path = tmp_path / "rig.csv"
+    path.write_text("t,RPM,acc [m/s^2]\n" + "\n".join(f"{a:.6g},{b:.6g},{c:.6g}"
+                                              for a, b, c in zip(t, rpm, acc)) + "\n")
+    position = rec["acc_block_z"].attrs["position"]
+    (tmp_path / "map.toml").write_text(
+        '[source]\ntime_column = "t"\ntime_units = "s"\nimep = "13 bar"\nload_law = "constant"\n'
+        '[channel.RPM]\ncolumn = "RPM"\nunits = "rpm"\n'
+        f'[channel.acc]\ncolumn = "acc [m/s^2]"\nunits = "m/s^2"\nposition = {list(position)}\n'
+        'direction = "z"\n')
+    assert main(["compare", str(path), str(ENGINE), "--json"]) == 2
+    assert "[channel.acc] position" in capsys.readouterr().err
+    assert main(["compare", str(path), str(ENGINE), "--map", str(tmp_path / "map.toml"),
+                 "--gate", "0.2", "--json"]) == 0
+    out = capsys.readouterr()
+    assert "--gate 0.2: not used with an engine model" in out.err
+    rows = json.loads(out.out)["rows"]
+    two = next(r for r in rows if r["order"] == 2.0)
+    assert two["sensor"] == "acc" and two["passed"]
+    assert two["measured"] == pytest.approx(24.8, rel=0.02)
+    assert two["measured"] / two["predicted"] == pytest.approx(1.0, abs=0.01)

@@ -109,3 +109,13 @@ def test_any_unit_string_converts_or_raises_record_error(text):
 def test_every_known_unit_gives_finite_si(unit, value):
     out, si, _ = to_si(value, unit)
     assert math.isfinite(out) and si in SI_UNITS
+
+
+@pytest.mark.parametrize("unit, rpm_per_unit", [("U/min", 1.0), ("min-1", 1.0), ("1/min", 1.0),
+                                                ("1/s", 60.0), ("U/s", 60.0), ("s-1", 60.0)])
+def test_rig_spellings_of_rotational_speed(unit, rpm_per_unit):
+    """German and DIN-style speed units of rig exports (n [U/min], n [1/s]): 1 U/min =
+    2π/60 rad/s, 1 1/s = 2π rad/s (one revolution per second)."""
+    values, si, quantity = to_si(np.array([1500.0]), unit)
+    assert si == "rad/s" and quantity == "rotational_speed"
+    assert values[0] == pytest.approx(1500.0 * rpm_per_unit * np.pi / 30, rel=1e-15)
