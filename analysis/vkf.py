@@ -489,7 +489,7 @@ def _vold_kalman_arrays(x, *, fs, speed_rpm, orders, bandwidth_hz, bandwidth_ord
     residual = xd - model
     noise, smear = _uncertainty(env, residual, fs_d, orders, rpm_d if speeds is None
                                 else speeds[:, index].T, bw_d, p, f_max)
-    std = np.sqrt(np.mean(noise ** 2, axis=0))
+    std = np.sqrt(np.einsum("ij,ij->j", noise, noise) / nd)      # rms over time, per order
     attrs = {"method": "Vold-Kalman filter (joint with an order-0 trend, banded Cholesky)"
                        if trend else "Vold-Kalman filter (joint, banded Cholesky)",
              "channel": label, "bandwidth": kind, "filter_order": p,
