@@ -720,9 +720,12 @@ def _stopped_spans(x, fs, speed_rpm):
     return list(zip(edges[0::2], edges[1::2]))
 
 
-def _track_running_spans(x, fs, speed_rpm, stops, *, shaft_angle, **options):
+def _track_running_spans(x, fs, speed_rpm, stops, *, shaft_angle, compute=None,
+                         what="orders are tracked", **options):
     """Track each span where the shaft turns (the record stops and restarts); results of the
-    standing spans are absent and a warning names them."""
+    standing spans are absent and a warning names them. ``compute`` (default
+    :func:`order_track`) may be :func:`analysis.order_map` (no shaft angle: integrated per
+    span)."""
     import xarray as xr
 
     values, fs_, units, label = _as_signal(x, fs)
@@ -737,7 +740,7 @@ def _track_running_spans(x, fs, speed_rpm, stops, *, shaft_angle, **options):
     runs = [(a, b) for a, b in zip(bounds[0::2], bounds[1::2]) if b > a]
     shown = ", ".join(f"{t0 + a / fs_:.6g}..{t0 + (b - 1) / fs_:.6g} s" for a, b in stops[:5])
     warnings.warn(f"{label}: the shaft stands (speed <= 0.5 % of {speed.max():.6g} rpm) at "
-                  f"{shown}; orders are tracked in each running span separately",
+                  f"{shown}; {what} in each running span separately",
                   OrderWarning, stacklevel=3)
     parts, skipped = [], []
     attrs = getattr(x, "attrs", {}) or {}
@@ -746,19 +749,23 @@ def _track_running_spans(x, fs, speed_rpm, stops, *, shaft_angle, **options):
                            coords={"time": t0 + np.arange(a, b) / fs_},
                            attrs={**attrs, "sample_rate": fs_}, name=label)
         try:
-            ds = order_track(sub, speed_rpm=speed[a:b],
-                             shaft_angle=None if angle is None else angle[a:b], **options)
+            if compute is None:
+                ds = order_track(sub, speed_rpm=speed[a:b],
+                                 shaft_angle=None if angle is None else angle[a:b], **options)
+            else:
+                ds = compute(sub, speed_rpm=speed[a:b], **options)
         except AnalysisError as exc:
             skipped.append(f"{t0 + a / fs_:.6g}..{t0 + (b - 1) / fs_:.6g} s ({exc})")
             continue
         parts.append(ds)
     if not parts:
-        raise AnalysisError(f"{label}: no running span long enough to track: "
+        raise AnalysisError(f"{label}: no running span long enough to analyse: "
                             f"{'; '.join(skipped)}")
     if skipped:
-        log.info("%s: running spans not tracked: %s", label, "; ".join(skipped))
-    out = xr.concat(parts, dim="time", data_vars="minimal", coords="minimal",
-                    combine_attrs="override") if len(parts) > 1 else parts[0]
+        log.info("%s: running spans not analysed: %s", label, "; ".join(skipped))
+    extra = {} if isinstance(parts[0], xr.DataArray) else {"data_vars": "minimal"}
+    out = xr.concat(parts, dim="time", coords="minimal", combine_attrs="override",
+                    **extra) if len(parts) > 1 else parts[0]
     out.attrs["stopped_spans_s"] = [v for a, b in stops for v in (t0 + a / fs_,
                                                                   t0 + (b - 1) / fs_)]
     return out
