@@ -489,31 +489,37 @@ def order_track(x, *, fs=None, speed_rpm, orders, amplitude: str = "peak", metho
 
 def _vkf_track(context, orders, *, bandwidth_hz, bandwidth_orders, filter_order):
     """VKF of the prepared channel, as an order-track Dataset with the smearing estimate."""
-    from .vkf import vold_kalman
+    from .vkf import _vold_kalman_arrays
 
-    res = vold_kalman(context["values"], fs=context["fs"], speed_rpm=context["speed"],
-                      orders=orders, bandwidth_hz=bandwidth_hz,
-                      bandwidth_orders=bandwidth_orders, filter_order=filter_order,
-                      shaft_angle=context["phi"])
+    res = _vold_kalman_arrays(context["values"], fs=context["fs"], speed_rpm=context["speed"],
+                              orders=orders, bandwidth_hz=bandwidth_hz,
+                              bandwidth_orders=bandwidth_orders, filter_order=filter_order,
+                              shaft_angle=context["phi"], checked=True)
     return _vkf_dataset(res, context, orders)
 
 
 def _vkf_dataset(res, context, orders):
-    factor = context["factor"]
-    env = res["envelope"].values
-    ds = _track_dataset(np.abs(env) * factor, np.angle(env), orders,
-                        res["time"].values + context["t0"], res["rpm"].values,
-                        context["units"], context["label"], context["reference"])
-    ds["mean"] = ("time", res["mean"].values, {"units": context["units"], "long_name":
-                                               "order 0: the channel's mean (trend envelope)"})
-    ds["amplitude_uncertainty"] = (("order", "time"), res["amplitude_uncertainty"].values
-                                   * factor, {"units": context["units"], "long_name":
-                                              "1-sigma amplitude uncertainty (noise and "
-                                              "envelope smearing)"})
-    ds["amplitude_noise"] = (("order", "time"), res["amplitude_noise"].values * factor,
-                             {"units": context["units"], "long_name":
-                              "1-sigma amplitude noise (its part of the uncertainty)"})
-    ds.attrs.update(res.attrs)
+    """Order-track Dataset of a VKF result: the ``vold_kalman`` Dataset or its arrays (dict)."""
+    if isinstance(res, dict):
+        env, mean, time = res["envelope"].T, res["mean"], res["time"]
+        rpm, unc, noise = res["rpm"], res["uncertainty"].T, res["noise"].T
+        attrs = res["attrs"]
+    else:
+        env, mean, time = res["envelope"].values, res["mean"].values, res["time"].values
+        rpm, unc = res["rpm"].values, res["amplitude_uncertainty"].values
+        noise, attrs = res["amplitude_noise"].values, res.attrs
+    factor, units = context["factor"], context["units"]
+    ds = _track_dataset(np.abs(env) * factor, np.angle(env), orders, time + context["t0"], rpm,
+                        units, context["label"], context["reference"], variables={
+                            "mean": ("time", mean, {"units": units, "long_name": "order 0: "
+                                                    "the channel's mean (trend envelope)"}),
+                            "amplitude_uncertainty": (("order", "time"), unc * factor, {
+                                "units": units, "long_name": "1-sigma amplitude uncertainty "
+                                "(noise and envelope smearing)"}),
+                            "amplitude_noise": (("order", "time"), noise * factor, {
+                                "units": units, "long_name": "1-sigma amplitude noise (its "
+                                "part of the uncertainty)"})})
+    ds.attrs.update(attrs)
     ds.attrs["phase_reference"] = context["reference"]
     return ds
 
@@ -765,7 +771,9 @@ def _track_running_spans(x, fs, speed_rpm, stops, *, shaft_angle, compute=None,
     return out
 
 
-def _track_dataset(amp, phase, orders, t, r, units, label, reference=None):
+def _track_dataset(amp, phase, orders, t, r, units, label, reference=None, variables=None):
+    """Order-track Dataset (amplitude, phase; ``variables``: more data variables, built in the
+    same constructor — each later assignment costs a merge)."""
     import xarray as xr
 
     coords = {"order": ("order", orders, {"units": "1", "long_name": "shaft order"}),
@@ -775,7 +783,8 @@ def _track_dataset(amp, phase, orders, t, r, units, label, reference=None):
         {"amplitude": (("order", "time"), amp, {"units": units,
                                                 "long_name": f"{label} order amplitude"}),
          "phase": (("order", "time"), phase, {"units": "rad",
-                                               "long_name": "phase of A cos(o φ + phase)"})},
+                                               "long_name": "phase of A cos(o φ + phase)"}),
+         **(variables or {})},
         coords=coords, attrs={"channel": str(label),
                               "phase_reference": reference or
                               "shaft angle 0 at the first sample of the record (speed-reference "
