@@ -48,9 +48,9 @@ def _predicted_share(ratio, measured, at, total, orders) -> str:
     only = np.where(measured, ratio, 0.0)[i:i + 1, :, None] * at[i:i + 1, :, c:c + 1]
     share = 1.0 - float(_superpose(only, orders)[0, 0]) / float(total[i, c]) \
         if total[i, c] > 0 else 0.0
-    listed = ", ".join(f"{q:g}" for q in taken) if len(taken) <= 8 else \
-        f"{len(taken)} orders ({taken[0]:g}–{taken[-1]:g}) of"
-    return (f"; {'' if len(taken) > 8 else 'orders '}{listed} not measured, taken as predicted: "
+    listed = "orders " + ", ".join(f"{q:g}" for q in taken) if len(taken) <= 8 else \
+        f"{len(taken)} orders ({taken[0]:g}–{taken[-1]:g})"
+    return (f"; {listed} not measured, taken as predicted: "
             f"{100.0 * max(share, 0.0):.0f} % of the worst stress")
 
 
