@@ -61,6 +61,12 @@ Role channels may also give ``units`` (of the raw signal, default V), ``scale``/
 attrs ``pulses_per_rev``, ``missing_teeth``, ``role``; a per-cycle mark has ``speed_ratio`` 0.5),
 wheels before marks, so the speed reference and the crank angle use them.
 
+A crank-angle-domain export of an indicating system (pressure per cycle against crank angle,
+no time axis) is said by ``[source] angle_column`` (with ``angle_units`` "deg"/"rad",
+``cycle_column``, ``speed_column``, ``layout`` "long"/"wide", ``firing_tdc_deg``); it is read
+by :func:`measure.readers.angle_table.read_angle_table` (``crankbench pressure --map``), and a
+time-domain read of it is refused.
+
 Keys are checked like model files: an unknown key is an error with a did-you-mean, a column
 that is not in the file is an error listing the columns there. The Record keeps its
 provenance: ``raw_source`` (file name), ``raw_sha256`` and ``channel_map`` (the map's text).

@@ -80,9 +80,9 @@ def _lines(s):
         return "n/a (needs --model)" if v is None else fmt.format(v)
 
     pc, ac = s["peak_pressure_bar_per_cycle"], s["peak_angle_deg_per_cycle"]
-    speed = "speed not given" if s["speed_rpm"] is None else f"{s['speed_rpm']:.1f} rpm"
+    speed = ", speed not given" if s["speed_rpm"] is None else f" at {s['speed_rpm']:.1f} rpm"
     out = [f"channel {s['channel']} (cylinder {s['cylinder']}, {s['cycle']}-stroke): "
-           f"{s['cycles']} cycles at {speed}",
+           f"{s['cycles']} cycles{speed}",
            f"  peak pressure      {s['peak_pressure_bar']:.3f} bar at "
            f"{s['peak_angle_deg']:.2f} deg after TDC (mean cycle)",
            f"  per cycle          {pc['mean']:.3f} ± {pc['std']:.3f} bar at {ac['mean']:.2f} ± "
