@@ -36,6 +36,24 @@ def _superpose(stress, orders):
     return out
 
 
+def _predicted_share(ratio, measured, at, total, orders) -> str:
+    """What of the "measured" stress is the prediction: the orders taken as predicted
+    (ratio 1: not tracked, or tracked only where the prediction is below 5 % of its
+    maximum) and their share of the stress at its worst speed and section, as basis text
+    (empty when every order's ratio is measured wherever it matters)."""
+    taken = [q for j, q in enumerate(orders) if not measured[:, j].any()]
+    if not taken:
+        return ""
+    i, c = np.unravel_index(int(np.argmax(total)), total.shape)
+    only = np.where(measured, ratio, 0.0)[i:i + 1, :, None] * at[i:i + 1, :, c:c + 1]
+    share = 1.0 - float(_superpose(only, orders)[0, 0]) / float(total[i, c]) \
+        if total[i, c] > 0 else 0.0
+    listed = ", ".join(f"{q:g}" for q in taken) if len(taken) <= 8 else \
+        f"{len(taken)} orders ({taken[0]:g}–{taken[-1]:g}) of"
+    return (f"; {'' if len(taken) > 8 else 'orders '}{listed} not measured, taken as predicted: "
+            f"{100.0 * max(share, 0.0):.0f} % of the worst stress")
+
+
 def _misfire_stress(system, speed_rpm, orders, load, sections):
     """Predicted superposed stress with one cylinder misfiring: the worst over the cylinders.
 
@@ -76,7 +94,8 @@ def _limit_checks(rec, system, track, grid, pred_stress, response, orders, chann
     ratio of measured to predicted amplitude of that order at the measured node (ratio 1 for
     orders not tracked, or where the prediction is below 5 % of its maximum over speed;
     clipped to [0, 10]), superposed over one engine cycle with the model's phases
-    (:func:`_superpose`).
+    (:func:`_superpose`). The basis names the orders taken as predicted and their share of
+    the worst stress (:func:`_predicted_share`).
     """
     from .torsional_limits import check_torsional_stress, not_assessed
 
@@ -100,6 +119,7 @@ def _limit_checks(rec, system, track, grid, pred_stress, response, orders, chann
         centre = 0.5 * (edges[1:] + edges[:-1])
         idx = np.clip(np.searchsorted(edges, rpm) - 1, 0, 299)
         ratio = np.ones((centre.size, len(orders)))
+        measured = np.zeros((centre.size, len(orders)), bool)   # ratio from the record
         tracked = np.asarray(track["amplitude"].values, float)  # (order, time)
         for jt, q in enumerate(np.asarray(track["order"].values, float)):
             j = int(np.argmin(np.abs(np.asarray(orders) - q)))
@@ -110,6 +130,7 @@ def _limit_checks(rec, system, track, grid, pred_stress, response, orders, chann
             pred = np.interp(centre, grid, pred_amp[:, j])
             ok = np.isfinite(meas) & (pred >= 0.05 * pred_amp[:, j].max()) & (pred > 0)
             ratio[ok, j] = np.clip(meas[ok] / pred[ok], 0.0, 10.0)
+            measured[ok, j] = True
         at = np.empty((centre.size, len(orders), len(cols)), complex)
         for k, c in enumerate(cols):
             for j in range(len(orders)):
@@ -119,7 +140,8 @@ def _limit_checks(rec, system, track, grid, pred_stress, response, orders, chann
         total = _superpose(ratio[:, :, None] * at, orders)
         basis = (f"record channel {channel} at {response.attrs.get('node', '')}, "
                  f"{lo:.0f}–{hi:.0f} rpm: measured/predicted order amplitude × model stress "
-                 "per section, superposed over the cycle")
+                 "per section, superposed over the cycle"
+                 + _predicted_share(ratio, measured, at, total, orders))
         checks.extend(check_torsional_stress(
             centre, total, limits, sections=[names[c] for c in cols],
             operating_range_rpm=operating_range_rpm, name="measured torsional stress",
