@@ -26,11 +26,9 @@ if str(ROOT) not in sys.path:
 OUT = HERE / "indicating_ca.csv"
 
 
-def text():
-    """The file's text."""
+def source():
+    """The time-domain indicator analysis (1-deg grid) of the 0.25 s bench record."""
     import tempfile
-
-    import numpy as np
 
     from crankbench.analysis.pressure import indicator_analysis
     from crankbench.measure.synth.run import synthesize
@@ -43,7 +41,14 @@ def text():
         path = Path(tmp) / "scene.toml"
         path.write_text(source, encoding="utf-8")
         run = synthesize(path)
-    r = indicator_analysis(run.record, run.scene.engine, resolution_deg=1.0)
+    return indicator_analysis(run.record, run.scene.engine, resolution_deg=1.0)
+
+
+def text(r=None):
+    """The file's text (from :func:`source`)."""
+    import numpy as np
+
+    r = source() if r is None else r
     rows = ["Zyklus;KW [°KW];Zylinderdruck Zyl1 [bar];Drehzahl [1/min]"]
     deg = np.rad2deg(r.crank_angle) + 360.0
     for k in range(r.n_cycles):
