@@ -307,6 +307,24 @@ def _cylinder_of(record, name, given):
     return None
 
 
+def _checked_cylinder(engine, channel, cyl, warnings):
+    """The channel's cylinder (1 when unknown), with the warnings of a missing engine model or
+    cylinder; a cylinder the engine does not have is an error."""
+    n_cyl = engine.n_cylinders if engine is not None else None
+    if engine is None:
+        warnings.append("no engine model: IMEP, PMEP, heat release, the polytropic peg and "
+                        "the TDC check need the cylinder geometry (engine=, CLI --model)")
+    if cyl is None:
+        cyl = 1
+        if n_cyl is None or n_cyl > 1:
+            warnings.append(f"channel {channel!r} names no cylinder; taken as cylinder 1 "
+                            "(pass cylinder=)")
+    if n_cyl is not None and not 1 <= int(cyl) <= n_cyl:
+        raise AnalysisError(f"channel {channel!r} is cylinder {cyl}, but the engine has "
+                            f"{n_cyl}")
+    return int(cyl)
+
+
 # ------------------------------------------------------------------------------ pegging
 def _peg(engine, psi, cycles, cylinder, *, peg, peg_pressure, window_deg, exponent):
     """Offsets per cycle and a description."""
@@ -477,19 +495,7 @@ def indicator_analysis(record, engine, *, channel=None, cylinder=None, angle_cha
         raise AnalysisError(f"channel={channel!r} is not a pressure channel; pressure "
                             f"channels: {', '.join(chans) or 'none'}")
     warnings = []
-    cyl = _cylinder_of(record, channel, cylinder)
-    n_cyl = engine.n_cylinders if engine is not None else None
-    if engine is None:
-        warnings.append("no engine model: IMEP, PMEP, heat release, the polytropic peg and "
-                        "the TDC check need the cylinder geometry (engine=, CLI --model)")
-    if cyl is None:
-        cyl = 1
-        if n_cyl is None or n_cyl > 1:
-            warnings.append(f"channel {channel!r} names no cylinder; taken as cylinder 1 "
-                            "(pass cylinder=)")
-    if n_cyl is not None and not 1 <= cyl <= n_cyl:
-        raise AnalysisError(f"channel {channel!r} is cylinder {cyl}, but the engine has "
-                            f"{n_cyl}")
+    cyl = _checked_cylinder(engine, channel, _cylinder_of(record, channel, cylinder), warnings)
     used_marks = {}
     trace, reference, has_tdc = _angle(record, angle_channel=angle_channel,
                                        tdc_channel=tdc_channel, tdc_offset_deg=tdc_offset_deg,

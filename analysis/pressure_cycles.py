@@ -48,7 +48,7 @@ from crankbench.predict._validate import check_option
 from crankbench.predict.errors import AnalysisError
 
 from . import indicator as thermo
-from .pressure import BAR, DEG, _analyse_cycles, _load_engine
+from .pressure import BAR, DEG, _analyse_cycles, _checked_cylinder, _load_engine
 from .pressure_angle import _cut
 
 __all__ = ["indicator_analysis_cycles", "angle_pressure_channels"]
@@ -226,19 +226,8 @@ loss_angle_deg, gamma, max_cycles
                             "only one revolution)")
     warnings = []
     var = data[channel]
-    cyl = int(cylinder) if cylinder is not None else var.attrs.get("cylinder")
-    n_cyl = engine.n_cylinders if engine is not None else None
-    if engine is None:
-        warnings.append("no engine model: IMEP, PMEP, heat release, the polytropic peg and "
-                        "the TDC check need the cylinder geometry (engine=, CLI --model)")
-    if cyl is None:
-        cyl = 1
-        if n_cyl is None or n_cyl > 1:
-            warnings.append(f"channel {channel!r} names no cylinder; taken as cylinder 1 "
-                            "(pass cylinder=)")
-    cyl = int(cyl)
-    if n_cyl is not None and not 1 <= cyl <= n_cyl:
-        raise AnalysisError(f"channel {channel!r} is cylinder {cyl}, but the engine has {n_cyl}")
+    cyl = _checked_cylinder(engine, channel, cylinder if cylinder is not None
+                            else var.attrs.get("cylinder"), warnings)
     axis = np.asarray(data["crank_angle"].values, float)
     p = np.asarray(var.values, float)
     if not np.all(np.isfinite(p)):

@@ -3,7 +3,7 @@ analysis.pressure_cycles, ``crankbench pressure`` on them) against the time-doma
 of the same cycles and against the synthetic bench's truth.
 
 The bench record (I4, 2000 rpm, 10 bar IMEP varying 2 % rms from cycle to cycle, cylinder 1
-at 50 kHz with an unknown offset, drift and 0.03 bar noise; 60-2 wheel and TDC mark on cylinder 1's crank) is analysed in the
+at 50 kHz with an unknown offset, drift and 0.02 bar noise; 60-2 wheel and TDC mark on cylinder 1's crank) is analysed in the
 time domain; its cycles are then written as an indicating system would export them — long and
 wide layouts, English and German dialects, axes -360..359.9 with the firing TDC at 0, 0..720
 with it at 360 (closing point included) and 0..719.9 with it at 0, a single averaged cycle —
@@ -26,51 +26,17 @@ from crankbench.measure.synth.pressure import pressure_truth
 from crankbench.measure.synth.run import synthesize
 from crankbench.predict.errors import AnalysisError, RecordError
 
+from pressure_scenes import bench_scene
+
 ROOT = Path(__file__).resolve().parents[2]
 I4 = ROOT / "sample_data/engines/i4.toml"
 
 
 def _scene(path):
-    path.write_text(f"""
-[scene]
-name = "I4 steady, cylinder pressure"
-engine = "{(ROOT / 'sample_data/engines/i4.toml').as_posix()}"
-shaftline = "{(ROOT / 'sample_data/shaftlines/i4.toml').as_posix()}"
-seed = 5
-max_order = 4.0
-
-[profile]
-kind = "steady"
-speed_rpm = 2000.0
-duration = 0.55
-
-[load]
-imep = 1.0e6
-
-[[sensor]]
-kind = "tacho"
-name = "wheel"
-node = "cyl 1"
-pulses_per_rev = 60
-missing_teeth = 2
-tdc_offset_deg = 84.0
-
-[[sensor]]
-kind = "tacho"
-name = "tdc"
-node = "cyl 1"
-pulses_per_rev = 1
-
-[[sensor]]
-kind = "pressure"
-name = "p_cyl1"
-cylinder = 1
-sample_rate = 50000.0
-offset = -0.6e5
-drift_rate = 1.0e4
-noise_rms = 3.0e3
-cycle_variation = 0.02
-""")
+    path.write_text(bench_scene(
+        name="I4 steady, cylinder pressure", seed=5, pressure_rate=50000.0,
+        profile='kind = "steady"\nspeed_rpm = 2000.0\nduration = 0.55',
+        extra="offset = -0.6e5\ndrift_rate = 1.0e4\ncycle_variation = 0.02\n"))
     return path
 
 
