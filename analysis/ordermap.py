@@ -140,6 +140,20 @@ def order_map(x, *, fs=None, speed_rpm, samples_per_rev: int = 64, revolutions: 
                           error=AnalysisError)
     top = spr / 4.0 if max_order is None else check_positive(max_order, "max_order",
                                                              error=AnalysisError)
+    from .orders import _stopped_spans, _track_running_spans
+
+    stops = None if np.isscalar(speed_rpm) else _stopped_spans(x, fs, speed_rpm)
+    if stops is not None:   # a record that stops: the map of each running span, as tracks
+        m = _track_running_spans(
+            x, fs, speed_rpm, stops, shaft_angle=None, compute=order_map,
+            what="the order map is computed", samples_per_rev=spr, revolutions=revolutions,
+            overlap=overlap, window=window, amplitude=amplitude, scaling=scaling,
+            max_order=max_order, interpolation=interpolation, trend=trend)
+        if speed_bins_rpm is None:
+            return m
+        return _speed_binned(m.values, m["rpm"].values, speed_bins_rpm, scaling, dict(m.attrs),
+                             ("order", m["order"].values, dict(m["order"].attrs)),
+                             str(m.name).removesuffix(" order map"))
     values, fs_, units, label = _as_signal(x, fs)
     n = values.shape[0]
     angle, reference = _angle_input(None, speed_rpm, n)
@@ -192,6 +206,14 @@ def order_map(x, *, fs=None, speed_rpm, samples_per_rev: int = 64, revolutions: 
                   "order": xr.Variable(*order_coord)}
         return xr.DataArray(xr.Variable(("time", "order"), values, attrs), coords=coords,
                             name=f"{label} order map")
+    return _speed_binned(values, r, speed_bins_rpm, scaling, attrs, order_coord, label)
+
+
+def _speed_binned(values, r, speed_bins_rpm, scaling, attrs, order_coord, label):
+    """Blocks of an order map (time × order) power-averaged into speed bins (rpm × order)."""
+    import xarray as xr
+
+    n_orders = values.shape[1]
     edges = (np.linspace(r.min(), r.max() * (1 + 1e-12), int(speed_bins_rpm) + 1)
              if np.isscalar(speed_bins_rpm) else check_finite_array(speed_bins_rpm,
                                                                     "speed_bins_rpm", ndim=1,
@@ -366,7 +388,7 @@ def campbell_map(x, *, fs=None, speed_rpm, nperseg: int = 4096, overlap: float =
     0.25
     """
     values, fs, units, label = _as_signal(x, fs)
-    speed = _as_rpm(speed_rpm, values.shape[0], fs)
+    speed = _as_rpm(speed_rpm, values.shape[0], fs, allow_stop=True)  # frames of a stop: 0 rpm
     factor = amplitude_factor(amplitude)
     nperseg = check_int(nperseg, "nperseg", minimum=8, error=AnalysisError)
     overlap = check_range(overlap, "overlap", 0.0, 1.0, inclusive=(True, False),

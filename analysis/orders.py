@@ -489,31 +489,37 @@ def order_track(x, *, fs=None, speed_rpm, orders, amplitude: str = "peak", metho
 
 def _vkf_track(context, orders, *, bandwidth_hz, bandwidth_orders, filter_order):
     """VKF of the prepared channel, as an order-track Dataset with the smearing estimate."""
-    from .vkf import vold_kalman
+    from .vkf import _vold_kalman_arrays
 
-    res = vold_kalman(context["values"], fs=context["fs"], speed_rpm=context["speed"],
-                      orders=orders, bandwidth_hz=bandwidth_hz,
-                      bandwidth_orders=bandwidth_orders, filter_order=filter_order,
-                      shaft_angle=context["phi"])
+    res = _vold_kalman_arrays(context["values"], fs=context["fs"], speed_rpm=context["speed"],
+                              orders=orders, bandwidth_hz=bandwidth_hz,
+                              bandwidth_orders=bandwidth_orders, filter_order=filter_order,
+                              shaft_angle=context["phi"], checked=True)
     return _vkf_dataset(res, context, orders)
 
 
 def _vkf_dataset(res, context, orders):
-    factor = context["factor"]
-    env = res["envelope"].values
-    ds = _track_dataset(np.abs(env) * factor, np.angle(env), orders,
-                        res["time"].values + context["t0"], res["rpm"].values,
-                        context["units"], context["label"], context["reference"])
-    ds["mean"] = ("time", res["mean"].values, {"units": context["units"], "long_name":
-                                               "order 0: the channel's mean (trend envelope)"})
-    ds["amplitude_uncertainty"] = (("order", "time"), res["amplitude_uncertainty"].values
-                                   * factor, {"units": context["units"], "long_name":
-                                              "1-sigma amplitude uncertainty (noise and "
-                                              "envelope smearing)"})
-    ds["amplitude_noise"] = (("order", "time"), res["amplitude_noise"].values * factor,
-                             {"units": context["units"], "long_name":
-                              "1-sigma amplitude noise (its part of the uncertainty)"})
-    ds.attrs.update(res.attrs)
+    """Order-track Dataset of a VKF result: the ``vold_kalman`` Dataset or its arrays (dict)."""
+    if isinstance(res, dict):
+        env, mean, time = res["envelope"].T, res["mean"], res["time"]
+        rpm, unc, noise = res["rpm"], res["uncertainty"].T, res["noise"].T
+        attrs = res["attrs"]
+    else:
+        env, mean, time = res["envelope"].values, res["mean"].values, res["time"].values
+        rpm, unc = res["rpm"].values, res["amplitude_uncertainty"].values
+        noise, attrs = res["amplitude_noise"].values, res.attrs
+    factor, units = context["factor"], context["units"]
+    ds = _track_dataset(np.abs(env) * factor, np.angle(env), orders, time + context["t0"], rpm,
+                        units, context["label"], context["reference"], variables={
+                            "mean": ("time", mean, {"units": units, "long_name": "order 0: "
+                                                    "the channel's mean (trend envelope)"}),
+                            "amplitude_uncertainty": (("order", "time"), unc * factor, {
+                                "units": units, "long_name": "1-sigma amplitude uncertainty "
+                                "(noise and envelope smearing)"}),
+                            "amplitude_noise": (("order", "time"), noise * factor, {
+                                "units": units, "long_name": "1-sigma amplitude noise (its "
+                                "part of the uncertainty)"})})
+    ds.attrs.update(attrs)
     ds.attrs["phase_reference"] = context["reference"]
     return ds
 
@@ -714,9 +720,12 @@ def _stopped_spans(x, fs, speed_rpm):
     return list(zip(edges[0::2], edges[1::2]))
 
 
-def _track_running_spans(x, fs, speed_rpm, stops, *, shaft_angle, **options):
+def _track_running_spans(x, fs, speed_rpm, stops, *, shaft_angle, compute=None,
+                         what="orders are tracked", **options):
     """Track each span where the shaft turns (the record stops and restarts); results of the
-    standing spans are absent and a warning names them."""
+    standing spans are absent and a warning names them. ``compute`` (default
+    :func:`order_track`) may be :func:`analysis.order_map` (no shaft angle: integrated per
+    span)."""
     import xarray as xr
 
     values, fs_, units, label = _as_signal(x, fs)
@@ -731,7 +740,7 @@ def _track_running_spans(x, fs, speed_rpm, stops, *, shaft_angle, **options):
     runs = [(a, b) for a, b in zip(bounds[0::2], bounds[1::2]) if b > a]
     shown = ", ".join(f"{t0 + a / fs_:.6g}..{t0 + (b - 1) / fs_:.6g} s" for a, b in stops[:5])
     warnings.warn(f"{label}: the shaft stands (speed <= 0.5 % of {speed.max():.6g} rpm) at "
-                  f"{shown}; orders are tracked in each running span separately",
+                  f"{shown}; {what} in each running span separately",
                   OrderWarning, stacklevel=3)
     parts, skipped = [], []
     attrs = getattr(x, "attrs", {}) or {}
@@ -740,25 +749,31 @@ def _track_running_spans(x, fs, speed_rpm, stops, *, shaft_angle, **options):
                            coords={"time": t0 + np.arange(a, b) / fs_},
                            attrs={**attrs, "sample_rate": fs_}, name=label)
         try:
-            ds = order_track(sub, speed_rpm=speed[a:b],
-                             shaft_angle=None if angle is None else angle[a:b], **options)
+            if compute is None:
+                ds = order_track(sub, speed_rpm=speed[a:b],
+                                 shaft_angle=None if angle is None else angle[a:b], **options)
+            else:
+                ds = compute(sub, speed_rpm=speed[a:b], **options)
         except AnalysisError as exc:
             skipped.append(f"{t0 + a / fs_:.6g}..{t0 + (b - 1) / fs_:.6g} s ({exc})")
             continue
         parts.append(ds)
     if not parts:
-        raise AnalysisError(f"{label}: no running span long enough to track: "
+        raise AnalysisError(f"{label}: no running span long enough to analyse: "
                             f"{'; '.join(skipped)}")
     if skipped:
-        log.info("%s: running spans not tracked: %s", label, "; ".join(skipped))
-    out = xr.concat(parts, dim="time", data_vars="minimal", coords="minimal",
-                    combine_attrs="override") if len(parts) > 1 else parts[0]
+        log.info("%s: running spans not analysed: %s", label, "; ".join(skipped))
+    extra = {} if isinstance(parts[0], xr.DataArray) else {"data_vars": "minimal"}
+    out = xr.concat(parts, dim="time", coords="minimal", combine_attrs="override",
+                    **extra) if len(parts) > 1 else parts[0]
     out.attrs["stopped_spans_s"] = [v for a, b in stops for v in (t0 + a / fs_,
                                                                   t0 + (b - 1) / fs_)]
     return out
 
 
-def _track_dataset(amp, phase, orders, t, r, units, label, reference=None):
+def _track_dataset(amp, phase, orders, t, r, units, label, reference=None, variables=None):
+    """Order-track Dataset (amplitude, phase; ``variables``: more data variables, built in the
+    same constructor — each later assignment costs a merge)."""
     import xarray as xr
 
     coords = {"order": ("order", orders, {"units": "1", "long_name": "shaft order"}),
@@ -768,7 +783,8 @@ def _track_dataset(amp, phase, orders, t, r, units, label, reference=None):
         {"amplitude": (("order", "time"), amp, {"units": units,
                                                 "long_name": f"{label} order amplitude"}),
          "phase": (("order", "time"), phase, {"units": "rad",
-                                               "long_name": "phase of A cos(o φ + phase)"})},
+                                               "long_name": "phase of A cos(o φ + phase)"}),
+         **(variables or {})},
         coords=coords, attrs={"channel": str(label),
                               "phase_reference": reference or
                               "shaft angle 0 at the first sample of the record (speed-reference "

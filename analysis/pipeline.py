@@ -37,6 +37,7 @@ from pathlib import Path
 
 import numpy as np
 
+from crankbench.measure.provenance import source_sha256
 from crankbench.predict._validate import check_option, check_positive, suggest
 from crankbench.predict.errors import AnalysisError, ConfigError, RecordError
 
@@ -634,7 +635,7 @@ def analyse(record, model, *, channel=None, speed_channel=None, orders=None, max
         "resonance finder": resonances.settings,
     }
     return PipelineResult(
-        source=source, record_sha256=str(rec.attrs.get("sha256", "")), model_path=model_path,
+        source=source, record_sha256=source_sha256(rec, missing=""), model_path=model_path,
         channel=channel, node=node, quantity=quantity, units=units, speed_channel=speed_channel,
         speed_range_rpm=(lo, hi), sweep_rate_rpm_per_s=sweep_rate, track=track,
         resonances=resonances, predicted=predicted, response=response_da,

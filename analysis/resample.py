@@ -112,10 +112,12 @@ def _as_signal(x, fs, name: str = "x"):
     return values, fs, units, label
 
 
-def _as_rpm(rpm, n: int, fs: float | None = None) -> np.ndarray:
+def _as_rpm(rpm, n: int, fs: float | None = None, *, allow_stop: bool = False) -> np.ndarray:
     """Speed in rpm as an array of length ``n`` (a scalar means a steady speed).
 
     ``fs`` (Hz), when known, lets an error say at what time the speed was bad.
+    ``allow_stop``: zero speed is accepted (a time-domain map labels frames by speed; only
+    a negative speed is refused).
     """
     if hasattr(rpm, "values") and hasattr(rpm, "dims"):
         rpm = rpm.values
@@ -129,8 +131,8 @@ def _as_rpm(rpm, n: int, fs: float | None = None) -> np.ndarray:
     if arr.shape[0] != n:
         raise AnalysisError(f"rpm has {arr.shape[0]} samples but the signal has {n}; "
                             "give one speed per signal sample (see analysis.speedref)")
-    if arr.min() <= 0:
-        bad = np.flatnonzero(arr <= 0)
+    if arr.min() < 0 or (arr.min() == 0 and not allow_stop):
+        bad = np.flatnonzero(arr < 0 if allow_stop else arr <= 0)
         i, j = int(bad[0]), int(bad[-1])
         when = (lambda k: f" (t = {k / fs:.6g} s)") if fs else (lambda k: "")
         raise AnalysisError(f"rpm must be > 0 throughout (shaft turning one way); found "

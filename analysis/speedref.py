@@ -386,12 +386,7 @@ def speed_reference(record, channel: str, *, speed_channel: str | None = None,
         omega = np.asarray(var.values, dtype=float) / _ratio(var, name)
         source = ("IAS channel" if var.attrs.get("quantity") == "angular_velocity"
                   else "speed channel") + f" {name!r}"
-    good = np.isfinite(omega)
-    if not good.all():
-        log.warning("%s: %d non-finite speed values skipped", source, int((~good).sum()))
-        t_in, omega = t_in[good], omega[good]
-    if t_in.shape[0] == 0:
-        raise AnalysisError(f"{source} holds no usable speed values")
+    t_in, omega = _finite_speed(t_in, omega, source)
     if source.startswith(("IAS", "speed channel")):
         omega = _repair_glitches(t_in, omega, source)
         omega = _one_direction(omega, source)
@@ -403,9 +398,7 @@ def speed_reference(record, channel: str, *, speed_channel: str | None = None,
     rpm = np.interp(t_out, t_in, omega) * (60.0 / _TWO_PI)
     if rpm.max() <= 0 or rpm.min() < 0:
         i = int(np.argmin(rpm))
-        raise AnalysisError(f"{source}: speed {rpm[i]:.6g} rpm at t = {t_out[i]:.6g} s; order "
-                            "analysis needs the shaft turning one way (>= 0 rpm throughout, "
-                            "> 0 somewhere); select a time range where it turns")
+        raise _not_one_way(source, rpm[i], t_out[i])
     # the shaft angle: from an angle source, else from a TDC-referenced pulse train, averaged
     # over whole cycles (the mean rotation)
     angle = None
@@ -434,8 +427,7 @@ def speed_reference(record, channel: str, *, speed_channel: str | None = None,
         if np.all(np.diff(smooth) > 0):
             coords["shaft_angle"] = (dim, smooth, {"units": "rad", "reference": reference,
                                                    "long_name": "shaft angle (mean rotation)"})
-    elif angle is None and rpm.min() > 0 and (source.startswith("IAS") or (
-            source.startswith("speed channel") and _samples_per_rev(t_in, omega) >= 10)):
+    elif angle is None and rpm.min() > 0 and _averaged(source, _samples_per_rev(t_in, omega)):
         # a speed or IAS channel sampled fast carries the shaft's torsional vibration: as the
         # resampling speed it would phase-modulate every order (an IAS exported as "ias
         # [rpm]" read orders 3 and 6 of its own vibration 0.26 % and 0.9 % off); averaged
@@ -458,6 +450,18 @@ def speed_reference(record, channel: str, *, speed_channel: str | None = None,
     return out
 
 
+def _finite_speed(t_in, omega, source):
+    """A speed trace without its non-finite values (skipped with a warning); refused when
+    none is left."""
+    good = np.isfinite(omega)
+    if not good.all():
+        log.warning("%s: %d non-finite speed values skipped", source, int((~good).sum()))
+        t_in, omega = t_in[good], omega[good]
+    if t_in.shape[0] == 0:
+        raise AnalysisError(f"{source} holds no usable speed values")
+    return t_in, omega
+
+
 #: a speed glitch: this many robust standard deviations from the running median, and at least
 #: this fraction of it (a shaft cannot step by that much between two samples and back)
 _GLITCH_SIGMAS = 10.0
@@ -475,7 +479,8 @@ def _repair_glitches(t_in, omega, source):
     revolution, so a real IAS oscillation sets its own scale) and ``_GLITCH_FRACTION`` of the
     local speed away from that median, in a run left and re-entered faster than
     ``_GLITCH_RATE_RPM_S`` (2e4 rpm/s, twice a free-revving engine); a slower departure (a real
-    stop or step) is kept.
+    stop or step) is kept. The streamed trackers apply the same rules block by block
+    (:mod:`analysis.stream_speed`).
 
     Examples
     --------
@@ -486,53 +491,100 @@ def _repair_glitches(t_in, omega, source):
     >>> float(fixed.min()), float(fixed.max())
     (125.0, 125.0)
     """
-    from scipy.ndimage import median_filter
-
     n = omega.shape[0]
     if n < 9:
         return omega
-    per_rev = _samples_per_rev(t_in, omega)
-    width = int(np.clip(per_rev, 5, 101)) | 1
-    med = median_filter(omega, size=width, mode="nearest")
+    width = _glitch_width(t_in, omega)
+    med = _running_median(omega, width)
     dev = omega - med
-    sigma = 1.4826 * float(np.median(np.abs(dev - np.median(dev))))
-    bad = (np.abs(dev) > _GLITCH_SIGMAS * sigma) & \
-        (np.abs(dev) > _GLITCH_FRACTION * np.abs(med))
+    bad = _glitch_candidates(med, dev, _robust_sigma(dev))
     if not bad.any():
         return omega
     # keep departures a shaft can make (a real stop or step): out and back over the run's
     # span at less than _GLITCH_RATE_RPM_S
     edges = np.flatnonzero(np.diff(np.concatenate([[0], bad.astype(np.int8), [0]])))
     for a, b in edges.reshape(-1, 2):
-        span = float(t_in[min(b, n - 1)] - t_in[max(a - 1, 0)])
-        rate = float(np.max(np.abs(dev[a:b]))) * 60.0 / _TWO_PI / max(span, 1e-300)
-        if rate < _GLITCH_RATE_RPM_S:
+        if not _is_glitch_run(float(np.max(np.abs(dev[a:b]))),
+                              float(t_in[min(b, n - 1)] - t_in[max(a - 1, 0)])):
             bad[a:b] = False
     if not bad.any() or bad.all():
         return omega
     fixed = omega.copy()
     fixed[bad] = np.interp(t_in[bad], t_in[~bad], omega[~bad])
-    first = t_in[np.flatnonzero(bad)[:3]]
+    _warn_glitches(source, int(bad.sum()), float(np.max(np.abs(dev[bad]))),
+                   t_in[np.flatnonzero(bad)[:3]])
+    return fixed
+
+
+def _glitch_width(t_in, omega) -> int:
+    """Running-median width of the glitch test: about one revolution, odd, 5..101 samples."""
+    return int(np.clip(_samples_per_rev(t_in, omega), 5, 101)) | 1
+
+
+def _running_median(omega, width):
+    from scipy.ndimage import median_filter
+
+    return median_filter(omega, size=width, mode="nearest")
+
+
+def _robust_sigma(dev) -> float:
+    """Robust standard deviation (1.4826 × median absolute deviation) of ``dev``."""
+    return 1.4826 * float(np.median(np.abs(dev - np.median(dev))))
+
+
+def _glitch_candidates(med, dev, sigma):
+    """Samples ``_GLITCH_SIGMAS`` σ and ``_GLITCH_FRACTION`` of the local speed off the
+    running median ``med`` (``dev`` = speed − ``med``)."""
+    return (np.abs(dev) > _GLITCH_SIGMAS * sigma) & (np.abs(dev) > _GLITCH_FRACTION * np.abs(med))
+
+
+def _is_glitch_run(peak, span) -> bool:
+    """A run of candidates ``peak`` rad/s off, left and re-entered over ``span`` s: faster
+    than ``_GLITCH_RATE_RPM_S`` (a shaft cannot follow)."""
+    return peak * 60.0 / _TWO_PI / max(span, 1e-300) >= _GLITCH_RATE_RPM_S
+
+
+def _warn_glitches(source, count, worst, first_times):
     log.warning("%s: %d glitch sample(s) (spikes or drop-outs a shaft cannot follow: up to "
                 "%.4g rpm off the running speed) bridged by interpolation, first at t = %s s",
-                source, int(bad.sum()), float(np.max(np.abs(dev[bad]))) * 60 / _TWO_PI,
-                ", ".join(f"{v:.6g}" for v in first))
-    return fixed
+                source, count, worst * 60 / _TWO_PI, ", ".join(f"{v:.6g}" for v in first_times))
 
 
 def _one_direction(omega, source):
     """A speed channel negative wherever the shaft runs is a sensor whose sign convention is
     the other way round: its magnitude, with a warning. A channel with both signs (a real
     reversal) is left to the caller's refusal."""
-    running = np.abs(omega) > 0.005 * float(np.max(np.abs(omega)))
-    if running.any() and np.all(omega[running] < 0):
-        log.warning("%s is negative throughout (%.6g .. %.6g rpm): taken as the shaft turning "
-                    "the other way round to the sensor's sign convention; its magnitude is "
-                    "used (order amplitudes unchanged, phases referred to the shaft's own "
-                    "direction of rotation)", source, float(omega.min()) * 60 / _TWO_PI,
-                    float(omega.max()) * 60 / _TWO_PI)
+    if _negative_throughout(float(np.max(omega)), float(np.max(np.abs(omega)))):
+        _warn_negative(source, float(omega.min()), float(omega.max()))
         return -omega
     return omega
+
+
+def _negative_throughout(highest, top) -> bool:
+    """Whether a speed whose highest value is ``highest`` and largest magnitude ``top`` is
+    negative wherever the shaft runs (|speed| > 0.5 % of ``top``)."""
+    return top > 0 and highest <= 0.005 * top
+
+
+def _warn_negative(source, lowest, highest):
+    log.warning("%s is negative throughout (%.6g .. %.6g rpm): taken as the shaft turning "
+                "the other way round to the sensor's sign convention; its magnitude is "
+                "used (order amplitudes unchanged, phases referred to the shaft's own "
+                "direction of rotation)", source, lowest * 60 / _TWO_PI, highest * 60 / _TWO_PI)
+
+
+def _not_one_way(source, value_rpm, t) -> AnalysisError:
+    """The refusal of a speed that reverses (or never turns): ``value_rpm`` at ``t`` s."""
+    return AnalysisError(f"{source}: speed {value_rpm:.6g} rpm at t = {t:.6g} s; order "
+                         "analysis needs the shaft turning one way (>= 0 rpm throughout, "
+                         "> 0 somewhere); select a time range where it turns")
+
+
+def _averaged(source, samples_per_rev) -> bool:
+    """Whether a speed source is averaged over whole cycles before use: an IAS channel, or a
+    speed channel sampled at least 10 times a revolution (it carries the torsional vibration)."""
+    return source.startswith("IAS") or (source.startswith("speed channel")
+                                        and samples_per_rev >= 10)
 
 
 def _samples_per_rev(t_in, omega) -> float:

@@ -19,6 +19,13 @@ speed and the time axis). The functions here take a Record opened lazily by
 * VKF: overlapping segments with ``vkf_overlap`` / B_min seconds (default 8 decay lengths of
   the filter) on either side; only each segment's interior is kept, and the envelope phase is
   referred to the shaft angle from the record start;
+* a speed or IAS channel is prepared as :func:`analysis.speedref.speed_reference` prepares it
+  (counter glitches bridged with a warning, a speed negative throughout taken by its magnitude,
+  a reversal refused, a fast or IAS channel cycle-averaged; an encoder angle channel unwrapped,
+  its mean rotation the phase angle): on its own clock it is read whole and repaired by the
+  same functions, on the analysed channel's clock block by block
+  (:mod:`analysis.stream_speed`: equal to memory, ``tests/analysis/test_stream_speed.py``);
+  a record where the shaft stops is tracked in each running span, as in memory;
 * a pulse train (the speed source, or any wheel with a gap or mark in the record) gives the
   shaft angle per span as :func:`analysis.speedref.speed_reference` gives it in memory: the
   edges' mean rotation (:func:`analysis.trend.mean_rotation`, each span read with its reach as
@@ -59,6 +66,8 @@ from crankbench.predict._validate import check_int, check_option, check_positive
 from crankbench.predict.errors import AnalysisError, RecordError
 from crankbench.predict._deprecate import renamed
 
+from .stream_speed import SpanSpeed, _running_span, _speed_for, _stopped_spans
+
 __all__ = ["SpanSpeed", "decimate_stream", "order_map_stream", "order_track_stream"]
 
 log = logging.getLogger("crankbench")
@@ -66,162 +75,60 @@ log = logging.getLogger("crankbench")
 _TWO_PI = 2.0 * np.pi
 
 
-# ---------------------------------------------------------------------------- speed per span
+# ---------------------------------------------------------------------------- stops
 
 
-class SpanSpeed:
-    """Shaft speed (rpm) on any span of a channel's samples, without the whole-record array.
+def _track_running_spans(record, channel, speed, stops, options, *, compute=None,
+                         what="orders are tracked"):
+    """Streamed tracks (or, with ``compute=order_map_stream``, the order map) of each span
+    where the shaft turns, as the in-memory tracker gives them (a warning names the standing
+    spans; their results are absent)."""
+    import warnings
 
-    Parameters
-    ----------
-    n : int
-        Samples of the analysed channel.
-    fs : float
-        Its sample rate, Hz.
-    t0 : float
-        Time of its first sample, s.
-    rpm : float or array_like, optional
-        Speed per sample (rpm) or a constant; else taken from ``t_in``/``omega``.
-    t_in, omega : ndarray, optional
-        A speed trace (s, rad/s) interpolated linearly (ends held), as
-        :func:`analysis.speedref.speed_reference` does.
+    import xarray as xr
 
-    Examples
-    --------
-    >>> s = SpanSpeed(10, 10.0, 0.0, t_in=np.array([0.0, 1.0]), omega=np.array([0.0, 2 * np.pi]))
-    >>> s(2, 4).tolist()
-    [12.0, 18.0]
-    """
+    from .orders import OrderWarning
 
-    @renamed(rpm="speed_rpm")
-    def __init__(self, n, fs, t0, *, speed_rpm=None, t_in=None, omega=None):
-        self.n, self.fs, self.t0 = int(n), float(fs), float(t0)
-        if speed_rpm is None or hasattr(speed_rpm,
-                                        "compute"):      # dask: sliced per span, never whole
-            self._rpm = speed_rpm
-        else:
-            self._rpm = np.asarray(speed_rpm,
-                                   float) if not np.isscalar(speed_rpm) else float(speed_rpm)
-        self._t_in, self._omega = t_in, omega
-        self.angle = None            # optional angle(a, b) -> shaft angle (rad) of the span
-        self.angle_reference = ("shaft angle 0 at the first sample of the record "
-                                "(speed-reference integration)")
-
-    def __call__(self, a: int, b: int) -> np.ndarray:
-        if self._rpm is not None:
-            if np.ndim(self._rpm) == 0:
-                return np.full(b - a, self._rpm)
-            part = self._rpm[a:b]
-            part = np.asarray(part.compute() if hasattr(part, "compute") else part, float)
-            if not np.isfinite(part).all() or part.min() <= 0:
-                raise AnalysisError(f"speed between samples {a} and {b} is not finite and > 0 "
-                                    "rpm; order analysis needs the shaft turning")
-            return part
-        t = self.t0 + np.arange(a, b) / self.fs
-        return np.interp(t, self._t_in, self._omega) * (60.0 / _TWO_PI)
-
-
-def _speed_for(record, channel, var, *, speed_rpm, speed_channel) -> SpanSpeed:
-    from .speedref import _is_pulses, _pulse_reference_channel, _pulse_speed, _times
-    from .speedref import find_speed_channel
-
-    n, fs = var.shape[0], float(var.attrs["sample_rate"])
-    t0 = _first_time(record, var)
-    if speed_rpm is not None:
-        if not np.isscalar(speed_rpm) and np.shape(speed_rpm)[0] != n:
-            raise AnalysisError(f"speed_rpm has {np.shape(speed_rpm)[0]} samples but channel {channel!r} has "
-                                f"{n}; give one speed per sample, a constant, or speed_channel")
-        speed = SpanSpeed(n, fs, t0, speed_rpm=speed_rpm.data if hasattr(speed_rpm, "coords")
-                          else speed_rpm)
-        coords = getattr(speed_rpm, "coords", {})
-        if "shaft_angle" in coords:              # speed_reference's angle, as in memory
-            angle = speed_rpm["shaft_angle"].data
-            speed.angle = lambda a, b: np.asarray(angle[a:b], float)
-            speed.angle_reference = str(speed_rpm["shaft_angle"].attrs.get(
-                "reference", speed_rpm.attrs.get("angle_reference", "")))
-        return speed
-    name = speed_channel or find_speed_channel(record, channel)
-    if name not in record.data_vars:
-        raise RecordError(f"record has no speed channel {name!r}")
-    sv = record[name]
-    if _is_pulses(sv):
-        t_in, omega = _pulse_speed(sv, name)
-    else:
-        if sv.attrs.get("units", "rad/s") != "rad/s":
-            raise RecordError(f"speed channel {name!r} has units {sv.attrs.get('units')!r}; "
-                              "expected 'rad/s'")
-        if sv.dims == var.dims:       # same clock: read the span of the speed channel itself
-            return SpanSpeed(n, fs, t0, speed_rpm=sv.data * (60.0 / _TWO_PI))
-        rate = sv.attrs.get("sample_rate")
-        if rate is not None and sv.dims[0] in record.coords:   # regular clock: t0 + i/rate
-            t_in = _first_time(record, sv) + np.arange(sv.shape[0]) / float(rate)
-        else:
-            t_in = np.asarray(_times(record, name), float)
-        omega = np.asarray(sv.values, float)
-    good = np.isfinite(omega)
-    t_in, omega = np.asarray(t_in)[good], np.asarray(omega)[good]
-    if t_in.shape[0] == 0:
-        raise AnalysisError(f"speed source {name!r} holds no usable speed values")
-    speed = SpanSpeed(n, fs, t0, t_in=t_in, omega=omega)
-    pulse = name if _is_pulses(sv) else _pulse_reference_channel(record, exclude=name)
-    if pulse is not None and omega.min() > 0:
-        _attach_pulse_angle(speed, record[pulse], pulse)
-    return speed
-
-
-def _attach_pulse_angle(speed: SpanSpeed, pv, name: str) -> None:
-    """The shaft angle per span from a pulse train's edges, as
-    :func:`analysis.speedref.speed_reference` gives it for the whole channel (the edges' mean
-    rotation, :func:`analysis.trend.mean_rotation`, each span read with its reach as margin),
-    and the phase reference (TDC where the wheel has a gap or mark)."""
-    from crankbench.predict.errors import AnalysisError as _AE
-
-    from .speedref import _pulse_angle_function
-    from .trend import MEAN_ROTATION_REACH_REVOLUTIONS, mean_rotation
-
-    edges = np.asarray(pv.values, float)
+    compute = order_track_stream if compute is None else compute
     n, fs, t0 = speed.n, speed.fs, speed.t0
-    if edges.size <= 8 or edges[0] > t0 + (n - 1) / fs or edges[-1] < t0:
-        return
-    try:
-        at, reference = _pulse_angle_function(pv, name)
-    except _AE as exc:                         # an undecodable wheel: integrate instead
-        log.warning("pulse train %r gives no angle (%s); phases from the integrated speed",
-                    name, exc)
-        return
-    ends = (float(at(np.array([t0]))[0]), float(at(np.array([t0 + (n - 1) / fs]))[0]))
-    low = float(speed._omega.min()) * 60.0 / _TWO_PI
-    margin = int(np.ceil(1.2 * MEAN_ROTATION_REACH_REVOLUTIONS * 60.0 / low * fs)) + 2
-
-    def angle(a, b):
-        ra, rb = max(0, a - margin), min(n, b + margin)
-        t = t0 + np.arange(ra, rb) / fs
-        return mean_rotation(at(t), speed(ra, rb), fs, ends=ends)[a - ra:b - ra]
-
-    speed.angle = angle
-    speed.angle_reference = reference
-
-
-def _first_time(record, var) -> float:
-    dim = var.dims[0]
-    if dim in record.coords and var.shape[0]:
-        return float(record[dim][0].values)
-    return 0.0
+    bounds = [0] + [v for s in stops for v in s] + [n]
+    runs = [(a, b) for a, b in zip(bounds[0::2], bounds[1::2]) if b > a]
+    shown = ", ".join(f"{t0 + a / fs:.6g}..{t0 + (b - 1) / fs:.6g} s" for a, b in stops[:5])
+    warnings.warn(f"{channel}: the shaft stands (speed <= 0.5 % of {speed.extremes[1]:.6g} "
+                  f"rpm) at {shown}; {what} in each running span separately",
+                  OrderWarning, stacklevel=3)
+    log.warning("%s: the shaft stands at %s; %s in each running span", channel, shown, what)
+    dim = record[channel].dims[0]
+    parts, skipped = [], []
+    for a, b in runs:
+        sub = record[[channel]].isel({dim: slice(a, b)})
+        try:
+            parts.append(compute(sub, channel, speed_rpm=_running_span(speed, a, b), **options))
+        except AnalysisError as exc:
+            skipped.append(f"{t0 + a / fs:.6g}..{t0 + (b - 1) / fs:.6g} s ({exc})")
+    if not parts:
+        raise AnalysisError(f"{channel}: no running span long enough to analyse: "
+                            f"{'; '.join(skipped)}")
+    if skipped:
+        log.info("%s: running spans not analysed: %s", channel, "; ".join(skipped))
+    extra = {} if isinstance(parts[0], xr.DataArray) else {"data_vars": "minimal"}
+    out = xr.concat(parts, dim="time", coords="minimal", combine_attrs="override",
+                    **extra) if len(parts) > 1 else parts[0]
+    out.attrs["stopped_spans_s"] = [v for a, b in stops for v in (t0 + a / fs,
+                                                                  t0 + (b - 1) / fs)]
+    return out
 
 
 def _reader(var):
     """``read(a, b)`` -> float64 samples a..b-1 of a (lazy) channel, checked finite."""
+    from .stream_speed import read_finite
+
     data = var.data
-    name = str(var.name)
+    label = f"channel {str(var.name)!r}"
 
     def read(a, b):
-        block = data[a:b]
-        block = np.asarray(block.compute() if hasattr(block, "compute") else block, np.float64)
-        if not np.isfinite(block).all():
-            i = a + int(np.flatnonzero(~np.isfinite(block))[0])
-            raise AnalysisError(f"channel {name!r}: NaN/inf at sample {i}; streamed order "
-                                "tracking needs finite samples (use order_track on a span)")
-        return block
+        return read_finite(data, a, b, label, "streamed order tracking needs finite samples "
+                           "(use order_track on a span)")
     return read
 
 
@@ -378,13 +285,15 @@ class _Framer:
 
 
 def _prepare(record, channel, *, speed_rpm, speed_channel, chunk, trend, segment_seconds,
-             orders=None):
+             orders=None, speed=None):
     """Channel, speed, detrending reader and segment length of a streamed analysis."""
     var = _channel(record, channel)
     label = str(channel)
     segment_seconds = check_positive(segment_seconds, "segment_seconds", error=AnalysisError)
     chunk = check_int(chunk, "chunk", minimum=1024, error=AnalysisError)
-    speed = _speed_for(record, channel, var, speed_rpm=speed_rpm, speed_channel=speed_channel)
+    if speed is None:
+        speed = _speed_for(record, channel, var, speed_rpm=speed_rpm,
+                           speed_channel=speed_channel)
     if orders is not None:          # before any work: the top order below the Nyquist frequency
         top = float(np.max(orders)) * _speed_top(speed, chunk) / 60.0
         if top >= 0.5 * speed.fs:
@@ -463,8 +372,9 @@ def _blocks(speed, reader, *, label, samples_per_rev, revolutions, overlap, inte
 def _coarse_speed(speed: SpanSpeed, points: int = 20000) -> np.ndarray:
     """The speed at about ``points`` samples spread over the record (sweep-rate estimate)."""
     step = max(1, speed.n // points)
-    return np.concatenate([speed(a, min(speed.n, a + 1)) for a in range(0, speed.n, step)]), \
-        speed.fs / step
+    span = step * max(1, (1 << 18) // step)          # whole spans, every step-th sample kept
+    return np.concatenate([speed(a, min(speed.n, a + span))[::step]
+                           for a in range(0, speed.n, span)]), speed.fs / step
 
 
 @renamed(rpm="speed_rpm")
@@ -533,9 +443,23 @@ def order_track_stream(record, channel: str, *, orders, speed_rpm=None, speed_ch
     method = check_option(method, "method", _METHODS, error=AnalysisError)
     factor = amplitude_factor(amplitude)
     orders = _check_orders(orders)
+    speed = None
+    if not isinstance(speed_rpm, SpanSpeed):
+        speed = _speed_for(record, channel, _channel(record, channel), speed_rpm=speed_rpm,
+                           speed_channel=speed_channel)
+        stops = _stopped_spans(speed)
+        if stops is not None:
+            return _track_running_spans(record, channel, speed, stops, dict(
+                orders=orders, segment_seconds=segment_seconds, amplitude=amplitude,
+                method=method, samples_per_rev=samples_per_rev, revolutions=revolutions,
+                overlap=overlap, window=window, interpolation=interpolation, chunk=chunk,
+                bandwidth_hz=bandwidth_hz, bandwidth_orders=bandwidth_orders,
+                filter_order=filter_order, vkf_overlap=vkf_overlap, trend=trend))
+    else:
+        speed = speed_rpm
     var, label, speed, segment, reader = _prepare(
-        record, channel, speed_rpm=speed_rpm, speed_channel=speed_channel, chunk=chunk,
-        trend=trend, segment_seconds=segment_seconds, orders=orders)
+        record, channel, speed_rpm=None, speed_channel=speed_channel, chunk=chunk,
+        trend=trend, segment_seconds=segment_seconds, orders=orders, speed=speed)
     if method == "vkf" or (method == "auto" and (bandwidth_hz is not None
                                                  or bandwidth_orders is not None)):
         return _vkf_stream(var, label, speed, reader, orders=orders, segment=segment,
@@ -618,9 +542,23 @@ def order_map_stream(record, channel: str, *, speed_rpm=None, speed_channel=None
                                                              error=AnalysisError)
     if top > spr / 2 + 1e-12:
         raise AnalysisError(f"max_order {top:g} exceeds samples_per_rev/2 = {spr / 2:g}")
+    if not isinstance(speed_rpm, SpanSpeed):
+        speed = _speed_for(record, channel, _channel(record, channel), speed_rpm=speed_rpm,
+                           speed_channel=speed_channel)
+        stops = _stopped_spans(speed)
+        if stops is not None:      # a record that stops: the map of each running span
+            return _track_running_spans(record, channel, speed, stops, dict(
+                segment_seconds=segment_seconds, samples_per_rev=samples_per_rev,
+                revolutions=revolutions, overlap=overlap, window=window, amplitude=amplitude,
+                scaling=scaling, max_order=max_order, interpolation=interpolation,
+                chunk=chunk, trend=trend), compute=order_map_stream,
+                what="the order map is computed")
+        speed_rpm = speed
     var, label, speed, segment, reader = _prepare(
-        record, channel, speed_rpm=speed_rpm, speed_channel=speed_channel, chunk=chunk,
-        trend=trend, segment_seconds=segment_seconds)
+        record, channel, speed_rpm=None if isinstance(speed_rpm, SpanSpeed) else speed_rpm,
+        speed_channel=speed_channel, chunk=chunk, trend=trend,
+        segment_seconds=segment_seconds,
+        speed=speed_rpm if isinstance(speed_rpm, SpanSpeed) else None)
     length = spr * int(revolutions)
     n_orders = min(length // 2 + 1, int(np.floor(top * int(revolutions))) + 1)
     spectra = MapSpectra(length, window, scaling, factor, n_orders)

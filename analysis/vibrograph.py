@@ -43,6 +43,7 @@ from pathlib import Path
 
 import numpy as np
 
+from crankbench.measure.provenance import source_sha256
 from crankbench.predict._validate import check_positive, check_range
 from crankbench.predict.errors import AnalysisError, ConfigError, ModelError, RecordError
 
@@ -663,7 +664,7 @@ def compare_vibrograph(record, model, *, load=None, speed_channel=None, orders=N
                 "sensors": "; ".join(s.describe() for s in sensors),
                 "skipped": "; ".join(f"{n}: {r}" for n, r in skipped) or "none"}
     return VibrographResult(
-        source=source, record_sha256=str(rec.attrs.get("sha256", "")), model_path=model_path,
+        source=source, record_sha256=source_sha256(rec, missing=""), model_path=model_path,
         sensors=tuple(tracked), skipped=skipped, table=table, verdicts=tuple(verdicts),
         residuals=residuals, curves=curves, speed_range_rpm=(lo, hi),
         sweep_rate_rpm_per_s=sweep, tolerance=tolerance, settings=settings,

@@ -11,11 +11,24 @@ smoothness term for ``c``; ``p`` = ``filter_order``: first or second differences
 solved with the orders, so it cannot leak into a low order. Each envelope is a cubic B-spline
 with knots every ``m`` samples (``m = 1``: one value per sample, the classical form). The normal
 equations couple the ``2K + 1`` unknowns of one knot with each other and with ``max(p, 3)``
-neighbouring knots only, so the matrix is banded (half-bandwidth ``(2K+1)·max(p, 3) + 2K``)
-and is solved by a banded Cholesky factorisation with one step of iterative refinement:
-assembly O(N K²), factorisation O((N/m) K³ ·max(p,3)²) — linear in the samples. The data part of
-the matrix is assembled by grouping the samples of each knot interval (one matrix product of
-the ``(2K+1)(2K+2)/2`` basis products with the spline weights), not by scattering each sample.
+neighbouring knots only, so the matrix is banded (half-bandwidth ``u = (2K+1)·max(p, 3) + 2K``)
+and is solved by a banded Cholesky factorisation with one step of iterative refinement.
+
+Cost, for ``N`` samples at the solve rate, ``K`` orders and knots every ``m`` samples (what
+runs; :mod:`analysis._vkf_kernels`, compiled by numba, numpy/SciPy twins otherwise):
+
+* decimation: a polyphase FIR cascade, ``Σ_s taps_s/(q_1⋯q_s)`` multiply-adds per input
+  sample, linear in the record and independent of ``K``;
+* assembly, one pass over the samples: the ``(2K+1)(2K+2)/2`` basis products of each sample
+  times the 10 spline-weight pairs of its knot interval, O(N K²);
+* factorisation O((N/m)(2K+1) u²) = O((N/m) K³) with ``m`` ≈ ``fs/(40 B)`` (the compiled
+  column-band Cholesky up to ``u`` = 39, LAPACK's blocked ``dpbtrf`` above); substitutions,
+  refinement and envelopes O((N/m) K²) and O(N K); noise and smearing estimates O(N K).
+
+All of it is linear in the samples (bench suite ``scaling``: fitted exponent against record
+length, bound 1.25). In the orders the sample-proportional part is quadratic and the
+factorisation cubic with a small constant: the fitted exponent against 1–16 orders is bounded
+by 2 in the same suite, but beyond about 8 orders the cubic term takes over.
 
 Bandwidth: for a stationary order the envelope filter is
 ``H(ν) = 1/(1 + 2r²(2 sin(π ν/fs))^{2p})`` (``ν`` the offset from the order; the data term of the
@@ -35,11 +48,13 @@ a resonance-shaped (Lorentzian) envelope of half-power crossing time ``T`` is ab
 (``T² = 8|A|/|A''|`` at a Lorentzian peak) and reported with the noise in
 ``amplitude_uncertainty``.
 
-Implementation: the record is first low-passed and decimated in the frequency domain (the
-anti-alias filter of :mod:`analysis.resample`, 100 dB) to about four times the highest order
-frequency, then solved in overlapping blocks whose overlap covers the filter's memory
-(``6/B`` seconds each side), so memory is bounded for long records. The record ends (the
-decimation filter's half-length) are trimmed.
+Implementation: the record is first low-passed and decimated by ``q = floor(fs/(4 f_max))``
+(``f_max`` the highest order frequency plus its bandwidth) with a cascade of zero-phase
+Kaiser-window FIR stages (:func:`_decimator`: pass band ``[0, f_max]`` flat to 1e-5, all that
+would alias into the output band 100 dB down — both checked on the designed taps by
+``tests/analysis/test_vkf_kernels.py``), then solved in overlapping blocks whose overlap covers
+the filter's memory (``6/B`` seconds each side), so memory is bounded for long records. The
+record ends (the decimation filters' half-lengths) are trimmed.
 
 References
 ----------
@@ -64,15 +79,14 @@ from crankbench.predict._validate import check_int, check_option, check_positive
 from crankbench.predict.errors import AnalysisError
 from crankbench.predict._threads import single_threaded_blas
 
-from .resample import _as_angle, _as_rpm, _as_signal, _fft_lowpass
+from . import _vkf_kernels
+from .resample import _as_angle, _as_rpm, _as_signal
 from .resample import shaft_angle as _integrate_speed
 
 __all__ = ["vold_kalman", "vkf_weight", "enbw_hz", "smearing_constant"]
 
 log = logging.getLogger("crankbench")
 
-_DIFF = {1: np.array([-1.0, 1.0]), 2: np.array([1.0, -2.0, 1.0])}
-_TWO_PI = 2.0 * np.pi
 
 
 def vkf_weight(bandwidth_hz, fs: float, filter_order: int):
@@ -147,176 +161,97 @@ def smearing_constant(filter_order: int) -> float:
     return float(c * 2.0 ** (2 * filter_order) * math.factorial(2 * filter_order))
 
 
-def _decimate(values: np.ndarray, fs: float, f_max: float):
-    """Low-pass and decimate (in the frequency domain) so that ``f_max`` stays flat (ripple
-    ≈ 1e-5, 100 dB above ``fs_new/2``).
+#: Kaiser design of each decimation stage (dB): ripple ≈ 2.5e-6 in its pass and stop bands by
+#: Kaiser's formula, raised where the cascade's computed pass band is not flat to 1e-5 (short
+#: stages miss the formula)
+_DECIMATION_DB = 112.0
 
-    Returns (decimated values, input index of each output sample, new rate)."""
+
+def _kaiser_lowpass(f_pass: float, f_stop: float, fs: float, db: float) -> np.ndarray:
+    """Symmetric odd-length Kaiser-windowed ideal low-pass (cut-off midway between ``f_pass``
+    and ``f_stop``; β and length from Kaiser's formulas for ``db``), unit DC gain."""
+    beta = 0.1102 * (db - 8.7)
+    half = int(math.ceil(beta / (np.pi * (f_stop - f_pass)) * fs))
+    f_cut = 0.5 * (f_pass + f_stop)
+    n = np.arange(-half, half + 1)
+    h = np.sinc(2.0 * f_cut / fs * n) * np.kaiser(2 * half + 1, beta)
+    return h / h.sum()
+
+
+@functools.lru_cache(maxsize=64)
+def _decimator(fs: float, f_max: float, q: int):
+    """Stages ``((q_s, h_s), …)`` of an FIR cascade decimating by ``q`` that keeps
+    ``[0, f_max]`` flat (|H − 1| ≤ 1e-5, checked on the designed taps) and attenuates by
+    ≥ 100 dB all that would alias into the output band ``[0, fs/(2q)]``: stage ``s`` (output
+    rate ``f_s``) stops from ``f_s − fs/(2q)`` (what lies between its pass and stop edges
+    folds above ``fs/(2q)`` and is removed by the next stage). Of ``q`` itself and its
+    two-factor splits, the one with the fewest multiply-adds per input sample."""
+    fs_out = fs / q
+    probe = np.linspace(0.0, f_max, 1025)
+    best = None
+    for factors in [(q,)] + [(a, q // a) for a in range(2, q) if q % a == 0]:
+        db = _DECIMATION_DB
+        while True:
+            rate, cost, stages, gain = fs, 0.0, [], np.ones_like(probe)
+            for qs in factors:
+                rate /= qs
+                h = _kaiser_lowpass(f_max, rate - 0.5 * fs_out, rate * qs, db)
+                n = np.arange(h.shape[0]) - h.shape[0] // 2
+                gain *= np.cos(2.0 * np.pi * np.outer(probe, n) / (rate * qs)) @ h
+                cost += h.shape[0] * rate / fs           # multiply-adds per input sample
+                stages.append((qs, h))
+            if np.abs(gain - 1.0).max() <= 1e-5 or db > _DECIMATION_DB + 20:
+                break
+            db += 6.0
+        if best is None or cost < best[0]:
+            best = (cost, tuple(stages))
+    return best[1]
+
+
+def _decimate(values: np.ndarray, fs: float, f_max: float):
+    """Low-pass and decimate by ``q = floor(fs/(4 f_max))`` with the FIR cascade of
+    :func:`_decimator` (zero phase: each output is centred on an input sample; pass band flat
+    to 1e-5, aliases ≥ 100 dB down; polyphase, so the work is the taps per *output* sample).
+
+    Returns (decimated values, input index of each output sample, new rate); the record ends
+    that the filters do not cover fully are dropped."""
     q = int(max(1, math.floor(fs / (4.0 * f_max))))
     if q == 1:
         return values, np.arange(values.shape[0]), fs
+    # records shorter than a one-stage filter are solved at their own rate (checked before any
+    # design: an extremely low speed asks for a huge q)
     from .resample import _aa_half_length
 
-    fs_new = fs / q
-    f_stop = 0.5 * fs_new
-    half = int(math.ceil(_aa_half_length(f_max, f_stop) * fs)) + 1
+    half = int(math.ceil(_aa_half_length(f_max, 0.5 * fs / q) * fs)) + 1
     if values.shape[0] <= 2 * half + 4 * q:
         return values, np.arange(values.shape[0]), fs
-    from .resample import _good_size
-
-    n_out = _good_size(-(-values.shape[0] // q))
-    filtered = _fft_lowpass(values, fs, f_max, f_stop, q * n_out, n_out)
-    first = -(-half // q)                          # first complete output
-    last = (values.shape[0] - 1 - half) // q        # last complete output
-    index = q * np.arange(first, last + 1)
-    return filtered[first:last + 1], index, fs_new
-
-
-def _spline_weights(n: int, m: int):
-    """Envelope representation on knots every ``m`` samples.
-
-    ``m == 1``: one unknown per sample (the classical VKF). ``m > 1``: uniform cubic B-spline
-    coefficients; sample ``i`` uses coefficients ``q_i … q_i + 3``. Returns (q, W, n_coef)."""
-    if m == 1:
-        return np.arange(n), np.ones((n, 1)), n
-    pos = np.arange(n) / m
-    q = np.floor(pos).astype(np.int64)
-    f = pos - q
-    f2, f3 = f * f, f * f * f
-    w = np.empty((n, 4))
-    w[:, 0] = (1.0 - f) ** 3 / 6.0
-    w[:, 1] = (3.0 * f3 - 6.0 * f2 + 4.0) / 6.0
-    w[:, 2] = (-3.0 * f3 + 3.0 * f2 + 3.0 * f + 1.0) / 6.0
-    w[:, 3] = f3 / 6.0
-    return q, w, int(q[-1]) + 4
+    stages = _decimator(float(fs), float(f_max), q)
+    y, offset, step = values, 0, 1           # y[l] is centred on input offset + step·l
+    for qs, h in stages:
+        half = h.shape[0] // 2
+        first = -(-half // qs)                          # first complete output
+        last = (y.shape[0] - 1 - half) // qs            # last complete output
+        y = _vkf_kernels.fir_decimate(y, h, qs, first, last - first + 1)
+        offset += step * qs * first
+        step *= qs
+    return y, offset + step * np.arange(y.shape[0]), fs / q
 
 
-@functools.lru_cache(maxsize=32)
-def _layout(m: int, s: int, u: int):
-    """Where each (slot a, slot b, column j, column jj) product goes in upper banded storage
-    of ``m`` unknowns per knot and ``s`` knots per sample: for slot pairs a ≤ b, the row
-    ``u − d`` and column offset of every entry, with the index of its symmetric column pair."""
-    pairs = [(j, jj) for j in range(m) for jj in range(j, m)]
-    pair_index = {pr: i for i, pr in enumerate(pairs)}
-    slot_pairs = [(a, b) for a in range(s) for b in range(a, s)]
-    rows, col_off, src_slot, src_pair = [], [], [], []
-    for ia, (a, b) in enumerate(slot_pairs):
-        for j in range(m):
-            for jj in range(m):
-                d = (b - a) * m + (jj - j)
-                if d < 0 or (a == b and jj < j):
-                    continue
-                rows.append(u - d)
-                col_off.append(b * m + jj)
-                src_slot.append(ia)
-                src_pair.append(pair_index[(min(j, jj), max(j, jj))])
-    return (np.array(pairs), slot_pairs, np.array(rows), np.array(col_off),
-            np.array(src_slot), np.array(src_pair))
-
-
-def _assemble(basis, x, q, w, n_coef, weights, p):
-    """Banded upper form of A = CᵀC + Σ_k r_k² D_pᵀ D_p and the right side Cᵀx.
-
-    ``basis``: (N, m) columns; ``q, w``: envelope representation (:func:`_spline_weights`; the
-    knots are uniform, so samples of one knot interval share their weight pattern);
-    ``weights``: (n_coef − p, m) squared weights per difference row and column. Unknown
-    (coefficient c, j) has flat index m c + j. Work: one product of the ``m(m+1)/2`` basis
-    products per sample with the ``s(s+1)/2`` weight products per position in a knot interval.
-    """
-    n, m = basis.shape
-    s = w.shape[1]
-    u = m * max(p, s - 1) + m - 1
-    size = n_coef * m
-    pairs, slot_pairs, rows, col_off, src_slot, src_pair = _layout(m, s, u)
-    prod = basis[:, pairs[:, 0]] * basis[:, pairs[:, 1]]            # (N, P)
-    groups = int(q[-1]) + 1
-    if s > 1:
-        span = int(np.max(np.bincount(q)))
-        # sample i sits at position i - span*q_i of its knot interval (uniform knots): lay the
-        # products out as (position, interval, pair) and sum each interval with the spline
-        # weights of every position in one matrix product
-        pos = np.arange(n) - span * q
-        lay = np.zeros((span, groups, prod.shape[1]))
-        lay[pos, q] = prod
-        wpat = np.zeros((len(slot_pairs), span))
-        wpat[:, pos[:span]] = np.stack([w[:span, a] * w[:span, b] for a, b in slot_pairs])
-        sums = (wpat @ lay.reshape(span, -1)).reshape(len(slot_pairs), groups, -1)
-        lay_x = np.zeros((span, groups, m))
-        lay_x[pos, q] = basis * x[:, None]
-        wv = np.zeros((s, span))
-        wv[:, pos[:span]] = w[:span].T
-        rsum = (wv @ lay_x.reshape(span, -1)).reshape(s, groups, m)
-    else:
-        sums = prod[None]                                            # (1, N, P)
-        rsum = (basis * x[:, None])[None]                            # (1, N, m)
-    # scatter: entry (row, g m + col_off) gets sums[src_slot, g, src_pair]
-    g = np.arange(groups)
-    flat_cols = (g[:, None] * m + col_off[None, :]).ravel()
-    flat_rows = np.broadcast_to(rows, (groups, rows.shape[0])).ravel()
-    vals = sums[src_slot, :, src_pair].T.ravel()
-    ab = np.bincount(flat_rows * size + flat_cols, weights=vals,
-                     minlength=(u + 1) * size).reshape(u + 1, size)
-    c = _DIFF[p]
-    rowsd = np.arange(weights.shape[0])
-    for a in range(p + 1):
-        for b in range(a, p + 1):
-            cols = ((rowsd[:, None] + b) * m + np.arange(m)[None, :]).ravel()
-            ab[u - (b - a) * m, cols] += c[a] * c[b] * weights.ravel()
-    rhs = np.bincount(((g[None, :, None] + np.arange(s)[:, None, None]) * m
-                       + np.arange(m)[None, None, :]).ravel(), weights=rsum.ravel(),
-                      minlength=size)
-    return ab, rhs
-
-
-def _banded_matvec(ab, z, u):
-    """y = A z for a symmetric matrix in upper banded storage."""
-    y = ab[u] * z
-    for d in range(1, u + 1):
-        diag = ab[u - d, d:]
-        y[:-d] += diag * z[d:]
-        y[d:] += diag * z[:-d]
-    return y
-
-
-def _solve_block(x, phase, knot_weights, p, m, trend):
-    """Solve one block; ``knot_weights``: (n_coef - p, K [+1]) r² per difference row."""
-    from scipy.linalg import cho_solve_banded, cholesky_banded
-
-    n, k = phase.shape
-    cols = 2 * k + (1 if trend else 0)
-    basis = np.empty((n, cols))
-    basis[:, 0:2 * k:2] = np.cos(phase)
-    basis[:, 1:2 * k:2] = -np.sin(phase)
-    if trend:
-        basis[:, -1] = 1.0
-    q, w, n_coef = _spline_weights(n, m)
+def _solve_block(x, cosp, sinp, knot_weights, p, m, trend):
+    """Solve one block; ``knot_weights``: (n_coef - p, K [+1]) r² per difference row.
+    Returns (envelopes (n, K), trend (n,), model (n,))."""
+    n, k = cosp.shape
+    n_coef = n if m == 1 else (n - 1) // m + 4
     col_w = np.repeat(knot_weights[:, :k], 2, axis=1)
     if trend:
         col_w = np.concatenate([col_w, knot_weights[:, k:]], axis=1)
-    ab, rhs = _assemble(basis, x, q, w, n_coef, col_w, p)
-    u = ab.shape[0] - 1
-    # factor in LAPACK's lower band form (dpbtrf 'L'): same matrix, and OpenBLAS's threaded
-    # upper-form path can be ~100x slower on a busy machine
-    low = np.zeros_like(ab)
-    for d in range(u + 1):
-        low[d, : ab.shape[1] - d] = ab[u - d, d:]
+    band, rhs = _vkf_kernels.assemble(x, cosp, sinp, trend, m, n_coef, p, col_w)
     try:
-        factor = cholesky_banded(low, lower=True, check_finite=False)
-    except np.linalg.LinAlgError:
+        z = _vkf_kernels.solve(band, rhs)
+    except _vkf_kernels.NotPositiveDefinite:
         raise AnalysisError("Vold-Kalman system is not positive definite; the bandwidth is "
                             "too narrow for float64 at this sample rate (widen bandwidth)") from None
-    z = cho_solve_banded((factor, True), rhs, check_finite=False)
-    z += cho_solve_banded((factor, True), rhs - _banded_matvec(ab, z, u), check_finite=False)
-    coef = z.reshape(n_coef, cols)
-    cplx = coef[:, 0:2 * k:2] + 1j * coef[:, 1:2 * k:2]          # (n_coef, K)
-    env = np.zeros((n, k), dtype=complex)
-    mean = np.zeros(n)
-    for a in range(w.shape[1]):
-        env += w[:, a:a + 1] * cplx[q + a]
-        if trend:
-            mean += w[:, a] * coef[q + a, -1]
-    model = np.real(env * np.exp(1j * phase)).sum(axis=1) + mean
-    return env, mean, model
+    return _vkf_kernels.envelopes(z.reshape(n_coef, -1), cosp, sinp, m, trend)
 
 
 def _bandwidths(bandwidth_hz, bandwidth_orders, orders, speeds, n):
@@ -354,7 +289,6 @@ def _bandwidths(bandwidth_hz, bandwidth_orders, orders, speeds, n):
 
 
 @renamed(rpm="speed_rpm")
-@single_threaded_blas  # banded solves per block: BLAS threads only cost (issue 21)
 def vold_kalman(x, *, fs=None, speed_rpm, orders, bandwidth_hz=None, bandwidth_orders=None,
                 filter_order: int = 2, decimate: bool = True, block: int = 1 << 15,
                 knots_per_bandwidth: float | None = 40.0, shaft_angle=None,
@@ -382,7 +316,7 @@ def vold_kalman(x, *, fs=None, speed_rpm, orders, bandwidth_hz=None, bandwidth_o
         Order of the smoothness (difference) equation; 2 gives a flatter pass band.
     decimate : bool
         Low-pass and decimate to ≈ 4× the highest order frequency before solving (faster; the
-        pass band is flat to ≈ 1e-5).
+        pass band is flat to 1e-5, aliases 100 dB down).
     block : int
         Samples (after decimation) solved at a time, plus the overlap (bounds memory).
     knots_per_bandwidth : float or None
@@ -424,7 +358,48 @@ def vold_kalman(x, *, fs=None, speed_rpm, orders, bandwidth_hz=None, bandwidth_o
     >>> np.round(amp.mean("time").values, 4), round(float(res["mean"].mean()), 4)
     (array([1. , 0.2]), 5.0)
     """
-    values, fs, units, label = _as_signal(x, fs)
+    res = _vold_kalman_arrays(x, fs=fs, speed_rpm=speed_rpm, orders=orders,
+                              bandwidth_hz=bandwidth_hz, bandwidth_orders=bandwidth_orders,
+                              filter_order=filter_order, decimate=decimate, block=block,
+                              knots_per_bandwidth=knots_per_bandwidth, shaft_angle=shaft_angle,
+                              trend=trend)
+    import xarray as xr
+
+    units = res["units"]
+    env = res["envelope"]
+    recon = env.real * res["cos"] - env.imag * res["sin"]
+    ds = xr.Dataset(
+        {"envelope": (("order", "time"), env.T, {"units": units, "long_name":
+                                                  "complex envelope A of Re{A exp(i o phi)}"}),
+         "reconstruction": (("order", "time"), recon.T, {"units": units}),
+         "mean": (("time",), res["mean"], {"units": units, "long_name":
+                                           "order 0: trend envelope (the channel's mean)"}),
+         "residual": (("time",), res["residual"], {"units": units}),
+         "amplitude_noise": (("order", "time"), res["noise"].T, {"units": units, "long_name":
+                                                                 "1-sigma amplitude noise"}),
+         "amplitude_uncertainty": (("order", "time"), res["uncertainty"].T,
+                                   {"units": units, "long_name": "1-sigma amplitude noise and "
+                                    "estimated envelope smearing"})},
+        coords={"order": ("order", res["orders"], {"units": "1"}),
+                "time": ("time", res["time"], {"units": "s"}),
+                "rpm": ("time", res["rpm"], {"units": "rpm"})},
+        attrs=res["attrs"])
+    return ds
+
+
+@single_threaded_blas  # the numpy forms' banded solves per block: BLAS threads only cost
+def _vold_kalman_arrays(x, *, fs, speed_rpm, orders, bandwidth_hz, bandwidth_orders,
+                        filter_order, decimate=True, block=1 << 15, knots_per_bandwidth=40.0,
+                        shaft_angle=None, trend=True, checked=False):
+    """:func:`vold_kalman` as plain arrays (dict): ``envelope`` (N, K) complex, ``mean``,
+    ``residual``, ``noise`` and ``uncertainty`` (N, K), ``time``, ``rpm``, ``orders``, the
+    basis ``cos``/``sin`` (N, K) of ``o_k φ``, ``units``, ``label`` and the Dataset's
+    ``attrs``. ``checked``: the caller has validated ``x`` (float array), ``fs``, a 1-D
+    ``speed_rpm`` and ``shaft_angle`` (``order_track`` has)."""
+    if checked:
+        values, units, label = np.asarray(x, dtype=float), "", "x"
+    else:
+        values, fs, units, label = _as_signal(x, fs)
     n = values.shape[0]
     orders = np.atleast_1d(np.asarray(orders, dtype=float))
     if orders.ndim != 1 or orders.size == 0 or not np.all(np.isfinite(orders)) or (orders <= 0).any():
@@ -442,9 +417,13 @@ def vold_kalman(x, *, fs=None, speed_rpm, orders, bandwidth_hz=None, bandwidth_o
         speeds = np.stack([_as_rpm(r, n, fs) for r in rpm_arr])
         single = None
     else:
-        single = _as_rpm(speed_rpm, n, fs)
         speeds = None
-        angle = _as_angle(shaft_angle, n)
+        if checked:
+            single = rpm_arr
+            angle = None if shaft_angle is None else np.asarray(shaft_angle, dtype=float)
+        else:
+            single = _as_rpm(speed_rpm, n, fs)
+            angle = _as_angle(shaft_angle, n)
         if angle is None and hasattr(speed_rpm, "coords") and "shaft_angle" in speed_rpm.coords:
             angle = _as_angle(speed_rpm.coords["shaft_angle"].values, n)
     speed_at = (lambda i: single if i is None else single[i]) if speeds is None else None
@@ -469,6 +448,7 @@ def vold_kalman(x, *, fs=None, speed_rpm, orders, bandwidth_hz=None, bandwidth_o
         phase = np.stack([_integrate_speed(s, fs)[index] for s in speeds], axis=1) * orders
         rpm_d = speeds[0, index]
         low_speed = float(speeds[:, index].min())
+    cosp, sinp = np.cos(phase), np.sin(phase)
     bw_d = bw_at(index)                                        # (Nd, K)
     if (bw_d >= fs_d).any():
         raise AnalysisError(f"bandwidth up to {bw_d.max():.6g} Hz is too wide for the solve rate "
@@ -502,46 +482,30 @@ def vold_kalman(x, *, fs=None, speed_rpm, orders, bandwidth_hz=None, bandwidth_o
         at_knots = np.clip(a + (np.arange(n_coef - p) + 0.5 * p - (0 if m == 1 else 1)) * m,
                            a, b - 1).astype(np.int64)
         r2 = vkf_weight(bw_all[at_knots], fs_d, p) ** 2 * float(m) ** (1 - 2 * p)
-        e, mn, mdl = _solve_block(xd[a:b], phase[a:b], r2, p, m, trend)
+        e, mn, mdl = _solve_block(xd[a:b], cosp[a:b], sinp[a:b], r2, p, m, trend)
         env[start:stop] = e[start - a: stop - a]
         mean[start:stop] = mn[start - a: stop - a]
         model[start:stop] = mdl[start - a: stop - a]
     residual = xd - model
     noise, smear = _uncertainty(env, residual, fs_d, orders, rpm_d if speeds is None
                                 else speeds[:, index].T, bw_d, p, f_max)
-    t = index / fs
-    import xarray as xr
-
-    recon = np.real(env * np.exp(1j * phase)).T
-    std = np.sqrt(np.mean(noise ** 2, axis=0))
-    ds = xr.Dataset(
-        {"envelope": (("order", "time"), env.T, {"units": units, "long_name":
-                                                  "complex envelope A of Re{A exp(i o phi)}"}),
-         "reconstruction": (("order", "time"), recon, {"units": units}),
-         "mean": (("time",), mean, {"units": units, "long_name":
-                                    "order 0: trend envelope (the channel's mean)"}),
-         "residual": (("time",), residual, {"units": units}),
-         "amplitude_noise": (("order", "time"), noise.T, {"units": units, "long_name":
-                                                          "1-sigma amplitude noise"}),
-         "amplitude_uncertainty": (("order", "time"), np.hypot(noise, smear).T,
-                                   {"units": units, "long_name": "1-sigma amplitude noise and "
-                                    "estimated envelope smearing"})},
-        coords={"order": ("order", orders, {"units": "1"}),
-                "time": ("time", t, {"units": "s"}),
-                "rpm": ("time", rpm_d, {"units": "rpm"})},
-        attrs={"method": "Vold-Kalman filter (joint with an order-0 trend, banded Cholesky)"
-                         if trend else "Vold-Kalman filter (joint, banded Cholesky)",
-               "channel": label, "bandwidth": kind, "filter_order": p,
-               "bandwidth_hz_min": float(np.min(bw_low)), "bandwidth_hz_max": float(np.max(bw_top)),
-               "trend_bandwidth_hz": b_trend if trend else float("nan"),
-               "solve_rate_hz": fs_d, "decimation": int(round(fs / fs_d)),
-               "block_samples": block, "overlap_samples": overlap, "knot_spacing_samples": m,
-               "amplitude_std_estimate": std.tolist(),
-               "error_note": "amplitude_uncertainty = noise sqrt(N0*ENBW) and the smearing of "
-                             "the envelope estimated from its second derivative "
-                             f"(K_p/(pi T B)^(2p), K_p = {smearing_constant(p):.4g})"})
+    std = np.sqrt(np.einsum("ij,ij->j", noise, noise) / nd)      # rms over time, per order
+    attrs = {"method": "Vold-Kalman filter (joint with an order-0 trend, banded Cholesky)"
+                       if trend else "Vold-Kalman filter (joint, banded Cholesky)",
+             "channel": label, "bandwidth": kind, "filter_order": p,
+             "bandwidth_hz_min": float(np.min(bw_low)), "bandwidth_hz_max": float(np.max(bw_top)),
+             "trend_bandwidth_hz": b_trend if trend else float("nan"),
+             "solve_rate_hz": fs_d, "decimation": int(round(fs / fs_d)),
+             "block_samples": block, "overlap_samples": overlap, "knot_spacing_samples": m,
+             "amplitude_std_estimate": std.tolist(),
+             "error_note": "amplitude_uncertainty = noise sqrt(N0*ENBW) and the smearing of "
+                           "the envelope estimated from its second derivative "
+                           f"(K_p/(pi T B)^(2p), K_p = {smearing_constant(p):.4g})"}
     log.debug("vold_kalman %s: %d orders, %d samples at %.6g Hz", label, k, nd, fs_d)
-    return ds
+    return {"envelope": env, "mean": mean, "residual": residual, "noise": noise,
+            "uncertainty": np.hypot(noise, smear), "time": index / fs, "rpm": rpm_d,
+            "orders": orders, "cos": cosp, "sin": sinp, "units": units, "label": label,
+            "attrs": attrs}
 
 
 def _uncertainty(env, residual, fs_d, orders, rpm_d, bw_d, p, f_pass):
@@ -558,41 +522,34 @@ def _uncertainty(env, residual, fs_d, orders, rpm_d, bw_d, p, f_pass):
     ``K_p (|A''|/(8|A|))^p/(πB)^{2p}``, with the noise part of ``|A''|²`` removed first."""
     nd, k = env.shape
     f_ord = orders[None, :] * (rpm_d if rpm_d.ndim == 2 else rpm_d[:, None]) / 60.0
-    n0 = _local_noise(residual, fs_d, f_ord, bw_d, f_pass)
+    b_med = np.median(bw_d, axis=0)
+    n0 = _local_noise(residual, fs_d, f_ord, b_med, f_pass)
     noise = np.sqrt(n0 * enbw_hz(bw_d, p))
     if nd < 8:
         return noise, np.zeros_like(noise)
-    dt = 1.0 / fs_d
-    d2 = np.zeros_like(env)
-    d2[1:-1] = (env[2:] - 2.0 * env[1:-1] + env[:-2]) / dt ** 2
-    d2[0], d2[-1] = d2[1], d2[-2]
     # noise part of |A''|²: N0 ∫ (2 sin(πν/fs)·fs)^4 |H(ν)|² dν over the solve band
     nu = np.linspace(-0.5 * fs_d, 0.5 * fs_d, 4097)
-    gain4 = (2.0 * np.sin(np.pi * nu / fs_d) * fs_d) ** 4
-    out = np.zeros_like(noise)
-    amp = np.abs(env)
+    d2nu = (2.0 * np.sin(np.pi * nu / fs_d)) ** 2          # (2 sin(πν/fs))², once for all orders
+    gain4 = d2nu * d2nu * fs_d ** 4
+    d2p = d2nu if p == 1 else d2nu * d2nu                  # (2 sin(πν/fs))^{2p}
+    per_n0 = np.empty(k)
+    span = np.empty(k, np.int64)
     for j in range(k):
-        bw = bw_d[:, j]
         # the integral scales as B^5 for p = 2 (B^3 for p = 1 within the band): evaluate at the
         # median bandwidth and scale
-        b0 = float(np.median(bw))
-        r = vkf_weight(b0, fs_d, p)
-        h2 = (1.0 / (1.0 + 2.0 * r ** 2 * (2.0 * np.sin(np.pi * nu / fs_d)) ** (2 * p))) ** 2
-        per_n0 = np.trapezoid(gain4 * h2, nu) * (bw / b0) ** (5 if p == 2 else 4)
-        # |A''|² averaged over the filter's response time, less ten times its expected
+        h = 1.0 / (1.0 + 2.0 * vkf_weight(float(b_med[j]), fs_d, p) ** 2 * d2p)
+        per_n0[j] = np.trapezoid(gain4 * h * h, nu)
+        # |A''|² is averaged over the filter's response time, less ten times its expected
         # noise part (E|A''_noise|² = 2 N0 ∫ D⁴|H|²): only curvature well above the noise
         # counts (noise alone would otherwise read as smearing that grows with B)
-        span = max(1, int(round(fs_d / (2.0 * bw.min()))))
-        a2 = _moving_mean(np.abs(d2[:, j]) ** 2, span) - 10.0 * 2.0 * n0[:, j] * per_n0
-        a2 = np.maximum(a2, 0.0)
-        ratio = np.sqrt(a2) / np.maximum(amp[:, j], 1e-300)
-        loss = smearing_constant(p) * (ratio / 8.0) ** p / (np.pi * bw) ** (2 * p)
-        out[:, j] = np.minimum(loss, 1.0) * amp[:, j]
-    return noise, out
+        span[j] = max(1, int(round(fs_d / (2.0 * bw_d[:, j].min()))))
+    return noise, _vkf_kernels.smearing(env, n0, bw_d, per_n0, b_med, span, p,
+                                        smearing_constant(p), fs_d)
 
 
-def _local_noise(residual, fs_d, f_ord, bw_d, f_pass):
-    """One-sided noise density (units²/Hz) of the residual beside each order, per sample."""
+def _local_noise(residual, fs_d, f_ord, b_med, f_pass):
+    """One-sided noise density (units²/Hz) of the residual beside each order, per sample
+    (``b_med``: each order's median bandwidth, Hz)."""
     nd, k = f_ord.shape
     length = int(2 ** np.ceil(np.log2(max(64.0, 2.0 * fs_d))))
     length = min(length, int(2 ** np.floor(np.log2(max(64, nd)))))
@@ -609,27 +566,12 @@ def _local_noise(residual, fs_d, f_ord, bw_d, f_pass):
     flat = (freq > 0) & (freq <= f_pass)
     out = np.empty((nd, k))
     for j in range(k):
-        b = float(np.median(bw_d[:, j]))
+        b = float(b_med[j])
         reach = max(8.0 * b, 20.0 * df)
-        level = np.empty(starts.shape[0])
         f_frame = np.interp(centre, np.arange(nd), f_ord[:, j])
-        for i, f0 in enumerate(f_frame):
-            near = flat & (np.abs(freq - f0) <= reach) & (np.abs(freq - f0) > 2.0 * b)
-            if near.sum() < 5:
-                near = flat
-            # lower quartile of an exponential variable: ln(4/3) of its mean (robust to up to
-            # three quarters of the bins holding lines of orders not tracked)
-            level[i] = (float(np.percentile(spec[i, near], 25.0)) / np.log(4.0 / 3.0)
-                        if near.any() else 0.0)
+        # lower quartile of an exponential variable: ln(4/3) of its mean (robust to up to
+        # three quarters of the bins holding lines of orders not tracked)
+        level = _vkf_kernels.lower_quartiles(spec, freq, flat, f_frame, reach,
+                                             2.0 * b) / np.log(4.0 / 3.0)
         out[:, j] = np.interp(np.arange(nd), centre, level)
     return out
-
-
-def _moving_mean(x, length):
-    if length <= 1 or x.shape[0] <= length:
-        return x
-    c = np.concatenate([[0.0], np.cumsum(x)])
-    out = (c[length:] - c[:-length]) / length
-    pad_a = (length - 1) // 2
-    return np.concatenate([np.full(pad_a, out[0]), out,
-                           np.full(x.shape[0] - out.shape[0] - pad_a, out[-1])])

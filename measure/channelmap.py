@@ -86,6 +86,7 @@ import numpy as np
 from crankbench.predict._toml import Table as TomlTable
 from crankbench.predict.errors import AnalysisError, ConfigError, RecordError
 
+from .provenance import SOURCE_ATTRS
 from .readers.text import DELIMITERS
 
 __all__ = ["ChannelMap", "ChannelSpec", "load_map", "apply_map", "read_mapped", "ROLES"]
@@ -761,7 +762,7 @@ def apply_map_to_record(record, cmap: ChannelMap, *, file, allow_nonfinite=False
                 spec.update(time=channel_time(record, name),
                             sample_rate=var.attrs["sample_rate"])
             extra[name] = spec
-    attrs = {k: v for k, v in record.attrs.items() if k not in ("source", "sha256")}
+    attrs = {k: v for k, v in record.attrs.items() if k not in SOURCE_ATTRS}
     attrs.update({k: cmap.source[k] for k in ("engine_id", "test_id") + LOAD_KEYS
                   if k in cmap.source})
     return _assemble(cmap, plain, roles, extra, attrs, file, allow_nonfinite)

@@ -28,11 +28,9 @@ time dims and are never resampled.
 
 from __future__ import annotations
 
-import hashlib
 import logging
 import os
 import warnings
-from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 import numpy as np
@@ -41,45 +39,24 @@ import xarray as xr
 from crankbench.predict.errors import ConfigError, CrankbenchError, RecordError
 
 from ._atomic import atomic_path, check_overwrite
+from .provenance import STAT_ATTR, sha256_of, source_sha256, stamp_source
 from .readers import EXTENSIONS, format_of_magic, module_for
 from .readers._common import REGULAR_KEY
 from .record import (CLIP_QUANTITIES, RecordWarning, clipped_spans, nonfinite_spans,
                      shared_scans, validate)
 
-__all__ = ["read", "write", "open", "read_truth", "iter_blocks", "sha256_of", "EXTENSIONS"]
+__all__ = ["read", "write", "open", "read_truth", "iter_blocks", "sha256_of", "source_sha256",
+           "EXTENSIONS"]
 
 log = logging.getLogger("crankbench")
 
-_HASH_CACHE: dict[tuple, str] = {}
 _FORMAT_EXT = {"hdf5": ".h5", "mdf": ".mf4", "tdms": ".tdms", "wav": ".wav", "uff": ".uff",
                "csv": ".csv", "xlsx": ".xlsx"}
 
 
-def sha256_of(path) -> str:
-    """SHA-256 hex digest of a file, read in 1 MiB blocks (cached per path, size and mtime).
-
-    Examples
-    --------
-    >>> import tempfile, pathlib
-    >>> p = pathlib.Path(tempfile.mkdtemp()) / "x.bin"
-    >>> _ = p.write_bytes(b"abc")
-    >>> sha256_of(p)[:16]
-    'ba7816bf8f01cfea'
-    """
-    path = Path(path)
-    st = path.stat()
-    key = (str(path.resolve()), st.st_size, st.st_mtime_ns)
-    if key not in _HASH_CACHE:
-        h = hashlib.sha256()
-        with path.open("rb") as f:
-            for block in iter(lambda: f.read(1 << 20), b""):
-                h.update(block)
-        _HASH_CACHE[key] = h.hexdigest()
-    return _HASH_CACHE[key]
-
-
-def _check_input(path) -> tuple[Path, object]:
-    """Resolve the format module and check existence, size and magic bytes."""
+def _check_input(path) -> tuple[Path, object, os.stat_result]:
+    """Resolve the format module and check existence, size and magic bytes; the file's stat
+    before any of its data is read (its identity for :mod:`measure.provenance`)."""
     path = Path(path)
     module = module_for(path)
     if not path.exists():
@@ -92,8 +69,8 @@ def _check_input(path) -> tuple[Path, object]:
         raise FileNotFoundError(f"record file {str(path)!r} does not exist{near}")
     if path.is_dir():
         raise RecordError(f"{path} is a directory; expected a {module.FORMAT} file")
-    size = path.stat().st_size
-    if size == 0:
+    st = path.stat()
+    if st.st_size == 0:
         raise RecordError(f"{path}: file is empty (0 bytes); expected {module.FORMAT} content")
     with path.open("rb") as f:
         head = f.read(64)
@@ -103,7 +80,7 @@ def _check_input(path) -> tuple[Path, object]:
                 f"{path.with_suffix(_FORMAT_EXT[actual]).name!r}?") if actual else ""
         raise RecordError(f"{path}: wrong magic bytes {head[:8]!r} for a {module.FORMAT} file "
                           f"(extension {path.suffix!r}){hint}")
-    return path, module
+    return path, module, st
 
 
 def _wrap(path: Path, module, exc: Exception) -> RecordError:
@@ -209,7 +186,10 @@ def read(path, *, channels=None, allow_nonfinite: bool = False, map=None) -> xr.
     Returns
     -------
     xarray.Dataset
-        The Record, units in SI, with attrs ``source`` (file name) and ``sha256``.
+        The Record, units in SI, with attrs ``source`` (file name) and ``source_stat`` (the
+        file's identity at read time). The file is not hashed here (that would cost more than
+        the read): :func:`source_sha256` gives its SHA-256 when provenance is written, after
+        checking the file is still the one read.
 
     Raises
     ------
@@ -231,30 +211,19 @@ def read(path, *, channels=None, allow_nonfinite: bool = False, map=None) -> xr.
     >>> print(back["acc"].attrs["units"], back["acc"].values[1], back.attrs["source"])
     m/s^2 9.80665 r.h5
     """
-    path, module = _check_input(path)
+    path, module, st = _check_input(path)
     cmap = None
     if map is not None:
         from .channelmap import load_map
 
         cmap = load_map(map)
-    cached = _cached_sha256(path)
-    if cached is not None:  # a file read before: no hashing thread to start and join
-        return _read_checked(path, module, cmap, channels, allow_nonfinite, lambda: cached)
-    # hash on a second thread while the reader parses (hashlib releases the GIL)
-    with ThreadPoolExecutor(max_workers=1) as pool:
-        digest = pool.submit(sha256_of, path)
-        return _read_checked(path, module, cmap, channels, allow_nonfinite, digest.result)
+    return _read_checked(path, module, st, cmap, channels, allow_nonfinite)
 
 
-def _cached_sha256(path: Path) -> str | None:
-    """The cached SHA-256 of ``path`` if its size and mtime are unchanged, else None."""
-    st = path.stat()
-    return _HASH_CACHE.get((str(path.resolve()), st.st_size, st.st_mtime_ns))
-
-
-def _read_checked(path, module, cmap, channels, allow_nonfinite, digest) -> xr.Dataset:
+def _read_checked(path, module, st, cmap, channels, allow_nonfinite) -> xr.Dataset:
     """Body of :func:`read`: parse (through the channel map ``cmap`` if any), mask, validate,
-    flag clipping, stamp source and hash (``digest()``)."""
+    flag clipping, stamp the source's identity ``st`` (its SHA-256 is computed on demand by
+    :func:`measure.provenance.source_sha256`; a channel map's raw export is hashed now)."""
     try:
         if cmap is None:
             ds = module.read(path, channels=channels)
@@ -279,10 +248,9 @@ def _read_checked(path, module, cmap, channels, allow_nonfinite, digest) -> xr.D
         except RecordError as exc:
             raise _named(path, exc) from None
         _flag_clipping(ds, path)
-    ds.attrs["source"] = path.name
-    ds.attrs["sha256"] = digest()
-    if cmap is not None:
-        ds.attrs.update(raw_source=path.name, raw_sha256=ds.attrs["sha256"],
+    stamp_source(ds.attrs, path, st)
+    if cmap is not None:  # the raw export's digest travels into the files written from it
+        ds.attrs.update(raw_source=path.name, raw_sha256=source_sha256(ds),
                         channel_map=cmap.text, channel_map_source=Path(cmap.origin).name,
                         channel_map_sha256=cmap.sha256)
     return ds
@@ -328,6 +296,9 @@ def write(record: xr.Dataset, path, *, truth: xr.Dataset | None = None,
     path = Path(path)
     module = module_for(path)
     validate(record, allow_nonfinite=True)
+    if STAT_ATTR in record.attrs:  # identity of the file it was read from: not this file's
+        record = record.copy(deep=False)
+        record.attrs = {k: v for k, v in record.attrs.items() if k != STAT_ATTR}
     if truth is not None and not hasattr(module, "write_truth"):
         raise RecordError(f"{path}: ground truth can only be stored in .h5/.hdf5/.nc records")
     check_overwrite(path, overwrite)
@@ -364,7 +335,7 @@ def read_truth(path) -> xr.Dataset:
     >>> read_truth(p)["critical_speed_rpm"].values
     array([1200., 2900.])
     """
-    path, module = _check_input(path)
+    path, module, _ = _check_input(path)
     if not hasattr(module, "read_truth"):
         raise RecordError(f"{path}: ground truth is stored only in .h5/.hdf5/.nc records")
     try:
@@ -400,8 +371,8 @@ def open(path, *, chunk_seconds: float = 10.0, channels=None,  # noqa: A001
     Returns
     -------
     xarray.Dataset
-        Lazily loaded Record (attrs ``source`` and ``sha256`` set). Use :func:`iter_blocks` or
-        dask reductions to process it.
+        Lazily loaded Record (attrs ``source`` and ``source_stat`` set, as by :func:`read`).
+        Use :func:`iter_blocks` or dask reductions to process it.
 
     Notes
     -----
@@ -427,7 +398,7 @@ def open(path, *, chunk_seconds: float = 10.0, channels=None,  # noqa: A001
     if map is not None:
         ds = read(path, channels=channels, allow_nonfinite=allow_nonfinite, map=map)
         return ds.chunk(_chunks_of(ds, chunk_seconds))
-    path, module = _check_input(path)
+    path, module, st = _check_input(path)
     try:
         if hasattr(module, "open"):
             ds = module.open(path, chunk_seconds=chunk_seconds, channels=channels)
@@ -442,8 +413,7 @@ def open(path, *, chunk_seconds: float = 10.0, channels=None,  # noqa: A001
         raise
     except Exception as exc:
         raise _wrap(path, module, exc) from exc
-    ds.attrs["source"] = path.name
-    ds.attrs["sha256"] = sha256_of(path)
+    stamp_source(ds.attrs, path, st)
     try:
         ds = validate(ds, allow_nonfinite=True)
     except RecordError as exc:

@@ -16,8 +16,9 @@ edge times on dim ``pulse`` (``pulse_<name>`` when several) with units ``s``, qu
 optional ``speed_ratio`` (turns of the pulse source per crankshaft turn, > 0, default 1: 0.5 for
 a mark once per four-stroke cycle) and ``role`` ("wheel" or "tdc", set when decoded from a raw
 signal by a channel map, with ``runt_teeth``/``lost_teeth`` and how it was decoded).
-Dataset attrs: ``start_time`` (ISO 8601), ``source`` (file name), ``sha256`` (of the source
-file), optional ``engine_id`` and ``test_id``; a record read through a channel map also keeps
+Dataset attrs: ``start_time`` (ISO 8601), ``source`` (file name), ``source_stat`` (the source
+file's identity at read time; its SHA-256 is :func:`measure.provenance.source_sha256`, computed
+on demand), optional ``engine_id`` and ``test_id``; a record read through a channel map also keeps
 ``raw_source``, ``raw_sha256`` (the raw export it came from), ``channel_map`` (the map's text)
 and ``channel_map_sha256``. Mixed sample rates are never resampled.
 """

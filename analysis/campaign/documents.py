@@ -51,7 +51,8 @@ def record_identity(record_path, attrs: dict | None = None) -> dict:
     attrs = dict(attrs or {})
     out = {"record_path": str(Path(record_path).resolve()),
            "record_name": Path(record_path).name,
-           "attrs": to_jsonable({k: v for k, v in attrs.items() if k != "channel_map"}),
+           "attrs": to_jsonable({k: v for k, v in attrs.items()
+                                 if k not in ("channel_map", "source_stat")}),
            "channel_map": attrs.get("channel_map")}
     for key in _IDENTITY_ATTRS:
         value = attrs.get(key)

@@ -244,7 +244,15 @@ def run(args) -> int:
             check_overwrite(path, args.overwrite, option="--overwrite")
     import os
 
-    streaming = os.path.getsize(args.record) > STREAM_BYTES
+    size = os.path.getsize(args.record)
+    streaming = size > STREAM_BYTES
+    if streaming and args.allow_nonfinite:
+        raise RecordError(
+            f"--allow-nonfinite: {args.record} is {size / 1e6:.4g} MB, above the "
+            f"{STREAM_BYTES / 1e6:.4g} MB read whole, and the streamed trackers do not mask "
+            "NaN/inf runs (they refuse them); order-track the spans around the dropouts in "
+            "Python (measure.open(path, allow_nonfinite=True), .isel(time=slice(a, b)), "
+            "analysis.order_track), or trim the file")
     if streaming:
         log.info("%s: %.3g MB > %.3g MB, streaming it segment by segment (measure.open + "
                  "analysis.stream)", args.record, os.path.getsize(args.record) / 1e6,

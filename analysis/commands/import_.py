@@ -92,6 +92,7 @@ def run(args) -> int:
     from crankbench.analysis.commands.info import summary
     from crankbench.measure import io
     from crankbench.measure._atomic import check_overwrite
+    from crankbench.measure.provenance import STAT_ATTR, source_sha256
     from crankbench.predict.errors import ConfigError
 
     out = Path(args.output)
@@ -114,6 +115,8 @@ def run(args) -> int:
         log.warning("warning: %s", note)
     io.write(record, out, overwrite=args.overwrite)
     info = summary(record)
+    info["attrs"].pop(STAT_ATTR, None)  # the source's provenance, hashed here (not at the read)
+    info["attrs"]["sha256"] = source_sha256(record, missing="")
     pulses = pulse_summary(record)
     if args.json:
         print_json({"source": str(args.source), "map": args.map, "output": str(out),

@@ -62,9 +62,13 @@ def run(args) -> int:
 
     from crankbench.analysis._output import print_json, print_table
     from crankbench.measure import io
+    from crankbench.measure.provenance import STAT_ATTR, source_sha256
 
     record = io.open(args.file, channels=args.channels, map=args.map)
     info = summary(record)
+    # provenance is written here: hash the file, checked to be the one just opened
+    info["attrs"].pop(STAT_ATTR, None)
+    info["attrs"]["sha256"] = source_sha256(record, missing="")
     if args.json:
         print_json({"file": str(args.file), **info})
         return 0

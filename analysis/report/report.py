@@ -231,8 +231,14 @@ class Report:
         self._section(section).items.append(_Item("kv", title, payload={"rows": rows}))
 
     def add_figure(self, fig, *, title: str, caption: str = "", section: str | None = None,
-                   image_format: str = "svg", dpi: int = 150, close: bool = True) -> None:
+                   image_format: str = "svg", dpi: int = 150, close: bool = True,
+                   decimate: bool = True) -> None:
         """Embed a matplotlib figure (rendered now: inline vector SVG, or PNG base64).
+
+        Long traces are first decimated to the output's pixel grid by their min/max envelope
+        per pixel column (:func:`analysis.report.figures.decimate_figure`: every peak kept at
+        its own sample; each pixel column's ink matches within one pixel column), which cuts
+        the rendering time and the SVG's size of figures with long time or speed traces.
 
         Parameters
         ----------
@@ -247,6 +253,9 @@ class Report:
             Resolution of PNG output and of rasterized artists.
         close : bool
             Close the figure afterwards (frees memory in long batch runs).
+        decimate : bool
+            Decimate long traces to the pixel grid at ``dpi`` first (changes ``fig``'s lines
+            in place); False draws every sample.
         """
         import matplotlib.pyplot as plt
 
@@ -255,6 +264,10 @@ class Report:
         if not hasattr(fig, "savefig"):
             raise ConfigError(f"add_figure: fig must be a matplotlib Figure, got "
                               f"{type(fig).__name__}")
+        if decimate:
+            from .figures import decimate_figure
+
+            decimate_figure(fig, dpi=dpi)
         payload = {}
         if image_format == "png":
             buf = io.BytesIO()

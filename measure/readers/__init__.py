@@ -5,7 +5,7 @@ Each format module defines
 * ``FORMAT`` — a human label ("HDF5 (crankbench layout)"),
 * ``check_magic(head: bytes) -> bool`` — does the file start like this format,
 * ``read(path, *, channels=None) -> xarray.Dataset`` — channels already in SI with Record attrs
-  (``measure.io.read`` adds ``source``/``sha256``, masks and validates),
+  (``measure.io.read`` adds ``source``/``source_stat``, masks and validates),
 * ``write(record, path, *, truth=None) -> dict`` — writes to ``path`` (a temporary name chosen
   by ``measure.io.write``) and returns extra files to place beside the target, as
   ``{suffix: bytes}`` (the WAV sidecar),

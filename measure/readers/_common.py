@@ -186,11 +186,20 @@ def select(names: list[str], channels, *, file: str) -> list[str]:
     return wanted
 
 
-def refuse_external_links(path, *, file=None) -> None:
+def refuse_external_links(path, *, file=None, h5file=None) -> None:
     """Refuse an HDF5 file holding external links or virtual datasets (data in other files).
 
     A record must hold its own data: following a link would read (and hash-attribute to this
     record) another file, possibly one that changed or that the user never named.
+
+    Parameters
+    ----------
+    path : path-like
+        The file.
+    file : str, optional
+        Its name in messages (default ``str(path)``).
+    h5file : h5py.File, optional
+        The file already open (read-only): checked without opening it again.
 
     Raises
     ------
@@ -200,22 +209,27 @@ def refuse_external_links(path, *, file=None) -> None:
     import h5py
 
     file = file or str(path)
-    with h5py.File(path, "r") as f:
-        found = []
+    if h5file is None:
+        with h5py.File(path, "r") as f:
+            return refuse_external_links(path, file=file, h5file=f)
+    f = h5file
+    found = []
 
-        def visit(name):
-            link = f.get(name, getlink=True)
-            if isinstance(link, h5py.ExternalLink):
-                found.append(f"{name!r} is an external link to {link.filename}:{link.path}")
-                return True
-            obj = f.get(name)
-            if isinstance(obj, h5py.Dataset) and obj.is_virtual:
+    def visit(name, link):
+        if isinstance(link, h5py.ExternalLink):
+            found.append(f"{name!r} is an external link to {link.filename}:{link.path}")
+            return True
+        # only datasets can be virtual: ask the object's type without opening groups
+        if (isinstance(link, h5py.HardLink)
+                and h5py.h5o.get_info(f.id, name.encode()).type == h5py.h5o.TYPE_DATASET):
+            obj = f[name]
+            if obj.is_virtual:
                 sources = sorted({s.file_name for s in obj.virtual_sources()})
                 found.append(f"{name!r} is a virtual dataset reading {', '.join(sources)}")
                 return True
-            return None
+        return None
 
-        f.visit_links(visit)
-        if found:
-            raise RecordError(f"{file}: HDF5 object {found[0]}; a record must hold its own "
-                              "data (external links and virtual datasets are not followed)")
+    f.visititems_links(visit)
+    if found:
+        raise RecordError(f"{file}: HDF5 object {found[0]}; a record must hold its own "
+                          "data (external links and virtual datasets are not followed)")

@@ -298,8 +298,8 @@ def read(path, *, channels=None) -> xr.Dataset:
     """Read a crankbench HDF5 record fully into memory."""
     h5py = _h5()
     file = str(path)
-    refuse_external_links(path, file=file)
     with h5py.File(path, "r") as f:
+        refuse_external_links(path, file=file, h5file=f)
         root = clean_attrs(f.attrs)
         order, dims = _layout(f, file, root)
         names = select(order, channels, file=file)

@@ -1,0 +1,632 @@
+"""Inner loops of the Vold–Kalman filter (:mod:`analysis.vkf`), compiled when numba is present.
+
+Each function has a numpy/SciPy twin that gives the same result to rounding (the twins are the
+reference: ``tests/analysis/test_vkf_kernels.py`` runs both on the same small records). The
+compiled forms do in one pass over the samples what the twins do in several whole-array
+passes and library calls:
+
+* :func:`fir_decimate` — one stage of a polyphase FIR decimator (twin:
+  :func:`scipy.signal.upfirdn`);
+* :func:`assemble` — the block-banded normal equations ``CᵀC + Σ r² D_pᵀD_p`` and ``Cᵀx`` of
+  the spline-envelope least squares, accumulated knot interval by knot interval (twin: grouped
+  products and ``np.bincount`` scatters);
+* :func:`solve` — banded Cholesky ``LLᵀ`` for the small bandwidth of this problem with one step
+  of iterative refinement (twin: LAPACK ``dpbtrf``/``dpbtrs`` through SciPy, one BLAS thread);
+* :func:`envelopes` — the complex envelopes, the trend and the model at every sample;
+* :func:`lower_quartiles` — the lower quartile of the residual's spectrum beside each order
+  (twin: ``np.percentile`` frame by frame);
+* :func:`smearing` — the envelope-smearing estimate from the envelopes' second differences.
+
+Matrix storage: a symmetric band matrix of half-bandwidth ``u`` is held by columns,
+``band[j, d] = A[j + d, j]`` for ``0 ≤ d ≤ u`` (the transpose of LAPACK's lower band form), so
+that the column updates of the factorisation run over contiguous memory.
+
+``CRANKBENCH_NO_NUMBA=1`` forces the twins (as for :mod:`analysis._kernels`);
+:func:`accelerated` says which are in use.
+"""
+
+from __future__ import annotations
+
+import functools
+
+import numpy as np
+
+__all__ = ["accelerated", "fir_decimate", "assemble", "solve", "envelopes",
+           "lower_quartiles", "smearing", "NotPositiveDefinite"]
+
+_DIFF = {1: np.array([-1.0, 1.0]), 2: np.array([1.0, -2.0, 1.0])}
+
+
+class NotPositiveDefinite(ArithmeticError):
+    """The banded matrix has a non-positive pivot (raised by :func:`solve`)."""
+
+
+@functools.lru_cache(maxsize=1)
+def _numba():
+    """The compiled kernels, or None (numba missing, or ``CRANKBENCH_NO_NUMBA`` set)."""
+    import os
+
+    if os.environ.get("CRANKBENCH_NO_NUMBA"):
+        return None
+    try:
+        from numba import njit
+    except ImportError:
+        return None
+
+    @njit(cache=True, fastmath=True)
+    def fir(x, h, q, first, n_out):          # pragma: no cover - compiled
+        taps = h.shape[0]
+        half = taps // 2
+        y = np.empty(n_out)
+        for k in range(n_out):
+            c = (first + k) * q - half
+            acc = 0.0
+            for t in range(taps):
+                acc += h[t] * x[c + t]
+            y[k] = acc
+        return y
+
+    @njit(cache=True)
+    def spline_w(i, m, w):                    # pragma: no cover - compiled
+        # uniform cubic B-spline weights of sample i (knots every m samples); the same float
+        # operations as analysis.vkf._spline_weights
+        pos = i / m
+        g = np.floor(pos)
+        f = pos - g
+        f2 = f * f
+        f3 = f2 * f
+        w[0] = (1.0 - f) ** 3 / 6.0
+        w[1] = (3.0 * f3 - 6.0 * f2 + 4.0) / 6.0
+        w[2] = (-3.0 * f3 + 3.0 * f2 + 3.0 * f + 1.0) / 6.0
+        w[3] = f3 / 6.0
+
+    @njit(cache=True, fastmath=True)
+    def assemble(x, cosp, sinp, trend, m, n_coef, p, weights, diff, u):  # pragma: no cover
+        n, k = cosp.shape
+        cols = 2 * k + (1 if trend else 0)
+        s = 1 if m == 1 else 4
+        size = n_coef * cols
+        band = np.zeros((size, u + 1))
+        rhs = np.zeros(size)
+        npair = cols * (cols + 1) // 2
+        pair = np.empty((cols, cols), np.int64)
+        idx = 0
+        for j in range(cols):
+            for jj in range(j, cols):
+                pair[j, jj] = idx
+                pair[jj, j] = idx
+                idx += 1
+        nslot = s * (s + 1) // 2
+        sums = np.zeros((nslot, npair))
+        rsum = np.zeros((s, cols))
+        b = np.empty(cols)
+        prod = np.empty(npair)
+        # the knots are uniform: every interval has the first one's weight pattern (as the
+        # numpy form)
+        w = np.ones(4)
+        wpat = np.ones((min(m, n), nslot))
+        wv = np.ones((min(m, n), s))
+        if s > 1:
+            for t in range(min(m, n)):
+                spline_w(t, m, w)
+                idx = 0
+                for a in range(s):
+                    wv[t, a] = w[a]
+                    for c in range(a, s):
+                        wpat[t, idx] = w[a] * w[c]
+                        idx += 1
+        groups = (n - 1) // m + 1
+        for g in range(groups):
+            sums[:, :] = 0.0
+            rsum[:, :] = 0.0
+            for i in range(g * m, min(n, g * m + m)):
+                t = i - g * m
+                for j in range(k):
+                    b[2 * j] = cosp[i, j]
+                    b[2 * j + 1] = -sinp[i, j]
+                if trend:
+                    b[cols - 1] = 1.0
+                idx = 0
+                for j in range(cols):
+                    bj = b[j]
+                    for jj in range(j, cols):
+                        prod[idx] = bj * b[jj]
+                        idx += 1
+                for ab in range(nslot):
+                    wab = wpat[t, ab]
+                    for e in range(npair):
+                        sums[ab, e] += wab * prod[e]
+                xi = x[i]
+                for a in range(s):
+                    wa = wv[t, a] * xi
+                    for j in range(cols):
+                        rsum[a, j] += wa * b[j]
+            # scatter the interval's sums: A[J, I] (J >= I) at band[I, J - I]
+            ab = 0
+            for a in range(s):
+                for c in range(a, s):
+                    for j in range(cols):
+                        row_i = (g + a) * cols + j
+                        for jj in range(cols):
+                            if a == c and jj < j:
+                                continue
+                            col_j = (g + c) * cols + jj
+                            band[row_i, col_j - row_i] += sums[ab, pair[j, jj]]
+                    ab += 1
+                for j in range(cols):
+                    rhs[(g + a) * cols + j] += rsum[a, j]
+        # smoothness: r² D_pᵀ D_p per column
+        for r in range(weights.shape[0]):
+            for a in range(p + 1):
+                for c in range(a, p + 1):
+                    cc = diff[a] * diff[c]
+                    for j in range(cols):
+                        band[(r + a) * cols + j, (c - a) * cols] += cc * weights[r, j]
+        return band, rhs
+
+    @njit(cache=True, fastmath=True)
+    def factor(band):                          # pragma: no cover - compiled
+        # in place, column by column (LAPACK dpbtf2's order): band -> L in the same storage;
+        # returns the first bad pivot or -1
+        size, w1 = band.shape
+        u = w1 - 1
+        for j in range(size):
+            d = band[j, 0]
+            if not d > 0.0:
+                return j
+            d = np.sqrt(d)
+            band[j, 0] = d
+            reach = min(u, size - 1 - j)
+            inv = 1.0 / d
+            for t in range(1, reach + 1):
+                band[j, t] *= inv
+            # trailing update A[j + t2, j + t1] -= L[j + t2, j] L[j + t1, j], t1 <= t2
+            for t1 in range(1, reach + 1):
+                l1 = band[j, t1]
+                row = j + t1
+                for t2 in range(t1, reach + 1):
+                    band[row, t2 - t1] -= band[j, t2] * l1
+        return -1
+
+    @njit(cache=True, fastmath=True)
+    def substitute(low, y):                    # pragma: no cover - compiled
+        # solves L Lᵀ z = y in place
+        size, w1 = low.shape
+        u = w1 - 1
+        for j in range(size):
+            y[j] /= low[j, 0]
+            yj = y[j]
+            for t in range(1, min(u, size - 1 - j) + 1):
+                y[j + t] -= low[j, t] * yj
+        for j in range(size - 1, -1, -1):
+            acc = y[j]
+            for t in range(1, min(u, size - 1 - j) + 1):
+                acc -= low[j, t] * y[j + t]
+            y[j] = acc / low[j, 0]
+
+    @njit(cache=True, fastmath=True)
+    def matvec(band, z):                       # pragma: no cover - compiled
+        size, w1 = band.shape
+        u = w1 - 1
+        y = np.zeros(size)
+        for j in range(size):
+            zj = z[j]
+            acc = band[j, 0] * zj
+            for t in range(1, min(u, size - 1 - j) + 1):
+                a = band[j, t]
+                acc += a * z[j + t]
+                y[j + t] += a * zj
+            y[j] += acc
+        return y
+
+    @njit(cache=True)
+    def solve(band, rhs):                      # pragma: no cover - compiled
+        low = band.copy()
+        bad = factor(low)
+        if bad >= 0:
+            return rhs, bad
+        z = rhs.copy()
+        substitute(low, z)
+        # one step of iterative refinement
+        res = rhs - matvec(band, z)
+        substitute(low, res)
+        z += res
+        return z, -1
+
+    @njit(cache=True)
+    def envelopes(coef, cosp, sinp, m, trend):  # pragma: no cover - compiled
+        n, k = cosp.shape
+        cols = coef.shape[1]
+        s = 1 if m == 1 else 4
+        env = np.zeros((n, k), np.complex128)
+        mean = np.zeros(n)
+        model = np.zeros(n)
+        w = np.ones(4)
+        for i in range(n):
+            g = i // m
+            if s > 1:
+                spline_w(i, m, w)
+            tot = 0.0
+            for j in range(k):
+                re = 0.0
+                im = 0.0
+                for a in range(s):
+                    re += w[a] * coef[g + a, 2 * j]
+                    im += w[a] * coef[g + a, 2 * j + 1]
+                env[i, j] = re + 1j * im
+                tot += re * cosp[i, j] - im * sinp[i, j]
+            if trend:
+                c0 = 0.0
+                for a in range(s):
+                    c0 += w[a] * coef[g + a, cols - 1]
+                mean[i] = c0
+                tot += c0
+            model[i] = tot
+        return env, mean, model
+
+    @njit(cache=True)
+    def quartiles(spec, freq, flat, f_frame, reach, notch):  # pragma: no cover - compiled
+        frames, bins = spec.shape
+        level = np.zeros(frames)
+        buf = np.empty(bins)
+        for i in range(frames):
+            f0 = f_frame[i]
+            cnt = 0
+            for b in range(bins):
+                d = abs(freq[b] - f0)
+                if flat[b] and d <= reach and d > notch:
+                    buf[cnt] = spec[i, b]
+                    cnt += 1
+            if cnt < 5:
+                cnt = 0
+                for b in range(bins):
+                    if flat[b]:
+                        buf[cnt] = spec[i, b]
+                        cnt += 1
+            if cnt == 0:
+                continue
+            v = np.sort(buf[:cnt])
+            # numpy's default ('linear') percentile
+            pos = 0.25 * (cnt - 1)
+            lo = int(np.floor(pos))
+            hi = min(lo + 1, cnt - 1)
+            frac = pos - lo
+            level[i] = v[lo] + (v[hi] - v[lo]) * frac
+        return level
+
+    @njit(cache=True)
+    def smearing(env, n0, bw_d, per_n0, b_med, span, p, kp, fs_d):  # pragma: no cover
+        n, k = env.shape
+        out = np.zeros((n, k))
+        a2 = np.empty(n)
+        x2 = np.empty(n)
+        c = np.empty(n + 1)
+        expo = 5 if p == 2 else 4
+        fs2 = fs_d * fs_d
+        for j in range(k):
+            # |A''|² by central differences (ends: their neighbours'), cumulated
+            c[0] = 0.0
+            for i in range(n):
+                ii = min(max(i, 1), n - 2)
+                d = (env[ii + 1, j] - 2.0 * env[ii, j] + env[ii - 1, j]) * fs2
+                x2[i] = d.real * d.real + d.imag * d.imag
+                c[i + 1] = c[i] + x2[i]
+            length = span[j]
+            if length <= 1 or n <= length:
+                a2[:] = x2
+            else:
+                pad = (length - 1) // 2
+                n_mid = n - length + 1
+                for i in range(n):
+                    t = min(max(i - pad, 0), n_mid - 1)
+                    a2[i] = (c[t + length] - c[t]) / length
+            for i in range(n):
+                bw = bw_d[i, j]
+                rel = bw / b_med[j]
+                val = a2[i] - 20.0 * n0[i, j] * per_n0[j] * rel ** expo
+                amp = abs(env[i, j])
+                if val <= 0.0:
+                    continue
+                ratio = np.sqrt(val) / max(amp, 1e-300)
+                loss = kp * (ratio / 8.0) ** p / (np.pi * bw) ** (2 * p)
+                out[i, j] = min(loss, 1.0) * amp
+        return out
+
+    return {"fir": fir, "assemble": assemble, "solve": solve, "matvec": matvec,
+            "envelopes": envelopes, "quartiles": quartiles, "smearing": smearing}
+
+
+def accelerated() -> bool:
+    """True when the compiled VKF kernels are in use."""
+    return _numba() is not None
+
+
+# ---------------------------------------------------------------------------- decimation
+
+
+def fir_decimate(x: np.ndarray, h: np.ndarray, q: int, first: int, n_out: int) -> np.ndarray:
+    """``y[k] = Σ_t h[t] x[(first + k) q − L//2 + t]`` for a symmetric odd-length ``h``: the
+    zero-phase filtered signal at input samples ``(first + k) q`` (all taps inside ``x``)."""
+    x = np.ascontiguousarray(x, dtype=float)
+    kernels = _numba()
+    if kernels is not None:
+        return kernels["fir"](x, h, int(q), int(first), int(n_out))
+    from scipy.signal import upfirdn
+
+    half = h.shape[0] // 2
+    # upfirdn: out[j] = Σ_t h[t] x[q j − t]; with h symmetric, out[j] of x[o:], o = half mod q,
+    # is the sample centred on input q (j − half // q) + ... = (first + k) q for j below
+    o = half % q
+    start = first + half // q
+    stop = start + n_out
+    # only the inputs the wanted outputs reach (upfirdn computes every output of its input)
+    hi = min(x.shape[0], o + (stop - 1) * q + 1)
+    return upfirdn(h, x[o:hi], down=q)[start:stop]
+
+
+# ---------------------------------------------------------------------------- normal equations
+
+
+@functools.lru_cache(maxsize=32)
+def _layout(m: int, s: int, u: int):
+    """Where each (slot a, slot b, column j, column jj) product goes in upper banded storage
+    of ``m`` unknowns per knot and ``s`` knots per sample: for slot pairs a ≤ b, the row
+    ``u − d`` and column offset of every entry, with the index of its symmetric column pair."""
+    pairs = [(j, jj) for j in range(m) for jj in range(j, m)]
+    pair_index = {pr: i for i, pr in enumerate(pairs)}
+    slot_pairs = [(a, b) for a in range(s) for b in range(a, s)]
+    rows, col_off, src_slot, src_pair = [], [], [], []
+    for ia, (a, b) in enumerate(slot_pairs):
+        for j in range(m):
+            for jj in range(m):
+                d = (b - a) * m + (jj - j)
+                if d < 0 or (a == b and jj < j):
+                    continue
+                rows.append(u - d)
+                col_off.append(b * m + jj)
+                src_slot.append(ia)
+                src_pair.append(pair_index[(min(j, jj), max(j, jj))])
+    return (np.array(pairs), slot_pairs, np.array(rows), np.array(col_off),
+            np.array(src_slot), np.array(src_pair))
+
+
+def spline_weights(n: int, m: int):
+    """Envelope representation on knots every ``m`` samples.
+
+    ``m == 1``: one unknown per sample (the classical VKF). ``m > 1``: uniform cubic B-spline
+    coefficients; sample ``i`` uses coefficients ``q_i … q_i + 3``. Returns (q, W, n_coef)."""
+    if m == 1:
+        return np.arange(n), np.ones((n, 1)), n
+    pos = np.arange(n) / m
+    q = np.floor(pos).astype(np.int64)
+    f = pos - q
+    f2, f3 = f * f, f * f * f
+    w = np.empty((n, 4))
+    w[:, 0] = (1.0 - f) ** 3 / 6.0
+    w[:, 1] = (3.0 * f3 - 6.0 * f2 + 4.0) / 6.0
+    w[:, 2] = (-3.0 * f3 + 3.0 * f2 + 3.0 * f + 1.0) / 6.0
+    w[:, 3] = f3 / 6.0
+    return q, w, int(q[-1]) + 4
+
+
+def band_width(cols: int, m: int, p: int) -> int:
+    """Half-bandwidth ``u`` of the normal equations: ``cols`` unknowns per knot, each sample on
+    ``s`` = 4 knots (1 for ``m == 1``), differences of order ``p``."""
+    s = 1 if m == 1 else 4
+    return cols * max(p, s - 1) + cols - 1
+
+
+def assemble(x, cosp, sinp, trend: bool, m: int, n_coef: int, p: int, weights):
+    """Column band form (module docstring) of ``A = CᵀC + Σ r² D_pᵀ D_p`` and ``Cᵀx``.
+
+    ``C`` has the columns ``cos(o_k φ)``, ``−sin(o_k φ)`` (and 1 with ``trend``) times the
+    spline weights of each sample's knots; unknown (knot c, column j) has the flat index
+    ``cols c + j``. ``weights``: (n_coef − p, cols) r² per difference row and column.
+    Work O(N (2K+1)² ) for the data part, O(n_coef (2K+1) p²) for the smoothness part.
+    """
+    k = cosp.shape[1]
+    cols = 2 * k + (1 if trend else 0)
+    u = band_width(cols, m, p)
+    kernels = _numba()
+    if kernels is not None:
+        return kernels["assemble"](np.ascontiguousarray(x, dtype=float),
+                                   np.ascontiguousarray(cosp), np.ascontiguousarray(sinp),
+                                   bool(trend), int(m), int(n_coef), int(p),
+                                   np.ascontiguousarray(weights, dtype=float), _DIFF[p], u)
+    n = cosp.shape[0]
+    basis = np.empty((n, cols))
+    basis[:, 0:2 * k:2] = cosp
+    basis[:, 1:2 * k:2] = -sinp
+    if trend:
+        basis[:, -1] = 1.0
+    q, w, n_coef_w = spline_weights(n, m)
+    assert n_coef_w == n_coef
+    ab, rhs = _assemble_upper(basis, x, q, w, n_coef, weights, p, u)
+    band = np.zeros((n_coef * cols, u + 1))
+    for d in range(u + 1):                   # A[j + d, j] = upper[u - d, j + d]
+        band[: band.shape[0] - d, d] = ab[u - d, d:]
+    return band, rhs
+
+
+def _assemble_upper(basis, x, q, w, n_coef, weights, p, u):
+    """numpy form: upper banded storage (LAPACK) of the same matrix, and the right side."""
+    n, m = basis.shape
+    s = w.shape[1]
+    size = n_coef * m
+    pairs, slot_pairs, rows, col_off, src_slot, src_pair = _layout(m, s, u)
+    prod = basis[:, pairs[:, 0]] * basis[:, pairs[:, 1]]            # (N, P)
+    groups = int(q[-1]) + 1
+    if s > 1:
+        span = int(np.max(np.bincount(q)))
+        # sample i sits at position i - span*q_i of its knot interval (uniform knots): lay the
+        # products out as (position, interval, pair) and sum each interval with the spline
+        # weights of every position in one matrix product
+        pos = np.arange(n) - span * q
+        lay = np.zeros((span, groups, prod.shape[1]))
+        lay[pos, q] = prod
+        wpat = np.zeros((len(slot_pairs), span))
+        wpat[:, pos[:span]] = np.stack([w[:span, a] * w[:span, b] for a, b in slot_pairs])
+        sums = (wpat @ lay.reshape(span, -1)).reshape(len(slot_pairs), groups, -1)
+        lay_x = np.zeros((span, groups, m))
+        lay_x[pos, q] = basis * x[:, None]
+        wv = np.zeros((s, span))
+        wv[:, pos[:span]] = w[:span].T
+        rsum = (wv @ lay_x.reshape(span, -1)).reshape(s, groups, m)
+    else:
+        sums = prod[None]                                            # (1, N, P)
+        rsum = (basis * x[:, None])[None]                            # (1, N, m)
+    # scatter: entry (row, g m + col_off) gets sums[src_slot, g, src_pair]
+    g = np.arange(groups)
+    flat_cols = (g[:, None] * m + col_off[None, :]).ravel()
+    flat_rows = np.broadcast_to(rows, (groups, rows.shape[0])).ravel()
+    vals = sums[src_slot, :, src_pair].T.ravel()
+    ab = np.bincount(flat_rows * size + flat_cols, weights=vals,
+                     minlength=(u + 1) * size).reshape(u + 1, size)
+    c = _DIFF[p]
+    rowsd = np.arange(weights.shape[0])
+    for a in range(p + 1):
+        for b in range(a, p + 1):
+            cols = ((rowsd[:, None] + b) * m + np.arange(m)[None, :]).ravel()
+            ab[u - (b - a) * m, cols] += c[a] * c[b] * weights.ravel()
+    rhs = np.bincount(((g[None, :, None] + np.arange(s)[:, None, None]) * m
+                       + np.arange(m)[None, None, :]).ravel(), weights=rsum.ravel(),
+                      minlength=size)
+    return ab, rhs
+
+
+# ---------------------------------------------------------------------------- banded solve
+
+
+#: widest band (u + 1 columns) factorised by the compiled kernel; wider bands (K ≥ 5 orders
+#: with the trend) go to LAPACK's blocked ``dpbtrf``, whose BLAS-3 trailing updates win there
+#: (measured: equal at 36 columns, 3x faster at 68, 4x at 132)
+COMPILED_MAX_BAND = 40
+
+
+def solve(band: np.ndarray, rhs: np.ndarray) -> np.ndarray:
+    """``z = A⁻¹ rhs`` for ``A`` in column band form, by Cholesky with one refinement step.
+
+    Raises :class:`NotPositiveDefinite` on a non-positive pivot. O(n u²) work, O(n u) memory;
+    bands wider than :data:`COMPILED_MAX_BAND` (and the numpy form) use LAPACK ``dpbtrf`` /
+    ``dpbtrs`` with one BLAS thread.
+    """
+    kernels = _numba()
+    if kernels is not None and band.shape[1] <= COMPILED_MAX_BAND:
+        z, bad = kernels["solve"](band, np.ascontiguousarray(rhs, dtype=float))
+        if bad >= 0:
+            raise NotPositiveDefinite(f"pivot {bad} is not positive")
+        return z
+    from scipy.linalg import cho_solve_banded, cholesky_banded
+
+    from crankbench.predict._threads import limit_blas
+
+    matvec = _matvec if kernels is None else kernels["matvec"]
+    # LAPACK's lower band form (dpbtrf 'L') is the transpose; OpenBLAS's threaded upper-form
+    # path can be ~100x slower on a busy machine
+    low = np.ascontiguousarray(band.T)
+    with limit_blas():
+        try:
+            factor = cholesky_banded(low, lower=True, check_finite=False)
+        except np.linalg.LinAlgError as exc:
+            raise NotPositiveDefinite(str(exc)) from None
+        z = cho_solve_banded((factor, True), rhs, check_finite=False)
+        z += cho_solve_banded((factor, True), rhs - matvec(band, z), check_finite=False)
+    return z
+
+
+def _matvec(band, z):
+    """y = A z for a symmetric matrix in column band form."""
+    u = band.shape[1] - 1
+    y = band[:, 0] * z
+    for d in range(1, u + 1):
+        diag = band[:-d, d]                    # A[j + d, j]
+        y[d:] += diag * z[:-d]
+        y[:-d] += diag * z[d:]
+    return y
+
+
+# ---------------------------------------------------------------------------- envelopes
+
+
+def envelopes(coef, cosp, sinp, m: int, trend: bool):
+    """(complex envelopes (N, K), trend (N,), model (N,)) from the spline coefficients
+    ``coef`` (n_coef, cols) at every sample; the model is ``Σ Re{A_k e^{iφ_k}} + trend``."""
+    kernels = _numba()
+    if kernels is not None:
+        return kernels["envelopes"](np.ascontiguousarray(coef), np.ascontiguousarray(cosp),
+                                    np.ascontiguousarray(sinp), int(m), bool(trend))
+    n, k = cosp.shape
+    q, w, _ = spline_weights(n, m)
+    cplx = coef[:, 0:2 * k:2] + 1j * coef[:, 1:2 * k:2]
+    env = np.zeros((n, k), dtype=complex)
+    mean = np.zeros(n)
+    for a in range(w.shape[1]):
+        env += w[:, a:a + 1] * cplx[q + a]
+        if trend:
+            mean += w[:, a] * coef[q + a, -1]
+    model = (env.real * cosp - env.imag * sinp).sum(axis=1) + mean
+    return env, mean, model
+
+
+# ---------------------------------------------------------------------------- noise level
+
+
+def lower_quartiles(spec, freq, flat, f_frame, reach: float, notch: float) -> np.ndarray:
+    """Per frame ``i``: the 25th percentile (numpy's linear rule) of ``spec[i]`` over the bins
+    of ``flat`` within ``reach`` of ``f_frame[i]`` but farther than ``notch`` (all ``flat`` bins
+    when fewer than 5 qualify; 0 when none)."""
+    kernels = _numba()
+    if kernels is not None:
+        return kernels["quartiles"](np.ascontiguousarray(spec), np.ascontiguousarray(freq),
+                                    np.ascontiguousarray(flat), np.ascontiguousarray(f_frame,
+                                                                                     dtype=float),
+                                    float(reach), float(notch))
+    level = np.zeros(spec.shape[0])
+    for i, f0 in enumerate(f_frame):
+        near = flat & (np.abs(freq - f0) <= reach) & (np.abs(freq - f0) > notch)
+        if near.sum() < 5:
+            near = flat
+        if near.any():
+            level[i] = float(np.percentile(spec[i, near], 25.0))
+    return level
+
+
+# ---------------------------------------------------------------------------- smearing
+
+
+def smearing(env, n0, bw_d, per_n0, b_med, span, p: int, kp: float, fs_d: float):
+    """Smearing bias (N, K) of each envelope: ``min(K_p (|A''|/(8|A|))^p/(πB)^{2p}, 1)·|A|``
+    with ``|A''|²`` (central differences) averaged over ``span[j]`` samples, less ten times its
+    expected noise part ``2 n0 · per_n0[j] (B/b_med[j])^{5 (p = 2) or 4}``.
+    See :func:`analysis.vkf._uncertainty`."""
+    kernels = _numba()
+    if kernels is not None:
+        return kernels["smearing"](np.ascontiguousarray(env), np.ascontiguousarray(n0),
+                                   np.ascontiguousarray(bw_d, dtype=float),
+                                   np.asarray(per_n0, float), np.asarray(b_med, float),
+                                   np.asarray(span, np.int64), int(p), float(kp), float(fs_d))
+    n, k = env.shape
+    d2 = np.zeros_like(env)
+    d2[1:-1] = (env[2:] - 2.0 * env[1:-1] + env[:-2]) * fs_d ** 2
+    d2[0], d2[-1] = d2[1], d2[-2]
+    out = np.zeros((n, k))
+    amp = np.abs(env)
+    for j in range(k):
+        bw = bw_d[:, j]
+        noise2 = 20.0 * n0[:, j] * per_n0[j] * (bw / b_med[j]) ** (5 if p == 2 else 4)
+        a2 = np.maximum(_moving_mean(np.abs(d2[:, j]) ** 2, int(span[j])) - noise2, 0.0)
+        ratio = np.sqrt(a2) / np.maximum(amp[:, j], 1e-300)
+        loss = kp * (ratio / 8.0) ** p / (np.pi * bw) ** (2 * p)
+        out[:, j] = np.minimum(loss, 1.0) * amp[:, j]
+    return out
+
+
+def _moving_mean(x, length):
+    """Centred moving mean over ``length`` samples (the ends hold the first/last full mean)."""
+    if length <= 1 or x.shape[0] <= length:
+        return x
+    c = np.concatenate([[0.0], np.cumsum(x)])
+    out = (c[length:] - c[:-length]) / length
+    pad_a = (length - 1) // 2
+    return np.concatenate([np.full(pad_a, out[0]), out,
+                           np.full(x.shape[0] - out.shape[0] - pad_a, out[-1])])

@@ -1,0 +1,223 @@
+"""The VKF kernels (analysis._vkf_kernels): each against an independent reference (dense
+normal equations, dense solve, the filter's own frequency response, np.percentile), and the
+compiled forms against the numpy/SciPy twins on the same small records.
+
+The numpy forms run by clearing the kernel cache with ``CRANKBENCH_NO_NUMBA`` set (as
+tests/analysis/test_kernels.py does); without numba installed only the numpy forms exist and
+the comparisons skip.
+"""
+
+import numpy as np
+import pytest
+
+from crankbench.analysis import _vkf_kernels as kern
+from crankbench.analysis import vkf
+from crankbench.analysis.resample import shaft_angle
+from crankbench.predict.errors import AnalysisError
+
+
+def _numpy_forms(monkeypatch):
+    monkeypatch.setenv("CRANKBENCH_NO_NUMBA", "1")
+    kern._numba.cache_clear()
+    assert not kern.accelerated()
+
+
+def _both(monkeypatch, call):
+    """(numpy result, compiled result) of ``call()``; skips without numba."""
+    pytest.importorskip("numba")
+    _numpy_forms(monkeypatch)
+    plain = call()
+    monkeypatch.delenv("CRANKBENCH_NO_NUMBA")
+    kern._numba.cache_clear()
+    assert kern.accelerated()
+    compiled = call()
+    kern._numba.cache_clear()
+    return plain, compiled
+
+
+@pytest.fixture(params=["numpy", "compiled"])
+def form(request, monkeypatch):
+    """Run a test on both forms (the compiled one only when numba is installed)."""
+    if request.param == "numpy":
+        _numpy_forms(monkeypatch)
+    else:
+        pytest.importorskip("numba")
+        monkeypatch.delenv("CRANKBENCH_NO_NUMBA", raising=False)
+        kern._numba.cache_clear()
+        assert kern.accelerated()
+    yield request.param
+    kern._numba.cache_clear()
+
+
+def _small_system(n=203, k=2, m=5, p=2, trend=True, seed=4):
+    rng = np.random.default_rng(seed)
+    phase = np.cumsum(rng.uniform(0.2, 0.9, (n, k)), axis=0)
+    cols = 2 * k + (1 if trend else 0)
+    n_coef = n if m == 1 else (n - 1) // m + 4
+    weights = rng.uniform(0.5, 3.0, (n_coef - p, cols))
+    return rng.normal(size=n), np.cos(phase), np.sin(phase), weights, n_coef, cols
+
+
+def _dense_reference(x, cosp, sinp, weights, n_coef, cols, m, p, trend):
+    """CᵀC + Σ r² D_pᵀ D_p and Cᵀx built densely, column by column of the definition."""
+    n, k = cosp.shape
+    basis = np.empty((n, cols))
+    basis[:, 0:2 * k:2] = cosp
+    basis[:, 1:2 * k:2] = -sinp
+    if trend:
+        basis[:, -1] = 1.0
+    design = np.zeros((n, n_coef * cols))
+    for i in range(n):
+        if m == 1:
+            knots, w = [i], [1.0]
+        else:
+            g, f = divmod(i, m)
+            f /= m
+            knots = range(g, g + 4)        # uniform cubic B-spline, de Boor's closed form
+            w = [(1 - f) ** 3 / 6, (3 * f ** 3 - 6 * f ** 2 + 4) / 6,
+                 (-3 * f ** 3 + 3 * f ** 2 + 3 * f + 1) / 6, f ** 3 / 6]
+        for c, wc in zip(knots, w):
+            design[i, c * cols:(c + 1) * cols] = wc * basis[i]
+    a = design.T @ design
+    diff = {1: [-1.0, 1.0], 2: [1.0, -2.0, 1.0]}[p]
+    for j in range(cols):
+        d = np.zeros((n_coef - p, n_coef * cols))
+        for r in range(n_coef - p):
+            for t, c in enumerate(diff):
+                d[r, (r + t) * cols + j] = c
+        a += d.T @ (weights[:, j:j + 1] * d)
+    return a, design.T @ x
+
+
+def _dense(band):
+    size, w1 = band.shape
+    a = np.zeros((size, size))
+    for d in range(w1):
+        idx = np.arange(size - d)
+        a[idx + d, idx] = band[: size - d, d]
+        a[idx, idx + d] = band[: size - d, d]
+    return a
+
+
+@pytest.mark.parametrize("m, p, trend", [(5, 2, True), (1, 2, True), (4, 1, False)])
+def test_assembly_equals_the_dense_normal_equations(form, m, p, trend):
+    x, cosp, sinp, weights, n_coef, cols = _small_system(m=m, p=p, trend=trend)
+    if not trend:
+        weights = weights[:, :cols]
+    band, rhs = kern.assemble(x, cosp, sinp, trend, m, n_coef, p, weights)
+    a_ref, rhs_ref = _dense_reference(x, cosp, sinp, weights, n_coef, cols, m, p, trend)
+    assert band.shape == (n_coef * cols, kern.band_width(cols, m, p) + 1)
+    np.testing.assert_allclose(_dense(band), a_ref, rtol=0, atol=1e-12 * np.abs(a_ref).max())
+    np.testing.assert_allclose(rhs, rhs_ref, rtol=0, atol=1e-12 * np.abs(rhs_ref).max())
+
+
+def test_banded_solve_matches_a_dense_solve_and_refuses_indefinite(form):
+    x, cosp, sinp, weights, n_coef, cols = _small_system()
+    band, rhs = kern.assemble(x, cosp, sinp, True, 5, n_coef, 2, weights)
+    z = kern.solve(band, rhs)
+    ref = np.linalg.solve(_dense(band), rhs)
+    np.testing.assert_allclose(z, ref, rtol=0, atol=1e-10 * np.abs(ref).max())
+    bad = band.copy()
+    bad[7, 0] = -1.0
+    with pytest.raises(kern.NotPositiveDefinite):
+        kern.solve(bad, rhs)
+
+
+@pytest.mark.parametrize("fs, f_max, stages", [(20_000.0, 225.5, 2), (5000.0, 60.0, 2),
+                                               (48_000.0, 100.0, 2), (20_000.0, 900.0, 1)])
+def test_decimator_response_is_flat_and_rejects_aliases(fs, f_max, stages):
+    """The FIR cascade's own frequency response (each stage Σ h cos(2π f n/f_s), folded at
+    each stage's output rate): pass band [0, f_max] flat to 1e-5, everything that lands in
+    the output band [0, fs/2q] from elsewhere attenuated below 1e-5 (100 dB), as _decimate
+    documents."""
+    q = int(fs // (4 * f_max))
+    design = vkf._decimator(fs, f_max, q)
+    assert np.prod([s for s, _ in design]) == q and len(design) == stages
+    f = np.linspace(0.0, fs / 2, 100_001)
+    gain = np.ones_like(f)
+    folded, rate = f.copy(), fs
+    for qs, h in design:
+        gain *= np.abs(_response(h, folded, rate))
+        rate /= qs
+        folded = np.abs(folded - rate * np.round(folded / rate))       # alias at the new rate
+    passband = f <= f_max
+    assert np.abs(gain[passband] - 1).max() < 1e-5
+    aliased = (folded <= 0.5 * rate) & (f > 0.5 * rate)
+    assert aliased.any() and gain[aliased].max() < 1e-5
+
+
+def _response(h, f, rate):
+    """Zero-phase response of the symmetric FIR ``h`` at frequencies ``f`` (chunked)."""
+    n = np.arange(h.shape[0]) - h.shape[0] // 2
+    out = np.empty(f.shape[0])
+    for i in range(0, f.shape[0], 20_000):
+        out[i:i + 20_000] = np.cos(2 * np.pi * np.outer(f[i:i + 20_000], n) / rate) @ h
+    return out
+
+
+def test_decimation_keeps_a_tone_and_its_timing(form):
+    """A tone inside the pass band comes through at the output's sample times (zero phase)."""
+    fs = 20_000.0
+    t = np.arange(60_000) / fs
+    x = np.cos(2 * np.pi * 180.0 * t + 0.4)
+    y, index, fs_d = vkf._decimate(x, fs, 225.5)
+    assert fs_d == fs / 22
+    np.testing.assert_allclose(y, x[index], rtol=0, atol=2e-5)
+
+
+def test_lower_quartiles_match_numpy_percentile(form):
+    rng = np.random.default_rng(7)
+    spec = rng.exponential(size=(6, 300))
+    freq = np.linspace(0.0, 150.0, 300)
+    flat = (freq > 0) & (freq < 120.0)
+    f_frame = np.array([10.0, 50.0, 119.0, 300.0, 60.0, 0.5])
+    got = kern.lower_quartiles(spec, freq, flat, f_frame, 20.0, 2.0)
+    for i, f0 in enumerate(f_frame):
+        near = flat & (np.abs(freq - f0) <= 20.0) & (np.abs(freq - f0) > 2.0)
+        near = near if near.sum() >= 5 else flat
+        assert got[i] == pytest.approx(np.percentile(spec[i, near], 25), rel=1e-14)
+
+
+def test_compiled_and_numpy_forms_agree_on_a_record(monkeypatch):
+    """The whole filter (decimation, assembly, solve, envelopes, noise and smearing) on a
+    small run-up with noise: compiled and numpy forms agree to rounding."""
+    fs = 4000.0
+    t = np.arange(int(6 * fs)) / fs
+    rpm = 900 + 150 * t
+    phi = shaft_angle(rpm, fs)
+    x = ((1 + 0.3 * np.sin(1.3 * t)) * np.cos(2 * phi + 0.2) + 0.4 * np.cos(3.5 * phi) + 2.0
+         + np.random.default_rng(1).normal(0, 0.05, t.size))
+
+    def run():
+        knots = vkf.vold_kalman(x, fs=fs, speed_rpm=rpm, orders=[2, 3.5], bandwidth_hz=1.5)
+        classical = vkf.vold_kalman(x[:3000], fs=fs, speed_rpm=rpm[:3000], orders=[2],
+                                    bandwidth_hz=20.0, decimate=False, filter_order=1,
+                                    knots_per_bandwidth=None)
+        return knots, classical
+
+    plain, compiled = _both(monkeypatch, run)
+    for a, b in zip(plain, compiled):
+        assert a.attrs["solve_rate_hz"] == b.attrs["solve_rate_hz"]
+        scale = float(np.abs(a.envelope).max())
+        np.testing.assert_allclose(b.envelope, a.envelope, rtol=0, atol=1e-10 * scale)
+        np.testing.assert_allclose(b["mean"], a["mean"], rtol=0, atol=1e-10 * scale)
+        np.testing.assert_allclose(b.amplitude_noise, a.amplitude_noise, rtol=1e-9)
+        np.testing.assert_allclose(b.amplitude_uncertainty, a.amplitude_uncertainty,
+                                   rtol=1e-7, atol=1e-12 * scale)
+    knots = plain[0]
+    assert knots.attrs["decimation"] > 1 and knots.attrs["knot_spacing_samples"] > 1
+    # and both are right: order 3.5 at 0.4 and the trend at 2.0 mid-record, within a few
+    # noise sigmas (0.05 rms at 4 kHz through ENBW 1.04·1.5 Hz: σ ≈ 1.4e-3)
+    mid = slice(knots.time.size // 4, 3 * knots.time.size // 4)
+    assert np.abs(np.abs(knots.envelope[1].values[mid]) - 0.4).max() < 6e-3
+    assert np.abs(knots["mean"].values[mid] - 2.0).max() < 6e-3
+
+
+def test_not_positive_definite_is_our_error(monkeypatch):
+    def refuse(band, rhs):
+        raise kern.NotPositiveDefinite("pivot 0 is not positive")
+
+    monkeypatch.setattr(kern, "solve", refuse)
+    x = np.cos(np.arange(4000) * 0.02)
+    with pytest.raises(AnalysisError, match="not positive definite; the bandwidth is too narrow"):
+        vkf.vold_kalman(x, fs=1000.0, speed_rpm=191.0, orders=[1], bandwidth_hz=1.0)
