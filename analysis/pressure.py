@@ -119,6 +119,9 @@ class IndicatorResult:
     heat_release : analysis.indicator.HeatRelease
         Of the mean cycle.
     warnings : tuple of str
+    cycle_number : ndarray (n_cycles,) or None
+        The cycle numbers of an angle-domain export (None: counted from 1). ``cycle_time`` and
+        ``speed_rpm`` are NaN where the export gives no speed.
     """
 
     channel: str
@@ -139,6 +142,7 @@ class IndicatorResult:
     heat_release: object
     warnings: tuple = ()
     mean: dict = field(default_factory=dict)
+    cycle_number: np.ndarray | None = None
 
     @property
     def n_cycles(self) -> int:
@@ -182,7 +186,9 @@ class IndicatorResult:
         geo = self.imep_net is not None
         out = {
             "channel": self.channel, "cylinder": self.cylinder, "cycle": self.cycle,
-            "cycles": self.n_cycles, "speed_rpm": float(np.mean(self.speed_rpm)),
+            "cycles": self.n_cycles,
+            "speed_rpm": float(np.mean(self.speed_rpm)) if np.all(np.isfinite(
+                self.speed_rpm)) else None,
             "peak_pressure_bar": m["peak_pressure"] / BAR,
             "peak_angle_deg": float(np.rad2deg(m["peak_angle"])),
             "peak_pressure_bar_per_cycle": stats(self.peak_pressure, BAR),
@@ -209,7 +215,9 @@ class IndicatorResult:
         """Per-cycle table: time, speed, peak (bar, deg), IMEP net/gross and PMEP (bar)."""
         import pandas as pd
 
-        cols = {"cycle": np.arange(1, self.n_cycles + 1), "time_s": self.cycle_time,
+        number = np.arange(1, self.n_cycles + 1) if self.cycle_number is None else \
+            np.asarray(self.cycle_number)
+        cols = {"cycle": number, "time_s": self.cycle_time,
                 "speed_rpm": self.speed_rpm, "peak_pressure_bar": self.peak_pressure / BAR,
                 "peak_angle_deg": np.rad2deg(self.peak_angle)}
         if self.imep_net is not None:
@@ -297,6 +305,24 @@ def _cylinder_of(record, name, given):
         if m:
             return int(m.group(1))
     return None
+
+
+def _checked_cylinder(engine, channel, cyl, warnings):
+    """The channel's cylinder (1 when unknown), with the warnings of a missing engine model or
+    cylinder; a cylinder the engine does not have is an error."""
+    n_cyl = engine.n_cylinders if engine is not None else None
+    if engine is None:
+        warnings.append("no engine model: IMEP, PMEP, heat release, the polytropic peg and "
+                        "the TDC check need the cylinder geometry (engine=, CLI --model)")
+    if cyl is None:
+        cyl = 1
+        if n_cyl is None or n_cyl > 1:
+            warnings.append(f"channel {channel!r} names no cylinder; taken as cylinder 1 "
+                            "(pass cylinder=)")
+    if n_cyl is not None and not 1 <= int(cyl) <= n_cyl:
+        raise AnalysisError(f"channel {channel!r} is cylinder {cyl}, but the engine has "
+                            f"{n_cyl}")
+    return int(cyl)
 
 
 # ------------------------------------------------------------------------------ pegging
@@ -469,19 +495,7 @@ def indicator_analysis(record, engine, *, channel=None, cylinder=None, angle_cha
         raise AnalysisError(f"channel={channel!r} is not a pressure channel; pressure "
                             f"channels: {', '.join(chans) or 'none'}")
     warnings = []
-    cyl = _cylinder_of(record, channel, cylinder)
-    n_cyl = engine.n_cylinders if engine is not None else None
-    if engine is None:
-        warnings.append("no engine model: IMEP, PMEP, heat release, the polytropic peg and "
-                        "the TDC check need the cylinder geometry (engine=, CLI --model)")
-    if cyl is None:
-        cyl = 1
-        if n_cyl is None or n_cyl > 1:
-            warnings.append(f"channel {channel!r} names no cylinder; taken as cylinder 1 "
-                            "(pass cylinder=)")
-    if n_cyl is not None and not 1 <= cyl <= n_cyl:
-        raise AnalysisError(f"channel {channel!r} is cylinder {cyl}, but the engine has "
-                            f"{n_cyl}")
+    cyl = _checked_cylinder(engine, channel, _cylinder_of(record, channel, cylinder), warnings)
     used_marks = {}
     trace, reference, has_tdc = _angle(record, angle_channel=angle_channel,
                                        tdc_channel=tdc_channel, tdc_offset_deg=tdc_offset_deg,
@@ -516,7 +530,6 @@ def indicator_analysis(record, engine, *, channel=None, cylinder=None, angle_cha
     if engine is None and cyl != 1:
         warnings.append(f"no engine model: the firing offset of cylinder {cyl} is unknown; the "
                         "TDC reference is taken as this cylinder's own")
-    applied = 0.0
     if not has_tdc and engine is None:
         raise AnalysisError("no TDC reference (no TDC mark channel, no wheel-gap offset) and no "
                             "engine model: locating TDC from the pressure needs the cylinder "
@@ -543,7 +556,37 @@ def indicator_analysis(record, engine, *, channel=None, cylinder=None, angle_cha
                                              used_marks.get("name"), warnings)
             phase_text += extra
         search = None
-    base = base0
+
+    def cut(shift):
+        got = _cut(theta, p, t, base0 + shift, psi, period)
+        if got[0].shape[0] == 0:
+            raise AnalysisError(f"pressure channel {channel!r} holds no complete "
+                                f"{np.rad2deg(period):g}-deg cycle within the pulse train")
+        return got
+
+    return _analyse_cycles(
+        cut, engine=engine, psi=psi, strokes=strokes, channel=channel, cyl=cyl,
+        has_tdc=has_tdc, search=search, reference=reference, phase_text=phase_text,
+        warnings=warnings, tdc_correction=tdc_correction, max_cycles=max_cycles, peg=peg,
+        peg_pressure=peg_pressure, peg_window_deg=peg_window_deg,
+        polytropic_exponent=polytropic_exponent, tdc_window_deg=tdc_window_deg,
+        loss_angle_deg=loss_angle_deg, gamma=gamma)
+
+
+def _analyse_cycles(cut, *, engine, psi, strokes, channel, cyl, has_tdc, search, reference,
+                    phase_text, warnings, tdc_correction, max_cycles, peg, peg_pressure,
+                    peg_window_deg, polytropic_exponent, tdc_window_deg, loss_angle_deg, gamma):
+    """The back half of the indicator analysis, shared by the time-domain record
+    (:func:`indicator_analysis`) and the crank-angle-domain export
+    (:func:`analysis.pressure_cycles.indicator_analysis_cycles`).
+
+    ``cut(shift)`` returns ``(cycles, t_c, rpm, t_grid)``: the cycles on the grid ``psi`` (Pa,
+    (n_cycles, n)) with their firing TDCs moved by ``shift`` (rad, the thermodynamic TDC
+    correction so far), the TDC time and mean speed of each cycle and the time (or any clock
+    linear in time) of every grid point. It pegs, checks (and corrects) TDC by moving the cut,
+    and gives peaks, mean effective pressures and the heat release.
+    """
+    applied = base = 0.0
     # thermodynamic TDC passes: without a reference first a wide scan with a window well before
     # the pressure peak (the guess), then the normal window; the last pass only checks
     passes = []
@@ -553,13 +596,10 @@ def indicator_analysis(record, engine, *, channel=None, cylinder=None, angle_cha
         passes.append((tdc_window_deg, None))
     passes.append((tdc_window_deg, None))
     for k, (window, scan) in enumerate(passes):
-        cycles, t_c, rpm, t_grid = _cut(theta, p, t, base, psi, period)
+        cycles, t_c, rpm, t_grid = cut(base)
         if max_cycles is not None:
             cycles, t_c, rpm, t_grid = (cycles[:max_cycles], t_c[:max_cycles],
                                         rpm[:max_cycles], t_grid[:max_cycles])
-        if cycles.shape[0] == 0:
-            raise AnalysisError(f"pressure channel {channel!r} holds no complete "
-                                f"{np.rad2deg(period):g}-deg cycle within the pulse train")
         peg_info, peg_warn = _peg(engine, psi, cycles, cyl, peg=peg, peg_pressure=peg_pressure,
                                   window_deg=peg_window_deg, exponent=polytropic_exponent)
         pegged = cycles + _offset_field(peg_info, psi, t_grid, peg_window_deg)

@@ -61,6 +61,12 @@ Role channels may also give ``units`` (of the raw signal, default V), ``scale``/
 attrs ``pulses_per_rev``, ``missing_teeth``, ``role``; a per-cycle mark has ``speed_ratio`` 0.5),
 wheels before marks, so the speed reference and the crank angle use them.
 
+A crank-angle-domain export of an indicating system (pressure per cycle against crank angle,
+no time axis) is said by ``[source] angle_column`` (with ``angle_units`` "deg"/"rad",
+``cycle_column``, ``speed_column``, ``layout`` "long"/"wide", ``firing_tdc_deg``); it is read
+by :func:`measure.readers.angle_table.read_angle_table` (``crankbench pressure --map``), and a
+time-domain read of it is refused.
+
 Keys are checked like model files: an unknown key is an error with a did-you-mean, a column
 that is not in the file is an error listing the columns there. The Record keeps its
 provenance: ``raw_source`` (file name), ``raw_sha256`` and ``channel_map`` (the map's text).
@@ -93,8 +99,11 @@ _SOURCE_TABLE_KEYS = ("sample_rate", "time_column", "time_units", "delimiter", "
 #: every key of [source] and of a [channel.<name>] table
 #: the run's load as the record states it (record attrs; analysis.pipeline.LoadCase)
 LOAD_KEYS = ("imep", "load_law", "load_reference_rpm")
+#: an angle-domain indicating export (measure.readers.angle_table; crankbench pressure)
+ANGLE_KEYS = ("angle_column", "angle_units", "cycle_column", "speed_column", "layout",
+              "firing_tdc_deg")
 SOURCE_KEYS = _SOURCE_TABLE_KEYS + ("start_time", "engine_id", "test_id", "keep_unmapped") \
-    + LOAD_KEYS
+    + LOAD_KEYS + ANGLE_KEYS
 CHANNEL_KEYS = ("column", "units", "quantity", "scale", "offset", "location", "direction",
                 "node", "position", "mount", "instrument_natural_frequency",
                 "instrument_damping_ratio", "role", "pulses_per_rev", "missing_teeth",
@@ -285,6 +294,18 @@ def _parse(doc: TomlTable, *, text: str, origin: str) -> ChannelMap:
         if "load_reference_rpm" in src:
             source["load_reference_rpm"] = src.positive("load_reference_rpm", unit="rpm",
                                                         plausible=(1.0, 1e5))
+        for key in ("angle_column", "cycle_column", "speed_column"):
+            if key in src:
+                source[key] = _column(src, key)
+        if "angle_units" in src:
+            source["angle_units"] = src.string("angle_units", options=("deg", "rad"))
+        if "layout" in src:
+            source["layout"] = src.string("layout", options=("long", "wide"))
+        if "firing_tdc_deg" in src:
+            source["firing_tdc_deg"] = src.number("firing_tdc_deg", unit="deg")
+        if "angle_column" in source and ("sample_rate" in source or "time_column" in source):
+            src.fail("angle_column", "and a time axis (sample_rate / time_column) are both "
+                                     "given; an angle-domain export has no time axis")
         if "sample_rate" in source and "time_column" in source:
             src.fail("sample_rate", "and time_column are both given; give one (the time "
                                     "column's own rate is used)")
@@ -588,6 +609,11 @@ def apply_map(table, cmap: ChannelMap, *, allow_nonfinite=False):
                         n_columns=table.n_columns)
 
     time_idx = time_unit = None
+    if "angle_column" in src:
+        raise RecordError(f"{file}: the map's [source] angle_column makes it a crank-angle-domain "
+                          "export (cylinder pressure against crank angle, no time axis): read "
+                          "it with crankbench pressure FILE --map MAP or "
+                          "measure.readers.angle_table.read_angle_table")
     if "time_column" in src:
         time_idx = index(src["time_column"], "source.time_column")
     elif "sample_rate" not in src:

@@ -9,6 +9,12 @@ cylinder geometry; without it only the quantities that need none are given. ``--
 prints the per-cycle table; ``--plot DIR`` writes ``pressure_<channel>.png`` (p–θ, log p–log V,
 heat release) and ``--report OUT.html`` a report section (:class:`analysis.report.Report`)
 atomically; ``--map`` reads a raw export through a channel map.
+
+A crank-angle-domain export of an indicating system (a table with a crank-angle column and no
+time column, :mod:`measure.readers.angle_table`; or a map with ``[source] angle_column``) is
+analysed per cycle as exported (:mod:`analysis.pressure_cycles`): ``--firing-tdc-deg`` says
+where its axis puts the firing TDC (default: from the pressure), ``--speed-rpm`` the speed
+when it has no speed column.
 """
 
 from __future__ import annotations
@@ -49,6 +55,13 @@ def configure(parser) -> None:
                         help="absolute pressure at intake BDC, bar (selects --peg bdc)")
     parser.add_argument("--gamma", type=number(low=1.0, high=2.0, strict_low=True), default=1.32,
                         help="ratio of specific heats for the heat release (default 1.32)")
+    parser.add_argument("--firing-tdc-deg", type=number(low=-720.0, high=720.0, unit="deg"),
+                        default=None, help="angle-domain export: angle of its axis at which "
+                        "the cylinder fires, deg (default: found from the pressure)")
+    parser.add_argument("--speed-rpm", type=number(low=0.0, high=1e5, strict_low=True,
+                                                   unit="rpm"), default=None,
+                        help="angle-domain export without a speed column: engine speed, rpm "
+                             "(only the speed/time columns use it)")
     parser.add_argument("--cycle", type=int, default=4, choices=[2, 4],
                         help="strokes, without --model (default 4)")
     parser.add_argument("--cycles", action="store_true", help="print the per-cycle table")
@@ -67,8 +80,9 @@ def _lines(s):
         return "n/a (needs --model)" if v is None else fmt.format(v)
 
     pc, ac = s["peak_pressure_bar_per_cycle"], s["peak_angle_deg_per_cycle"]
+    speed = ", speed not given" if s["speed_rpm"] is None else f" at {s['speed_rpm']:.1f} rpm"
     out = [f"channel {s['channel']} (cylinder {s['cylinder']}, {s['cycle']}-stroke): "
-           f"{s['cycles']} cycles at {s['speed_rpm']:.1f} rpm",
+           f"{s['cycles']} cycles{speed}",
            f"  peak pressure      {s['peak_pressure_bar']:.3f} bar at "
            f"{s['peak_angle_deg']:.2f} deg after TDC (mean cycle)",
            f"  per cycle          {pc['mean']:.3f} ± {pc['std']:.3f} bar at {ac['mean']:.2f} ± "
@@ -108,6 +122,9 @@ def run(args) -> int:
 
             raise ConfigError(f"--plot {out_dir}: exists and is not a directory")
     record = _read(io, args)
+    angle_domain = record.attrs.get("domain") == "crank_angle"
+    if angle_domain:
+        from crankbench.analysis.pressure_cycles import angle_pressure_channels as pressure_channels
     channels = [args.channel] if args.channel else pressure_channels(record)
     if not channels:
         from crankbench.predict.errors import AnalysisError
@@ -134,8 +151,21 @@ def run(args) -> int:
                   + (model_inputs(args.model) if args.model else []))
     for path, _ in outputs:
         check_overwrite(path, args.overwrite, option="--overwrite")
-    results = {c: indicator_analysis(record, args.model, channel=c, **options)
-               for c in channels}
+    if angle_domain:
+        from crankbench.analysis.pressure_cycles import indicator_analysis_cycles
+
+        for key in ("angle_channel", "tdc_channel", "phase_channel", "tdc_offset_deg"):
+            if options.pop(key) is not None:
+                log.warning("--%s does not apply to a crank-angle-domain export (its axis is "
+                            "referenced to TDC; use --firing-tdc-deg)", key.replace("_", "-"))
+        options["cycle"] = None if args.model else args.cycle
+        results = {c: indicator_analysis_cycles(record, args.model, channel=c,
+                                                firing_tdc_deg=args.firing_tdc_deg,
+                                                speed_rpm=args.speed_rpm, **options)
+                   for c in channels}
+    else:
+        results = {c: indicator_analysis(record, args.model, channel=c, **options)
+                   for c in channels}
     if args.json:
         out = {"record": str(args.record), "model": args.model,
                "channels": {c: r.summary() for c, r in results.items()}}
@@ -167,8 +197,17 @@ def run(args) -> int:
 
 
 def _read(io, args):
+    from crankbench.measure.readers.angle_table import is_angle_table, read_angle_table
+
     if args.map is None:
+        if is_angle_table(args.record):
+            return read_angle_table(args.record)
         return io.read(args.record)
+    from crankbench.measure.channelmap import load_map
+
+    cmap = load_map(args.map)
+    if "angle_column" in cmap.source or is_angle_table(args.record):
+        return read_angle_table(args.record, map=cmap)
     import inspect
 
     if "map" not in inspect.signature(io.read).parameters:
