@@ -535,9 +535,16 @@ def table_record(table: Table, *, channels=None):
             "%s: date/time %s not read (the time axis is %s)", file,
             ", ".join(table.label(i) for i in skipped), table.label(time_idx))
     if time_idx is None and not table.sample_rate:
+        from .angle_table import angle_column_of
+
+        angle = angle_column_of(table)
+        hint = "" if angle is None else (
+            f"; {table.label(angle)} is a crank angle: an indicating system's "
+            "angle-domain export is analysed by `crankbench pressure FILE --model ENGINE.toml` "
+            "(measure.readers.angle_table), not read as a time record")
         raise RecordError(f"{file}: no time column; expected a first column named 'time [s]' "
                           f"(found columns {headers}), or a sample rate: give a channel map "
-                          "with [source] sample_rate (Hz) or time_column")
+                          f"with [source] sample_rate (Hz) or time_column{hint}")
     names = [p[0] for i, p in enumerate(parsed) if i != time_idx and i not in skipped]
     wanted = select(names, channels, file=file)
     idx = [i for i, (name, _) in enumerate(parsed)

@@ -293,3 +293,14 @@ def test_time_records_are_not_angle_tables_and_maps_say_where_angle_tables_go(tm
     with pytest.raises(RecordError, match="angle_column makes it a crank-angle-domain"):
         read(ca, map={"source": {"angle_column": 1}, "channel": {"p": {"column": 2,
                                                                          "units": "bar"}}})
+
+
+def test_reading_an_angle_export_as_a_time_record_points_to_the_pressure_command():
+    """`crankbench info`/`import` of an angle-domain export: the refusal says what the file is
+    and which command analyses it."""
+    from crankbench import measure
+    from crankbench.predict.errors import RecordError
+
+    path = Path(__file__).resolve().parents[2] / "sample_data/raw/indicating_ca.csv"
+    with pytest.raises(RecordError, match=r"is a crank angle.*crankbench pressure"):
+        measure.read(path)
