@@ -85,9 +85,7 @@ def _track_running_spans(record, channel, speed, stops, options, *, compute=None
     spans; their results are absent)."""
     import warnings
 
-    import xarray as xr
-
-    from .orders import OrderWarning
+    from .orders import OrderWarning, join_running_spans
 
     compute = order_track_stream if compute is None else compute
     n, fs, t0 = speed.n, speed.fs, speed.t0
@@ -106,17 +104,7 @@ def _track_running_spans(record, channel, speed, stops, options, *, compute=None
             parts.append(compute(sub, channel, speed_rpm=_running_span(speed, a, b), **options))
         except AnalysisError as exc:
             skipped.append(f"{t0 + a / fs:.6g}..{t0 + (b - 1) / fs:.6g} s ({exc})")
-    if not parts:
-        raise AnalysisError(f"{channel}: no running span long enough to analyse: "
-                            f"{'; '.join(skipped)}")
-    if skipped:
-        log.info("%s: running spans not analysed: %s", channel, "; ".join(skipped))
-    extra = {} if isinstance(parts[0], xr.DataArray) else {"data_vars": "minimal"}
-    out = xr.concat(parts, dim="time", coords="minimal", combine_attrs="override",
-                    **extra) if len(parts) > 1 else parts[0]
-    out.attrs["stopped_spans_s"] = [v for a, b in stops for v in (t0 + a / fs,
-                                                                  t0 + (b - 1) / fs)]
-    return out
+    return join_running_spans(parts, skipped, stops, label=channel, t0=t0, fs=fs)
 
 
 def _reader(var):
