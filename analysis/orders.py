@@ -758,25 +758,9 @@ def _track_running_spans(x, fs, speed_rpm, stops, *, shaft_angle, compute=None,
             skipped.append(f"{t0 + a / fs_:.6g}..{t0 + (b - 1) / fs_:.6g} s ({exc})")
             continue
         parts.append(ds)
+    from .spans import join_running_spans
+
     return join_running_spans(parts, skipped, stops, label=label, t0=t0, fs=fs_)
-
-
-def join_running_spans(parts, skipped, stops, *, label, t0, fs):
-    """The results of a record's running spans as one (along ``time``), with the standing
-    spans in ``attrs['stopped_spans_s']`` (s); refused when no span could be analysed."""
-    import xarray as xr
-
-    if not parts:
-        raise AnalysisError(f"{label}: no running span long enough to analyse: "
-                            f"{'; '.join(skipped)}")
-    if skipped:
-        log.info("%s: running spans not analysed: %s", label, "; ".join(skipped))
-    extra = {} if isinstance(parts[0], xr.DataArray) else {"data_vars": "minimal"}
-    out = xr.concat(parts, dim="time", coords="minimal", combine_attrs="override",
-                    **extra) if len(parts) > 1 else parts[0]
-    out.attrs["stopped_spans_s"] = [v for a, b in stops for v in (t0 + a / fs,
-                                                                  t0 + (b - 1) / fs)]
-    return out
 
 
 def _track_dataset(amp, phase, orders, t, r, units, label, reference=None, variables=None):

@@ -85,7 +85,8 @@ def _track_running_spans(record, channel, speed, stops, options, *, compute=None
     spans; their results are absent)."""
     import warnings
 
-    from .orders import OrderWarning, join_running_spans
+    from .orders import OrderWarning
+    from .spans import join_running_spans
 
     compute = order_track_stream if compute is None else compute
     n, fs, t0 = speed.n, speed.fs, speed.t0

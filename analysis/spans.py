@@ -1,0 +1,29 @@
+"""Running spans of a record that stops: their results joined into one (shared by the
+in-memory trackers, :mod:`analysis.orders` / :mod:`analysis.ordermap`, and the streamed ones,
+:mod:`analysis.stream`)."""
+
+from __future__ import annotations
+
+import logging
+
+from crankbench.predict.errors import AnalysisError
+
+log = logging.getLogger("crankbench")
+
+
+def join_running_spans(parts, skipped, stops, *, label, t0, fs):
+    """The results of a record's running spans as one (along ``time``), with the standing
+    spans in ``attrs['stopped_spans_s']`` (s); refused when no span could be analysed."""
+    import xarray as xr
+
+    if not parts:
+        raise AnalysisError(f"{label}: no running span long enough to analyse: "
+                            f"{'; '.join(skipped)}")
+    if skipped:
+        log.info("%s: running spans not analysed: %s", label, "; ".join(skipped))
+    extra = {} if isinstance(parts[0], xr.DataArray) else {"data_vars": "minimal"}
+    out = xr.concat(parts, dim="time", coords="minimal", combine_attrs="override",
+                    **extra) if len(parts) > 1 else parts[0]
+    out.attrs["stopped_spans_s"] = [v for a, b in stops for v in (t0 + a / fs,
+                                                                  t0 + (b - 1) / fs)]
+    return out
