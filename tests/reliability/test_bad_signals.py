@@ -177,6 +177,22 @@ def test_unusable_channel_is_named_error(case, pattern, func):
         pytest.skip("order_track tracks the running spans around a stop (tests/hard_cases/"
                     "test_hard_orders.py::test_a_stop_is_tracked_around_and_named)")
     c = sig.CHANNEL_CASES[case]()
+    if func in ("order_map", "campbell_map") and case == "channel_zero_speed_segment":
+        # the order map is computed in each running span, named in a warning (as the tracks
+        # are); the Campbell map's time frames take the standing span at 0 rpm
+        from crankbench.analysis.orders import OrderWarning
+
+        a, b = (v / FS for v in c.spans[0])
+        if func == "order_map":
+            with pytest.warns(OrderWarning, match="order map is computed in each running span"):
+                m = ORDER_FUNCS[func](_channel(c.data), c.rpm)
+            t = m["time"].values
+            assert not np.any((t > a) & (t < b)) and np.isfinite(m.values).all()
+        else:
+            m = ORDER_FUNCS[func](_channel(c.data), c.rpm)
+            assert np.isfinite(m.values).all()
+            assert float(m["rpm"].min()) < 0.8 * float(np.median(c.rpm))   # the stop shows
+        return
     with pytest.raises(AnalysisError, match=pattern):
         ORDER_FUNCS[func](_channel(c.data), c.rpm)
 
