@@ -736,9 +736,9 @@ def _track_running_spans(x, fs, speed_rpm, stops, *, shaft_angle, compute=None,
         angle = np.asarray(speed_rpm.coords["shaft_angle"].values, float)
     t0 = _t0(x)
     n = values.shape[0]
-    bounds = [0] + [v for s in stops for v in s] + [n]
-    runs = [(a, b) for a, b in zip(bounds[0::2], bounds[1::2]) if b > a]
-    shown = ", ".join(f"{t0 + a / fs_:.6g}..{t0 + (b - 1) / fs_:.6g} s" for a, b in stops[:5])
+    from .spans import running_spans
+
+    runs, shown = running_spans(stops, n, t0=t0, fs=fs_)
     warnings.warn(f"{label}: the shaft stands (speed <= 0.5 % of {speed.max():.6g} rpm) at "
                   f"{shown}; {what} in each running span separately",
                   OrderWarning, stacklevel=3)

@@ -27,3 +27,13 @@ def join_running_spans(parts, skipped, stops, *, label, t0, fs):
     out.attrs["stopped_spans_s"] = [v for a, b in stops for v in (t0 + a / fs,
                                                                   t0 + (b - 1) / fs)]
     return out
+
+
+def running_spans(stops, n, *, t0, fs):
+    """The sample spans ``[(a, b), ...]`` where the shaft turns, between the standing ``stops``
+    of an ``n``-sample record, and the standing spans as text (s, the first five) for the
+    warning that names them."""
+    bounds = [0] + [v for s in stops for v in s] + [n]
+    runs = [(a, b) for a, b in zip(bounds[0::2], bounds[1::2]) if b > a]
+    shown = ", ".join(f"{t0 + a / fs:.6g}..{t0 + (b - 1) / fs:.6g} s" for a, b in stops[:5])
+    return runs, shown

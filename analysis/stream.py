@@ -86,13 +86,11 @@ def _track_running_spans(record, channel, speed, stops, options, *, compute=None
     import warnings
 
     from .orders import OrderWarning
-    from .spans import join_running_spans
+    from .spans import join_running_spans, running_spans
 
     compute = order_track_stream if compute is None else compute
     n, fs, t0 = speed.n, speed.fs, speed.t0
-    bounds = [0] + [v for s in stops for v in s] + [n]
-    runs = [(a, b) for a, b in zip(bounds[0::2], bounds[1::2]) if b > a]
-    shown = ", ".join(f"{t0 + a / fs:.6g}..{t0 + (b - 1) / fs:.6g} s" for a, b in stops[:5])
+    runs, shown = running_spans(stops, n, t0=t0, fs=fs)
     warnings.warn(f"{channel}: the shaft stands (speed <= 0.5 % of {speed.extremes[1]:.6g} "
                   f"rpm) at {shown}; {what} in each running span separately",
                   OrderWarning, stacklevel=3)
