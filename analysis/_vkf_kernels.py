@@ -7,6 +7,7 @@ passes and library calls:
 
 * :func:`fir_decimate` — one stage of a polyphase FIR decimator (twin:
   :func:`scipy.signal.upfirdn`);
+* :func:`order_basis` — ``cos``/``sin`` of every order's phase (twin: ``np.cos``/``np.sin``);
 * :func:`assemble` — the block-banded normal equations ``CᵀC + Σ r² D_pᵀD_p`` and ``Cᵀx`` of
   the spline-envelope least squares, accumulated knot interval by knot interval (twin: grouped
   products and ``np.bincount`` scatters);
@@ -31,10 +32,20 @@ import functools
 
 import numpy as np
 
-__all__ = ["accelerated", "fir_decimate", "assemble", "solve", "envelopes",
+__all__ = ["accelerated", "fir_decimate", "order_basis", "assemble", "solve", "envelopes",
            "lower_quartiles", "smearing", "NotPositiveDefinite"]
 
 _DIFF = {1: np.array([-1.0, 1.0]), 2: np.array([1.0, -2.0, 1.0])}
+
+# π/2 in three parts of 33, 33 and 53 bits (the leading digits of π/2: 1.5707963267341256 +
+# 6.077100506303966e-11 + 2.0222662487959506e-21), for the exact argument reduction of basis()
+_PIO2 = (1.5707963267341256, 6.077100506303966e-11, 2.0222662487959506e-21)
+_TWO_OVER_PI = 2.0 / np.pi
+# Taylor coefficients of sin (r³ … r¹⁷) and cos (r² … r¹⁸)
+_S = tuple((-1.0) ** i / float(np.prod(np.arange(1, 2 * i + 2))) for i in range(1, 9))
+_C = tuple((-1.0) ** i / float(np.prod(np.arange(1, 2 * i + 1))) for i in range(1, 10))
+#: largest |o φ| (rad) of the compiled basis (|q| < 2^20 keeps the reduction exact)
+BASIS_MAX_PHASE = 2.0 ** 20
 
 
 class NotPositiveDefinite(ArithmeticError):
@@ -60,11 +71,38 @@ def _numba():
         y = np.empty(n_out)
         for k in range(n_out):
             c = (first + k) * q - half
+            # a slice, not x[c + t]: a signed index makes numba check for wrap-around at
+            # every tap, which keeps LLVM from vectorising the dot product (6x slower)
+            xs = x[c:c + taps]
             acc = 0.0
             for t in range(taps):
-                acc += h[t] * x[c + t]
+                acc += h[t] * xs[t]
             y[k] = acc
         return y
+
+    @njit(cache=True, error_model="numpy")
+    def basis(phi, orders, cos_out, sin_out):  # pragma: no cover - compiled
+        # cos/sin of o_j φ_i, written (K, N): Cody–Waite reduction by π/2 in three parts (33,
+        # 33 and 53 bits, so q·P1 and q·P2 are exact for |q| < 2^20) and the Taylor series on
+        # |r| ≤ π/4 (first omitted terms < 1e-19); no fastmath (the reduction's order of
+        # operations matters), no library call, so LLVM vectorises the loop (8-15x np.cos)
+        for j in range(orders.shape[0]):
+            o = orders[j]
+            for i in range(phi.shape[0]):
+                x = phi[i] * o
+                q = np.rint(x * _TWO_OVER_PI)
+                r = ((x - q * _PIO2[0]) - q * _PIO2[1]) - q * _PIO2[2]
+                z = r * r
+                s = r + r * z * (_S[0] + z * (_S[1] + z * (_S[2] + z * (_S[3] + z * (
+                    _S[4] + z * (_S[5] + z * (_S[6] + z * _S[7])))))))
+                c = 1.0 + z * (_C[0] + z * (_C[1] + z * (_C[2] + z * (_C[3] + z * (
+                    _C[4] + z * (_C[5] + z * (_C[6] + z * (_C[7] + z * _C[8]))))))))
+                quadrant = np.int64(q)
+                odd = (quadrant & 1) == 1
+                a = c if odd else s
+                b = s if odd else c
+                sin_out[j, i] = -a if (quadrant & 2) else a
+                cos_out[j, i] = -b if ((quadrant + 1) & 2) else b
 
     @njit(cache=True)
     def spline_w(i, m, w):                    # pragma: no cover - compiled
@@ -82,7 +120,7 @@ def _numba():
 
     @njit(cache=True, fastmath=True)
     def assemble(x, cosp, sinp, trend, m, n_coef, p, weights, diff, u):  # pragma: no cover
-        n, k = cosp.shape
+        k, n = cosp.shape                      # (K, N): one order's samples contiguous
         cols = 2 * k + (1 if trend else 0)
         s = 1 if m == 1 else 4
         size = n_coef * cols
@@ -122,8 +160,8 @@ def _numba():
             for i in range(g * m, min(n, g * m + m)):
                 t = i - g * m
                 for j in range(k):
-                    b[2 * j] = cosp[i, j]
-                    b[2 * j + 1] = -sinp[i, j]
+                    b[2 * j] = cosp[j, i]
+                    b[2 * j + 1] = -sinp[j, i]
                 if trend:
                     b[cols - 1] = 1.0
                 idx = 0
@@ -235,7 +273,7 @@ def _numba():
 
     @njit(cache=True)
     def envelopes(coef, cosp, sinp, m, trend):  # pragma: no cover - compiled
-        n, k = cosp.shape
+        k, n = cosp.shape
         cols = coef.shape[1]
         s = 1 if m == 1 else 4
         env = np.zeros((n, k), np.complex128)
@@ -254,7 +292,7 @@ def _numba():
                     re += w[a] * coef[g + a, 2 * j]
                     im += w[a] * coef[g + a, 2 * j + 1]
                 env[i, j] = re + 1j * im
-                tot += re * cosp[i, j] - im * sinp[i, j]
+                tot += re * cosp[j, i] - im * sinp[j, i]
             if trend:
                 c0 = 0.0
                 for a in range(s):
@@ -332,7 +370,7 @@ def _numba():
                 out[i, j] = min(loss, 1.0) * amp
         return out
 
-    return {"fir": fir, "assemble": assemble, "solve": solve, "matvec": matvec,
+    return {"fir": fir, "basis": basis, "assemble": assemble, "solve": solve, "matvec": matvec,
             "envelopes": envelopes, "quartiles": quartiles, "smearing": smearing}
 
 
@@ -362,6 +400,28 @@ def fir_decimate(x: np.ndarray, h: np.ndarray, q: int, first: int, n_out: int) -
     # only the inputs the wanted outputs reach (upfirdn computes every output of its input)
     hi = min(x.shape[0], o + (stop - 1) * q + 1)
     return upfirdn(h, x[o:hi], down=q)[start:stop]
+
+
+# ---------------------------------------------------------------------------- order basis
+
+
+def order_basis(phi: np.ndarray, orders: np.ndarray):
+    """``(cos(o_k φ), sin(o_k φ))``, each (N, K), for the shaft angle ``phi`` (rad, (N,)).
+
+    The compiled form (|o φ| < :data:`BASIS_MAX_PHASE`) agrees with ``np.cos``/``np.sin`` to
+    a few units in the last place (``tests/analysis/test_vkf_kernels.py``); its arrays are
+    stored order by order (the returned (N, K) arrays are transposed views)."""
+    phi = np.ascontiguousarray(phi, dtype=float)
+    orders = np.ascontiguousarray(orders, dtype=float)
+    kernels = _numba()
+    top = float(np.abs(phi).max() * np.abs(orders).max()) if phi.size else 0.0
+    if kernels is None or not top < BASIS_MAX_PHASE:          # (a NaN phase: numpy's NaN)
+        phase = np.multiply.outer(phi, orders)
+        return np.cos(phase), np.sin(phase)
+    cos = np.empty((orders.shape[0], phi.shape[0]))
+    sin = np.empty_like(cos)
+    kernels["basis"](phi, orders, cos, sin)
+    return cos.T, sin.T
 
 
 # ---------------------------------------------------------------------------- normal equations
@@ -430,7 +490,7 @@ def assemble(x, cosp, sinp, trend: bool, m: int, n_coef: int, p: int, weights):
     kernels = _numba()
     if kernels is not None:
         return kernels["assemble"](np.ascontiguousarray(x, dtype=float),
-                                   np.ascontiguousarray(cosp), np.ascontiguousarray(sinp),
+                                   np.ascontiguousarray(cosp.T), np.ascontiguousarray(sinp.T),
                                    bool(trend), int(m), int(n_coef), int(p),
                                    np.ascontiguousarray(weights, dtype=float), _DIFF[p], u)
     n = cosp.shape[0]
@@ -553,8 +613,8 @@ def envelopes(coef, cosp, sinp, m: int, trend: bool):
     ``coef`` (n_coef, cols) at every sample; the model is ``Σ Re{A_k e^{iφ_k}} + trend``."""
     kernels = _numba()
     if kernels is not None:
-        return kernels["envelopes"](np.ascontiguousarray(coef), np.ascontiguousarray(cosp),
-                                    np.ascontiguousarray(sinp), int(m), bool(trend))
+        return kernels["envelopes"](np.ascontiguousarray(coef), np.ascontiguousarray(cosp.T),
+                                    np.ascontiguousarray(sinp.T), int(m), bool(trend))
     n, k = cosp.shape
     q, w, _ = spline_weights(n, m)
     cplx = coef[:, 0:2 * k:2] + 1j * coef[:, 1:2 * k:2]

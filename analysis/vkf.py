@@ -441,14 +441,14 @@ def _vold_kalman_arrays(x, *, fs, speed_rpm, orders, bandwidth_hz, bandwidth_ord
     nd = xd.shape[0]
     if speeds is None:
         phi = _integrate_speed(single, fs) if angle is None else angle
-        phase = np.outer(phi[index], orders)                      # (Nd, K)
+        cosp, sinp = _vkf_kernels.order_basis(phi[index], orders)      # (Nd, K)
         rpm_d = speed_at(index)
         low_speed = float(rpm_d.min())
     else:
         phase = np.stack([_integrate_speed(s, fs)[index] for s in speeds], axis=1) * orders
         rpm_d = speeds[0, index]
         low_speed = float(speeds[:, index].min())
-    cosp, sinp = np.cos(phase), np.sin(phase)
+        cosp, sinp = np.cos(phase), np.sin(phase)
     bw_d = bw_at(index)                                        # (Nd, K)
     if (bw_d >= fs_d).any():
         raise AnalysisError(f"bandwidth up to {bw_d.max():.6g} Hz is too wide for the solve rate "
