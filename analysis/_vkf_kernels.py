@@ -358,15 +358,26 @@ def _numba():
                 for i in range(n):
                     t = min(max(i - pad, 0), n_mid - 1)
                     a2[i] = (c[t + length] - c[t]) / length
+            inv_med = 1.0 / b_med[j]
+            noise_scale = 20.0 * per_n0[j]
             for i in range(n):
+                # (products, not ** with a run-time exponent: a pow call per sample)
                 bw = bw_d[i, j]
-                rel = bw / b_med[j]
-                val = a2[i] - 20.0 * n0[i, j] * per_n0[j] * rel ** expo
-                amp = abs(env[i, j])
+                rel = bw * inv_med
+                rel4 = rel * rel
+                rel4 *= rel4
+                val = a2[i] - noise_scale * n0[i, j] * (rel4 * rel if expo == 5 else rel4)
                 if val <= 0.0:
                     continue
-                ratio = np.sqrt(val) / max(amp, 1e-300)
-                loss = kp * (ratio / 8.0) ** p / (np.pi * bw) ** (2 * p)
+                e = env[i, j]
+                amp2 = e.real * e.real + e.imag * e.imag
+                amp = np.sqrt(amp2)
+                pb2 = np.pi * bw
+                pb2 *= pb2
+                if p == 2:                      # K_p (|A''|/(8|A|))² / (πB)⁴
+                    loss = kp * val / (64.0 * max(amp2, 1e-300) * pb2 * pb2)
+                else:
+                    loss = kp * np.sqrt(val) / (8.0 * max(amp, 1e-300) * pb2)
                 out[i, j] = min(loss, 1.0) * amp
         return out
 

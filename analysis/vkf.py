@@ -522,7 +522,12 @@ def _uncertainty(env, residual, fs_d, orders, rpm_d, bw_d, p, f_pass):
     ``K_p (|A''|/(8|A|))^p/(πB)^{2p}``, with the noise part of ``|A''|²`` removed first."""
     nd, k = env.shape
     f_ord = orders[None, :] * (rpm_d if rpm_d.ndim == 2 else rpm_d[:, None]) / 60.0
-    b_med = np.median(bw_d, axis=0)
+    by_order = np.ascontiguousarray(bw_d.T)  # (numpy reduces an (N, 3) array over N ~20x slower)
+    b_low, b_high = by_order.min(axis=1), by_order.max(axis=1)
+    b_med = b_low.copy()                    # (a constant bandwidth needs no sort)
+    varies = b_low != b_high
+    if varies.any():
+        b_med[varies] = np.median(by_order[varies], axis=1)
     n0 = _local_noise(residual, fs_d, f_ord, b_med, f_pass)
     noise = np.sqrt(n0 * enbw_hz(bw_d, p))
     if nd < 8:
@@ -542,7 +547,7 @@ def _uncertainty(env, residual, fs_d, orders, rpm_d, bw_d, p, f_pass):
         # |A''|² is averaged over the filter's response time, less ten times its expected
         # noise part (E|A''_noise|² = 2 N0 ∫ D⁴|H|²): only curvature well above the noise
         # counts (noise alone would otherwise read as smearing that grows with B)
-        span[j] = max(1, int(round(fs_d / (2.0 * bw_d[:, j].min()))))
+        span[j] = max(1, int(round(fs_d / (2.0 * b_low[j]))))
     return noise, _vkf_kernels.smearing(env, n0, bw_d, per_n0, b_med, span, p,
                                         smearing_constant(p), fs_d)
 
