@@ -48,6 +48,10 @@ _C = tuple((-1.0) ** i / float(np.prod(np.arange(1, 2 * i + 1))) for i in range(
 BASIS_MAX_PHASE = 2.0 ** 20
 
 
+#: compiled helpers called by other compiled kernels (set by :func:`_numba`)
+_JIT_SPLINE_W = _JIT_FACTOR = _JIT_SUBSTITUTE = _JIT_MATVEC = None
+
+
 class NotPositiveDefinite(ArithmeticError):
     """The banded matrix has a non-positive pivot (raised by :func:`solve`)."""
 
@@ -63,6 +67,10 @@ def _numba():
         from numba import njit
     except ImportError:
         return None
+    # kernels that call kernels reach them as module globals, not closure cells: numba keys
+    # its on-disk cache on the pickled closure cells, and a pickled dispatcher differs from
+    # process to process, so a closure reference recompiled the caller (8 s) in every process
+    global _JIT_SPLINE_W, _JIT_FACTOR, _JIT_SUBSTITUTE, _JIT_MATVEC
 
     @njit(cache=True, fastmath=True)
     def fir(x, h, q, first, n_out):          # pragma: no cover - compiled
@@ -118,9 +126,12 @@ def _numba():
         w[2] = (-3.0 * f3 + 3.0 * f2 + 3.0 * f + 1.0) / 6.0
         w[3] = f3 / 6.0
 
+    _JIT_SPLINE_W = spline_w
+
     @njit(cache=True, fastmath=True)
     def assemble(x, cosp, sinp, trend, m, n_coef, p, weights, diff, u):  # pragma: no cover
-        k, n = cosp.shape                      # (K, N): one order's samples contiguous
+        k = cosp.shape[0]                      # (K, N): one order's samples contiguous
+        n = x.shape[0]                         # (K may be 0: the trend alone)
         cols = 2 * k + (1 if trend else 0)
         s = 1 if m == 1 else 4
         size = n_coef * cols
@@ -146,7 +157,7 @@ def _numba():
         wv = np.ones((min(m, n), s))
         if s > 1:
             for t in range(min(m, n)):
-                spline_w(t, m, w)
+                _JIT_SPLINE_W(t, m, w)
                 idx = 0
                 for a in range(s):
                     wv[t, a] = w[a]
@@ -257,17 +268,19 @@ def _numba():
             y[j] += acc
         return y
 
+    _JIT_FACTOR, _JIT_SUBSTITUTE, _JIT_MATVEC = factor, substitute, matvec
+
     @njit(cache=True)
     def solve(band, rhs):                      # pragma: no cover - compiled
         low = band.copy()
-        bad = factor(low)
+        bad = _JIT_FACTOR(low)
         if bad >= 0:
             return rhs, bad
         z = rhs.copy()
-        substitute(low, z)
+        _JIT_SUBSTITUTE(low, z)
         # one step of iterative refinement
-        res = rhs - matvec(band, z)
-        substitute(low, res)
+        res = rhs - _JIT_MATVEC(band, z)
+        _JIT_SUBSTITUTE(low, res)
         z += res
         return z, -1
 
@@ -283,7 +296,7 @@ def _numba():
         for i in range(n):
             g = i // m
             if s > 1:
-                spline_w(i, m, w)
+                _JIT_SPLINE_W(i, m, w)
             tot = 0.0
             for j in range(k):
                 re = 0.0
@@ -382,6 +395,7 @@ def _numba():
         return out
 
     return {"fir": fir, "basis": basis, "assemble": assemble, "solve": solve, "matvec": matvec,
+            "factor": factor, "substitute": substitute, "spline_w": spline_w,
             "envelopes": envelopes, "quartiles": quartiles, "smearing": smearing}
 
 

@@ -79,7 +79,7 @@ from crankbench.predict._validate import check_int, check_option, check_positive
 from crankbench.predict.errors import AnalysisError
 from crankbench.predict._threads import single_threaded_blas
 
-from . import _vkf_kernels
+from . import _vkf_kernels, vkf_iterative
 from .resample import _as_angle, _as_rpm, _as_signal
 from .resample import shaft_angle as _integrate_speed
 
@@ -237,21 +237,32 @@ def _decimate(values: np.ndarray, fs: float, f_max: float):
     return y, offset + step * np.arange(y.shape[0]), fs / q
 
 
-def _solve_block(x, cosp, sinp, knot_weights, p, m, trend):
-    """Solve one block; ``knot_weights``: (n_coef - p, K [+1]) r² per difference row.
-    Returns (envelopes (n, K), trend (n,), model (n,))."""
+def _solve_block(x, cosp, sinp, knot_weights, p, m, trend, iterative, orders):
+    """Solve one block; ``knot_weights``: (n_coef - p, K [+1]) r² per difference row;
+    ``iterative``: by PCG (:mod:`analysis.vkf_iterative`), else by banded Cholesky.
+    Returns ((envelopes (n, K), trend (n,), model (n,)), PCG iterations: -1 when it did not
+    converge and the direct solve was used, 0 for the direct solve)."""
     n, k = cosp.shape
     n_coef = n if m == 1 else (n - 1) // m + 4
     col_w = np.repeat(knot_weights[:, :k], 2, axis=1)
     if trend:
         col_w = np.concatenate([col_w, knot_weights[:, k:]], axis=1)
-    band, rhs = _vkf_kernels.assemble(x, cosp, sinp, trend, m, n_coef, p, col_w)
+    iterations = 0
     try:
+        if iterative:
+            z, iterations = vkf_iterative.solve(x, cosp, sinp, trend, m, n_coef, p, col_w,
+                                                orders=orders)
+            if iterations >= 0:
+                return _vkf_kernels.envelopes(z, cosp, sinp, m, trend), iterations
+            log.warning("Vold-Kalman: conjugate gradients did not reach %.0e in %d iterations "
+                        "(orders close for their bandwidths); solved directly",
+                        vkf_iterative.TOLERANCE, vkf_iterative.MAX_ITERATIONS)
+        band, rhs = _vkf_kernels.assemble(x, cosp, sinp, trend, m, n_coef, p, col_w)
         z = _vkf_kernels.solve(band, rhs)
     except _vkf_kernels.NotPositiveDefinite:
         raise AnalysisError("Vold-Kalman system is not positive definite; the bandwidth is "
                             "too narrow for float64 at this sample rate (widen bandwidth)") from None
-    return _vkf_kernels.envelopes(z.reshape(n_coef, -1), cosp, sinp, m, trend)
+    return _vkf_kernels.envelopes(z.reshape(n_coef, -1), cosp, sinp, m, trend), iterations
 
 
 def _bandwidths(bandwidth_hz, bandwidth_orders, orders, speeds, n):
@@ -292,7 +303,7 @@ def _bandwidths(bandwidth_hz, bandwidth_orders, orders, speeds, n):
 def vold_kalman(x, *, fs=None, speed_rpm, orders, bandwidth_hz=None, bandwidth_orders=None,
                 filter_order: int = 2, decimate: bool = True, block: int = 1 << 15,
                 knots_per_bandwidth: float | None = 40.0, shaft_angle=None,
-                trend: bool = True):
+                trend: bool = True, solver: str = "auto"):
     """Vold–Kalman filter: complex envelopes of several orders (and the trend), solved jointly.
 
     Parameters
@@ -330,6 +341,12 @@ def vold_kalman(x, *, fs=None, speed_rpm, orders, bandwidth_hz=None, bandwidth_o
     trend : bool
         Solve an order-0 envelope (the channel's mean and drift) with the orders; its −3 dB
         bandwidth is a quarter of the lowest order's frequency at the lowest speed.
+    solver : {'auto', 'direct', 'iterative'}
+        The joint normal equations by banded Cholesky ('direct', cubic in the number of
+        orders) or by block-preconditioned conjugate gradients ('iterative',
+        :mod:`analysis.vkf_iterative`: linear in the orders, envelopes within 1e-7 of the
+        largest of the direct solve's; falls back to 'direct' with a warning if it does not
+        converge); 'auto': iterative from ``vkf_iterative.MIN_ORDERS`` orders.
 
     Returns
     -------
@@ -362,7 +379,7 @@ def vold_kalman(x, *, fs=None, speed_rpm, orders, bandwidth_hz=None, bandwidth_o
                               bandwidth_hz=bandwidth_hz, bandwidth_orders=bandwidth_orders,
                               filter_order=filter_order, decimate=decimate, block=block,
                               knots_per_bandwidth=knots_per_bandwidth, shaft_angle=shaft_angle,
-                              trend=trend)
+                              trend=trend, solver=solver)
     import xarray as xr
 
     units = res["units"]
@@ -390,7 +407,7 @@ def vold_kalman(x, *, fs=None, speed_rpm, orders, bandwidth_hz=None, bandwidth_o
 @single_threaded_blas  # the numpy forms' banded solves per block: BLAS threads only cost
 def _vold_kalman_arrays(x, *, fs, speed_rpm, orders, bandwidth_hz, bandwidth_orders,
                         filter_order, decimate=True, block=1 << 15, knots_per_bandwidth=40.0,
-                        shaft_angle=None, trend=True, checked=False):
+                        shaft_angle=None, trend=True, checked=False, solver="auto"):
     """:func:`vold_kalman` as plain arrays (dict): ``envelope`` (N, K) complex, ``mean``,
     ``residual``, ``noise`` and ``uncertainty`` (N, K), ``time``, ``rpm``, ``orders``, the
     basis ``cos``/``sin`` (N, K) of ``o_k φ``, ``units``, ``label`` and the Dataset's
@@ -408,6 +425,8 @@ def _vold_kalman_arrays(x, *, fs, speed_rpm, orders, bandwidth_hz, bandwidth_ord
     p = check_int(filter_order, "filter_order", minimum=1, error=AnalysisError)
     check_option(p, "filter_order", (1, 2), error=AnalysisError)
     block = check_int(block, "block", minimum=256, error=AnalysisError)
+    solver = check_option(solver, "solver", ("auto", "direct", "iterative"), error=AnalysisError)
+    iterative = solver == "iterative" or (solver == "auto" and k >= vkf_iterative.MIN_ORDERS)
     rpm_arr = np.asarray(speed_rpm.values if hasattr(speed_rpm, "dims") else speed_rpm, dtype=float)
     angle = None
     if rpm_arr.ndim == 2:
@@ -473,6 +492,7 @@ def _vold_kalman_arrays(x, *, fs, speed_rpm, orders, bandwidth_hz, bandwidth_ord
     env = np.empty((nd, k), dtype=complex)
     mean = np.zeros(nd)
     model = np.empty(nd)
+    iterations = []
     for start in range(0, nd, block):
         stop = min(nd, start + block)
         a, b = max(0, start - overlap), min(nd, stop + overlap)
@@ -482,7 +502,9 @@ def _vold_kalman_arrays(x, *, fs, speed_rpm, orders, bandwidth_hz, bandwidth_ord
         at_knots = np.clip(a + (np.arange(n_coef - p) + 0.5 * p - (0 if m == 1 else 1)) * m,
                            a, b - 1).astype(np.int64)
         r2 = vkf_weight(bw_all[at_knots], fs_d, p) ** 2 * float(m) ** (1 - 2 * p)
-        e, mn, mdl = _solve_block(xd[a:b], cosp[a:b], sinp[a:b], r2, p, m, trend)
+        (e, mn, mdl), its = _solve_block(xd[a:b], cosp[a:b], sinp[a:b], r2, p, m, trend,
+                                         iterative, orders)
+        iterations.append(its)
         env[start:stop] = e[start - a: stop - a]
         mean[start:stop] = mn[start - a: stop - a]
         model[start:stop] = mdl[start - a: stop - a]
@@ -490,8 +512,16 @@ def _vold_kalman_arrays(x, *, fs, speed_rpm, orders, bandwidth_hz, bandwidth_ord
     noise, smear = _uncertainty(env, residual, fs_d, orders, rpm_d if speeds is None
                                 else speeds[:, index].T, bw_d, p, f_max)
     std = np.sqrt(np.einsum("ij,ij->j", noise, noise) / nd)      # rms over time, per order
-    attrs = {"method": "Vold-Kalman filter (joint with an order-0 trend, banded Cholesky)"
-                       if trend else "Vold-Kalman filter (joint, banded Cholesky)",
+    fallback = iterative and min(iterations) < 0
+    how = ("conjugate gradients" if iterative and not fallback else "banded Cholesky")
+    attrs = {"method": f"Vold-Kalman filter (joint with an order-0 trend, {how})"
+                       if trend else f"Vold-Kalman filter (joint, {how})",
+             "solver": ("direct (banded Cholesky)" if not iterative else
+                        f"iterative (block-preconditioned conjugate gradients to a relative "
+                        f"residual of {vkf_iterative.TOLERANCE:.0e}, at most "
+                        f"{max(iterations)} iterations per block)" if not fallback else
+                        f"direct (banded Cholesky) after conjugate gradients did not converge "
+                        f"in {vkf_iterative.MAX_ITERATIONS} iterations"),
              "channel": label, "bandwidth": kind, "filter_order": p,
              "bandwidth_hz_min": float(np.min(bw_low)), "bandwidth_hz_max": float(np.max(bw_top)),
              "trend_bandwidth_hz": b_trend if trend else float("nan"),

@@ -221,3 +221,18 @@ def test_not_positive_definite_is_our_error(monkeypatch):
     x = np.cos(np.arange(4000) * 0.02)
     with pytest.raises(AnalysisError, match="not positive definite; the bandwidth is too narrow"):
         vkf.vold_kalman(x, fs=1000.0, speed_rpm=191.0, orders=[1], bandwidth_hz=1.0)
+
+
+def test_order_basis_matches_numpy_cos_and_sin(form):
+    """cos/sin of o·φ: the compiled reduction + Taylor form within 4e-16 of np.cos/np.sin up
+    to the largest phase it takes (|o φ| < 2^20 rad), and numpy beyond."""
+    phi = np.concatenate([np.linspace(0.0, 7.0e5, 200_001), [-3.3, 1e-300]])
+    orders = np.array([0.5, 1.0, 1.5, 2.5])
+    cos, sin = kern.order_basis(phi, orders)
+    phase = np.multiply.outer(phi, orders)
+    assert cos.shape == sin.shape == (phi.size, orders.size)
+    np.testing.assert_allclose(cos, np.cos(phase), rtol=0, atol=4e-16)
+    np.testing.assert_allclose(sin, np.sin(phase), rtol=0, atol=4e-16)
+    far = np.array([0.0, 4.0e6])                       # beyond BASIS_MAX_PHASE: numpy
+    np.testing.assert_array_equal(kern.order_basis(far, orders)[0], np.cos(np.multiply.outer(
+        far, orders)))
