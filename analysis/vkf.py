@@ -12,7 +12,10 @@ solved with the orders, so it cannot leak into a low order. Each envelope is a c
 with knots every ``m`` samples (``m = 1``: one value per sample, the classical form). The normal
 equations couple the ``2K + 1`` unknowns of one knot with each other and with ``max(p, 3)``
 neighbouring knots only, so the matrix is banded (half-bandwidth ``u = (2K+1)·max(p, 3) + 2K``)
-and is solved by a banded Cholesky factorisation with one step of iterative refinement.
+and is solved by a banded Cholesky factorisation with one step of iterative refinement — or,
+from ``vkf_iterative.MIN_ORDERS`` = 12 orders (``solver``), by conjugate gradients
+preconditioned with the exact normal equations of groups of neighbouring orders
+(:mod:`analysis.vkf_iterative`), which never forms the joint matrix.
 
 Cost, for ``N`` samples at the solve rate, ``K`` orders and knots every ``m`` samples (what
 runs; :mod:`analysis._vkf_kernels`, compiled by numba, numpy/SciPy twins otherwise):
@@ -23,12 +26,15 @@ runs; :mod:`analysis._vkf_kernels`, compiled by numba, numpy/SciPy twins otherwi
   times the 10 spline-weight pairs of its knot interval, O(N K²);
 * factorisation O((N/m)(2K+1) u²) = O((N/m) K³) with ``m`` ≈ ``fs/(40 B)`` (the compiled
   column-band Cholesky up to ``u`` = 39, LAPACK's blocked ``dpbtrf`` above); substitutions,
-  refinement and envelopes O((N/m) K²) and O(N K); noise and smearing estimates O(N K).
+  refinement and envelopes O((N/m) K²) and O(N K); noise and smearing estimates O(N K);
+* iterative solve (12 orders and more): the groups' own normal equations O(N K) to build
+  and factorise, then O(N K) per iteration; the iterations depend on how close the orders
+  are for their bandwidths, not on ``K`` directly (14–40 on the bench's run-ups).
 
 All of it is linear in the samples (bench suite ``scaling``: fitted exponent against record
-length, bound 1.25). In the orders the sample-proportional part is quadratic and the
-factorisation cubic with a small constant: the fitted exponent against 1–16 orders is bounded
-by 2 in the same suite, but beyond about 8 orders the cubic term takes over.
+length, bound 1.25). In the orders the direct solve is cubic with a small constant and takes
+over beyond about 8 orders; with the iterative solve from 12 orders the fitted exponent over
+3–24 orders (same solve rate) is 1.6 in the same suite (bound 2).
 
 Bandwidth: for a stationary order the envelope filter is
 ``H(ν) = 1/(1 + 2r²(2 sin(π ν/fs))^{2p})`` (``ν`` the offset from the order; the data term of the
