@@ -640,25 +640,38 @@ def _notch_depth(f_ord, starts, length, win, freq, b_med, trend_hz, fs_d, p):
     b_all = np.append(np.asarray(b_med, float), float(trend_hz))
     r2 = vkf_weight(np.maximum(b_all, 1e-12), fs_d, p) ** 2
     reach = (3.0 if p == 2 else 6.0) * b_all
-    rows = np.arange(frames)[:, None]
+    # every line at once (each order and its mirror, the trend's positive side): the product
+    # of the (1 - H)² factors of one (instant, frame, bin) as the exp of a sum of logs (one
+    # bincount, not a Python loop of small multiply.at scatters)
+    order_of = [m for m in range(k) if b_all[m] > 0.0 for _ in (0, 1)]
+    signs = [sgn for m in range(k) if b_all[m] > 0.0 for sgn in (1.0, -1.0)]
+    if b_all[k] > 0.0:
+        order_of.append(k)
+        signs.append(1.0)
     depth = np.zeros((frames, bins))
-    for off, w in zip(offsets, weights):
-        at = np.clip(starts + off, 0, nd - 1)
-        g = np.ones((frames, bins))
-        for m in range(k + 1):
-            if b_all[m] <= 0.0:
-                continue
-            centres = (np.zeros(frames) if m == k
-                       else np.interp(at, np.arange(nd), f_ord[:, m]))
-            span = int(np.ceil(reach[m] / df)) + 1
-            for sign in ((1.0,) if m == k else (1.0, -1.0)):     # the line and its mirror
-                first = np.floor((sign * centres - reach[m]) / df).astype(np.int64)
-                cols = first[:, None] + np.arange(2 * span + 1)[None, :]
-                inside = (cols >= 0) & (cols < bins)
-                cols = np.clip(cols, 0, bins - 1)
-                nu = cols * df - sign * centres[:, None]
-                h = 1.0 / (1.0 + 2.0 * r2[m] * (2.0 * np.sin(np.pi * nu / fs_d)) ** (2 * p))
-                np.multiply.at(g, (np.broadcast_to(rows, cols.shape)[inside], cols[inside]),
-                               ((1.0 - h) ** 2)[inside])
-        depth += w * g
+    if not order_of:
+        depth[:] = 1.0
+        return depth
+    order_of = np.array(order_of)
+    signs = np.array(signs)
+    at = np.clip(starts[None, :] + offsets[:, None], 0, nd - 1)            # (3, frames)
+    centres = np.zeros((3, order_of.shape[0], frames))
+    for i, m in enumerate(order_of):
+        if m < k:
+            centres[:, i] = signs[i] * np.interp(at, np.arange(nd), f_ord[:, m])
+    span = np.ceil(reach[order_of] / df).astype(np.int64) + 1                # per line
+    first = np.floor((centres - reach[order_of][None, :, None]) / df).astype(np.int64)
+    t = np.arange(2 * int(span.max()) + 1)
+    cols = first[..., None] + t                                           # (3, L, frames, T)
+    valid = (cols >= 0) & (cols < bins) & (t <= 2 * span[None, :, None, None])
+    nu = cols * df - centres[..., None]
+    h = 1.0 / (1.0 + 2.0 * r2[order_of][None, :, None, None]
+               * (2.0 * np.sin(np.pi * nu / fs_d)) ** (2 * p))
+    with np.errstate(divide="ignore"):
+        log_factor = np.where(valid, 2.0 * np.log(np.abs(1.0 - h)), 0.0)
+    inst = np.arange(3)[:, None, None, None]
+    row = np.arange(frames)[None, None, :, None]
+    flat = ((inst * frames + row) * bins + np.clip(cols, 0, bins - 1)).ravel()
+    logs = np.bincount(flat, weights=log_factor.ravel(), minlength=3 * frames * bins)
+    depth = np.tensordot(weights, np.exp(logs.reshape(3, frames, bins)), axes=1)
     return np.where(depth >= 0.25, depth, np.nan)
