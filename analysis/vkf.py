@@ -29,7 +29,8 @@ runs; :mod:`analysis._vkf_kernels`, compiled by numba, numpy/SciPy twins otherwi
   refinement and envelopes O((N/m) K²) and O(N K); noise and smearing estimates O(N K);
 * iterative solve (12 orders and more): the groups' own normal equations O(N K) to build
   and factorise, then O(N K) per iteration; the iterations depend on how close the orders
-  are for their bandwidths, not on ``K`` directly (14–40 on the bench's run-ups).
+  are for their bandwidths (23–40 from 12 to 24 orders 0.5 apart on the bench's scaling
+  record, 14 for 16 orders with the automatic bandwidths).
 
 All of it is linear in the samples (bench suite ``scaling``: fitted exponent against record
 length, bound 1.25). In the orders the direct solve is cubic with a small constant and takes

@@ -10,20 +10,23 @@ orders. Here ``A`` is never formed:
   ``y = Σ_j b_j (W v)_j`` (``b_j`` the basis column, ``W`` the four spline weights) and then
   ``Cᵀy`` scattered back — the coupling of the orders through a sample is rank one — plus
   the smoothness term per column: O(N K) (``N`` samples at the solve rate);
-* the preconditioner is the block diagonal of ``A`` per order: each order's own 2-column
-  normal equations (its ``cos``/``sin`` pair with its own smoothness weights, exact) and the
-  trend's, factorised once by banded Cholesky (half-bandwidth 7 and 3): O(N K) to build,
-  O((N/m) K) per application;
+* the preconditioner is the block diagonal of ``A`` over groups of :data:`GROUP` orders
+  neighbouring in frequency (the trend with the lowest): each group's own normal equations
+  (its ``cos``/``sin`` columns with their own smoothness weights, exact), factorised once by
+  banded Cholesky: O(N K) to build, O((N/m) K) per application;
 * conjugate gradients (Hestenes–Stiefel, preconditioned) start from the block solution (each
-  order alone) and stop when the preconditioned residual ``sqrt(rᵀP⁻¹r / bᵀP⁻¹b)`` is below
+  group alone) and stop when the preconditioned residual ``sqrt(rᵀP⁻¹r / bᵀP⁻¹b)`` is below
   :data:`TOLERANCE`.
 
-What is left between the blocks is the coupling of different orders (and of an order with
-the trend) inside their filter bands, so the iteration count depends on how far apart the
-orders are relative to their bandwidths, not on ``K``: the total cost is O(N K · iterations).
-Orders closer than a few bandwidths converge slowest (2 and 2.5 at 600 rpm with 4 Hz bands:
-see ``tests/analysis/test_vkf_iterative.py``); after :data:`MAX_ITERATIONS` the caller falls
-back to the direct solve and says so.
+What is left between the groups is the coupling of orders in different groups inside their
+filter bands, so the iteration count depends on how close the orders are relative to their
+bandwidths: orders far apart converge in a few iterations whatever ``K``; a chain of
+neighbours whose bands overlap (0.5 orders apart at 600 rpm with 4 Hz bands, the bench's
+scaling record) needs more as the chain grows — 23 to 40 iterations from 12 to 24 orders,
+so the total cost there grows as about K^1.6 (bench suite ``scaling``). Orders 2 and 2.5 only
+1.5 bandwidths apart (500 rpm, 2.8 Hz bands) converge within the cap
+(``tests/analysis/test_vkf_iterative.py``); after :data:`MAX_ITERATIONS` the caller falls
+back to the direct solve and says so (log warning and the result's ``solver`` attr).
 
 Accuracy: at :data:`TOLERANCE` = 1e-10 the envelopes agree with the direct solve to better
 than 1e-7 of the largest envelope (``tests/analysis/test_vkf_iterative.py``, which also checks
