@@ -569,7 +569,7 @@ def _uncertainty(env, residual, fs_d, orders, rpm_d, bw_d, p, f_pass, *, trend_h
     varies = b_low != b_high
     if varies.any():
         b_med[varies] = np.median(by_order[varies], axis=1)
-    n0 = _local_noise(residual, fs_d, f_ord, b_med, f_pass, p, trend_hz)
+    n0 = _local_noise(residual, fs_d, f_ord, b_med, f_pass, p, trend_hz, bw_d)
     noise = np.sqrt(n0 * enbw_hz(bw_d, p))
     if nd < 8:
         return noise, np.zeros_like(noise)
@@ -593,10 +593,11 @@ def _uncertainty(env, residual, fs_d, orders, rpm_d, bw_d, p, f_pass, *, trend_h
                                         smearing_constant(p), fs_d)
 
 
-def _local_noise(residual, fs_d, f_ord, b_med, f_pass, p=2, trend_hz=0.0):
+def _local_noise(residual, fs_d, f_ord, b_med, f_pass, p=2, trend_hz=0.0, bw_d=None):
     """One-sided noise density (units²/Hz) of the residual beside each order, per sample
     (``b_med``: each order's median bandwidth, Hz; ``trend_hz``: the order-0 trend's bandwidth,
-    0 without one), each bin corrected for the solve's own notches (see :func:`_uncertainty`)."""
+    0 without one; ``bw_d``: the bandwidth per sample and order, default ``b_med``), each bin
+    corrected for the solve's own notches (see :func:`_uncertainty`)."""
     nd, k = f_ord.shape
     length = int(2 ** np.ceil(np.log2(max(64.0, 2.0 * fs_d))))
     length = min(length, int(2 ** np.floor(np.log2(max(64, nd)))))
@@ -611,7 +612,9 @@ def _local_noise(residual, fs_d, f_ord, b_med, f_pass, p=2, trend_hz=0.0):
     df = float(freq[1]) if freq.shape[0] > 1 else fs_d
     centre = starts + 0.5 * frames.shape[1]
     flat = (freq > 0) & (freq <= f_pass)
-    spec = spec / _notch_depth(f_ord, starts, frames.shape[1], win, freq, b_med, trend_hz,
+    if bw_d is None:
+        bw_d = np.broadcast_to(np.asarray(b_med, float)[None, :], f_ord.shape)
+    spec = spec / _notch_depth(f_ord, starts, frames.shape[1], win, freq, bw_d, trend_hz,
                                fs_d, p)
     out = np.empty((nd, k))
     for j in range(k):
@@ -625,49 +628,49 @@ def _local_noise(residual, fs_d, f_ord, b_med, f_pass, p=2, trend_hz=0.0):
     return out
 
 
-def _notch_depth(f_ord, starts, length, win, freq, b_med, trend_hz, fs_d, p):
+def _notch_depth(f_ord, starts, length, win, freq, bw_d, trend_hz, fs_d, p):
     """Expected residual power per (frame, bin) relative to the input's: ``∏_m (1 − H_m)²``
     over every tracked order (and its mirror) and the order-0 trend, ``H`` the filter's
-    envelope response :func:`vkf_weight`, averaged over 3 instants of the frame weighted by
-    the window's energy (in a sweep the notch moves within the frame); NaN below 1/4 (too
-    empty to read). ``H`` < 1e-3 beyond 3 B of its line (2nd order; 1st order: 6 B): only
-    those bins are computed."""
+    envelope response :func:`vkf_weight` at the order's bandwidth there (``bw_d``, per sample
+    and order: an adaptive band widened around a resonance notches wider), averaged over 3
+    instants of the frame weighted by the window's energy (in a sweep the notch moves within
+    the frame); NaN below 1/4 (too empty to read). ``H`` < 1e-3 beyond 3 B of its line (2nd
+    order; 1st order: 6 B): only those bins are computed."""
     nd, k = f_ord.shape
     frames, bins = starts.shape[0], freq.shape[0]
     df = float(freq[1] - freq[0]) if bins > 1 else fs_d
     offsets = (np.arange(3) + 0.5) / 3.0 * length
     weights = np.interp(offsets, np.arange(length), win ** 2)
     weights = weights / weights.sum()
-    b_all = np.append(np.asarray(b_med, float), float(trend_hz))
-    r2 = vkf_weight(np.maximum(b_all, 1e-12), fs_d, p) ** 2
-    reach = (3.0 if p == 2 else 6.0) * b_all
-    # every line at once (each order and its mirror, the trend's positive side): the product
-    # of the (1 - H)² factors of one (instant, frame, bin) as the exp of a sum of logs (one
-    # bincount, not a Python loop of small multiply.at scatters)
-    order_of = [m for m in range(k) if b_all[m] > 0.0 for _ in (0, 1)]
-    signs = [sgn for m in range(k) if b_all[m] > 0.0 for sgn in (1.0, -1.0)]
-    if b_all[k] > 0.0:
-        order_of.append(k)
-        signs.append(1.0)
-    depth = np.zeros((frames, bins))
-    if not order_of:
-        depth[:] = 1.0
-        return depth
-    order_of = np.array(order_of)
-    signs = np.array(signs)
+    reach_per_hz = 3.0 if p == 2 else 6.0
+    # every line at once (each order and its mirror, the trend's positive side) at each of the
+    # 3 instants: the product of the (1 - H)² factors of one (instant, frame, bin) as the exp
+    # of a sum of logs (one bincount, not a Python loop of small multiply.at scatters)
+    order_of = np.repeat(np.arange(k), 2)
+    signs = np.tile([1.0, -1.0], k)
+    if trend_hz > 0:
+        order_of = np.append(order_of, k)
+        signs = np.append(signs, 1.0)
+    if order_of.shape[0] == 0:
+        return np.ones((frames, bins))
+    grid = np.arange(nd)
     at = np.clip(starts[None, :] + offsets[:, None], 0, nd - 1)            # (3, frames)
-    centres = np.zeros((3, order_of.shape[0], frames))
-    for i, m in enumerate(order_of):
-        if m < k:
-            centres[:, i] = signs[i] * np.interp(at, np.arange(nd), f_ord[:, m])
-    span = np.ceil(reach[order_of] / df).astype(np.int64) + 1                # per line
-    first = np.floor((centres - reach[order_of][None, :, None]) / df).astype(np.int64)
+    lines = order_of.shape[0]
+    centres = np.zeros((3, lines, frames))
+    band = np.full((3, lines, frames), float(trend_hz))
+    for m in range(k):
+        c = np.interp(at, grid, f_ord[:, m])
+        b = np.maximum(np.interp(at, grid, bw_d[:, m]), 1e-12)
+        centres[:, 2 * m], centres[:, 2 * m + 1] = c, -c
+        band[:, 2 * m] = band[:, 2 * m + 1] = b
+    r2 = vkf_weight(band, fs_d, p) ** 2
+    span = np.ceil(reach_per_hz * band.max(axis=2) / df).astype(np.int64) + 1   # (3, lines)
+    first = np.floor((centres - reach_per_hz * band) / df).astype(np.int64)
     t = np.arange(2 * int(span.max()) + 1)
-    cols = first[..., None] + t                                           # (3, L, frames, T)
-    valid = (cols >= 0) & (cols < bins) & (t <= 2 * span[None, :, None, None])
+    cols = first[..., None] + t                                     # (3, lines, frames, T)
+    valid = (cols >= 0) & (cols < bins) & (t <= 2 * span[:, :, None, None])
     nu = cols * df - centres[..., None]
-    h = 1.0 / (1.0 + 2.0 * r2[order_of][None, :, None, None]
-               * (2.0 * np.sin(np.pi * nu / fs_d)) ** (2 * p))
+    h = 1.0 / (1.0 + 2.0 * r2[..., None] * (2.0 * np.sin(np.pi * nu / fs_d)) ** (2 * p))
     with np.errstate(divide="ignore"):
         log_factor = np.where(valid, 2.0 * np.log(np.abs(1.0 - h)), 0.0)
     inst = np.arange(3)[:, None, None, None]
