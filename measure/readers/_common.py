@@ -198,7 +198,7 @@ def refuse_external_links(path, *, file=None, h5file=None) -> None:
         The file.
     file : str, optional
         Its name in messages (default ``str(path)``).
-    h5file : h5py.File, optional
+    h5file : h5py.File or h5py.h5f.FileID, optional
         The file already open (read-only): checked without opening it again.
 
     Raises
@@ -212,9 +212,9 @@ def refuse_external_links(path, *, file=None, h5file=None) -> None:
     if h5file is None:
         with h5py.File(path, "r") as f:
             return refuse_external_links(path, file=file, h5file=f)
-    f = h5file
-    if not _linked_or_virtual(f.id):
+    if not _linked_or_virtual(h5file.id if isinstance(h5file, h5py.File) else h5file):
         return  # the usual file: one walk through h5py's low-level API, no Python objects
+    f = h5file if isinstance(h5file, h5py.File) else h5py.File(h5file)  # to name the links
     found = []
 
     def visit(name, link):

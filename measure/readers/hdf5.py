@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import builtins
 import json
+import os
 
 import numpy as np
 import xarray as xr
@@ -172,7 +173,8 @@ def _attrs(obj) -> dict:
     :func:`write` stores -- are read here; anything else (arrays, fixed-length or empty
     attributes) goes through ``obj.attrs``."""
     h5py = _h5()
-    oid = obj.id
+    # a high-level object or a low-level ObjectID (whose own ``.id`` is the integer handle)
+    oid = obj.id if isinstance(obj, (h5py.Group, h5py.Dataset)) else obj
     out = {}
     for i in range(h5py.h5a.get_num_attrs(oid)):
         a = h5py.h5a.open(oid, index=i)
@@ -193,19 +195,52 @@ def _attrs(obj) -> dict:
                     value = raw.decode(info.encoding, "surrogateescape") if isinstance(
                         raw, bytes) else raw
         if value is None:
-            value = clean_attr(obj.attrs[name])
+            value = clean_attr(h5py.AttributeManager(_Bound(oid))[name])
         out[name] = value
     return out
 
 
-def _layout(f, file: str, root=None) -> tuple[list[str], dict]:
-    """Channel order and dims of an open file; ``root`` = its cleaned root attrs if read."""
-    root = _attrs(f) if root is None else root
+class _Bound:
+    """A low-level h5py ObjectID where the high-level API wants an object with ``.id``."""
+
+    def __init__(self, oid):
+        self.id = oid
+
+
+def _members(gid) -> list[str]:
+    """Names of the links in a low-level group, in HDF5's (name) order."""
+    names = []
+    gid.links.iterate(lambda name: names.append(name.decode("utf-8", "surrogateescape")))
+    return names
+
+
+def _has(gid, name: str) -> bool:
+    try:
+        return _h5().h5g.GroupID.__contains__(gid, name.encode("utf-8", "surrogateescape"))
+    except (KeyError, ValueError, TypeError, RuntimeError):
+        return False
+
+
+def _group(parent, name: str):
+    """Low-level group ``name`` of ``parent`` (a FileID or GroupID), None if not a group."""
+    h5py = _h5()
+    if not _has(parent, name):
+        return None
+    obj = h5py.h5o.open(parent, name.encode("utf-8", "surrogateescape"))
+    return obj if isinstance(obj, h5py.h5g.GroupID) else None
+
+
+def _layout(fid, file: str, root=None) -> tuple[list[str], dict, object]:
+    """Channel order, dims and the ``/channels`` group (low-level GroupID) of an open file
+    (``h5py.h5f.FileID``: h5py's low-level API, several times cheaper per call than its
+    high-level objects); ``root`` = its cleaned root attrs if read."""
+    h5py = _h5()
+    root = _attrs(fid) if root is None else root
     fmt = root.get("crankbench_format")
     if isinstance(fmt, bytes):
         fmt = fmt.decode()
-    gch = f.get("channels") if fmt == "record" else None
-    gdims = f.get("dims") if gch is not None else None
+    gch = _group(fid, "channels") if fmt == "record" else None
+    gdims = _group(fid, "dims") if gch is not None else None
     if gdims is None:
         raise RecordError(
             f"{file}: HDF5 file is not in crankbench's record layout (expected root attr "
@@ -218,18 +253,29 @@ def _layout(f, file: str, root=None) -> tuple[list[str], dict]:
     try:
         order = json.loads(root["channel_order"])
     except (KeyError, TypeError, ValueError):
-        order = sorted(gch)
-    missing = [n for n in order if n not in gch]
+        order = sorted(_members(gch))
+    missing = [n for n in order if not _has(gch, str(n))]
     if missing:
         raise RecordError(f"{file}: header lists channel(s) {missing} that have no data "
                           "(header/body mismatch; file truncated?)")
     dims = {}
-    for dim, g in gdims.items():
+    for dim in _members(gdims):
+        g = h5py.h5o.open(gdims, dim.encode("utf-8", "surrogateescape"))
         info = _attrs(g)
-        if "values" in g:
-            info["values_ds"] = g["values"]
+        if isinstance(g, h5py.h5g.GroupID) and _has(g, "values"):
+            info["values_ds"] = h5py.Dataset(h5py.h5d.open(g, b"values"))
         dims[dim] = info
-    return order, dims
+    return order, dims, gch
+
+
+def _dataset(gch, name: str):
+    """Channel ``name`` of the low-level ``/channels`` group as an ``h5py.Dataset``."""
+    h5py = _h5()
+    obj = h5py.h5o.open(gch, name.encode("utf-8", "surrogateescape"))
+    if not isinstance(obj, h5py.h5d.DatasetID):
+        raise RecordError(f"channel {name!r} is an HDF5 {type(obj).__name__[:-2].lower()}, "
+                          "not a dataset; expected one dataset per channel under /channels")
+    return h5py.Dataset(obj)
 
 
 def _channel_attrs(ds, name: str, dims: dict, file: str) -> tuple[str, dict]:
@@ -366,20 +412,28 @@ def _read_all(ds, userblock: int | None = None) -> np.ndarray:
     return out
 
 
+def _open_read(path):
+    """``path`` opened read-only as a low-level ``h5py.h5f.FileID`` whose close also closes
+    every object opened in it (what ``h5py.File.close`` does by enumerating them)."""
+    h5py = _h5()
+    fapl = h5py.h5p.create(h5py.h5p.FILE_ACCESS)
+    fapl.set_fclose_degree(h5py.h5f.CLOSE_STRONG)
+    return h5py.h5f.open(os.fsencode(os.fspath(path)), h5py.h5f.ACC_RDONLY, fapl=fapl)
+
+
 def read(path, *, channels=None) -> xr.Dataset:
     """Read a crankbench HDF5 record fully into memory."""
-    h5py = _h5()
     file = str(path)
-    with h5py.File(path, "r") as f:
-        refuse_external_links(path, file=file, h5file=f)
-        root = _attrs(f)
-        order, dims = _layout(f, file, root)
+    fid = _open_read(path)
+    try:
+        refuse_external_links(path, file=file, h5file=fid)
+        root = _attrs(fid)
+        order, dims, group = _layout(fid, file, root)
         names = select(order, channels, file=file)
         out, used = [], {}
-        userblock = _userblock(f.id)
-        group = f["channels"]
+        userblock = _userblock(fid)
         for name in names:
-            ds = group[name]
+            ds = _dataset(group, name)
             dim, attrs = _channel_attrs(ds, name, dims, file)
             values, attrs = si_channel(name, _read_all(ds, userblock), attrs, file=file)
             out.append((name, dim, values, attrs))
@@ -393,6 +447,8 @@ def read(path, *, channels=None) -> xr.Dataset:
                 implicit.append(c)
         attrs = {k: _from_attr(v) for k, v in root.items()
                  if k not in ("crankbench_format", "crankbench_format_version", "channel_order")}
+    finally:
+        fid.close()  # strong close degree: every object opened above closes with it
     if explicit or len(implicit) != 1:
         ds = build_dataset(out, explicit, attrs)
         for coords in implicit:
@@ -437,7 +493,7 @@ def open(path, *, chunk_seconds: float = 10.0, channels=None) -> xr.Dataset:  # 
     file = str(path)
     refuse_external_links(path, file=file)
     with h5py.File(path, "r") as f:
-        order, dims = _layout(f, file)
+        order, dims, _ = _layout(f.id, file)
         names = select(order, channels, file=file)
         data_vars, used = {}, {}
         for name in names:

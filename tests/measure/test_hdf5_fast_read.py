@@ -96,3 +96,26 @@ def test_low_level_attributes_equal_h5py_high_level(tmp_path):
     assert len(ref) == 16
     for k in ref:
         assert type(fast[k]) is type(ref[k]) and repr(fast[k]) == repr(ref[k]), k
+
+
+def test_a_channel_that_is_a_group_is_refused_by_name(tmp_path):
+    from crankbench.predict.errors import RecordError
+
+    path, _ = _file(tmp_path)
+    with h5py.File(path, "r+") as f:
+        attrs = dict(f["channels/acc"].attrs)
+        del f["channels/acc"]
+        f["channels"].create_group("acc").attrs.update(attrs)
+    with pytest.raises(RecordError, match=r"r\.h5: channel 'acc' is an HDF5 group, not a "
+                                          r"dataset; expected one dataset per channel"):
+        io.read(path)
+
+
+def test_the_file_is_closed_after_a_read(tmp_path):
+    """The low-level open closes the file with every object opened in it: the file can be
+    opened for writing right after (HDF5 refuses while a read-only handle is open)."""
+    path, x = _file(tmp_path)
+    rec = io.read(path)
+    with h5py.File(path, "r+") as f:
+        f.attrs["touched"] = 1
+    np.testing.assert_array_equal(rec["acc"].values, x)
