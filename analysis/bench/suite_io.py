@@ -20,9 +20,9 @@ reused; both it and the raw file are in the page cache, the same cache state for
 (:func:`measure.provenance.source_sha256` with its cache cleared: the cost a report or the
 campaign store pays once per record; SHA-256 runs at about 1.8 GB/s, so this row cannot beat
 0.4x raw and says so) and streaming through ``measure.open`` block by block. Sizes: quick 5 M
-samples, full 50 M (HDF5 also at 5 M, where the fixed per-file cost decides the ratio); the
-text and UFF formats (pure-Python parsers) use a tenth of that, and so does MDF4 in quick
-mode, as the ``setting`` column says. Everything runs on one thread (h5py, numpy and the
+samples, full 50 M (HDF5 also at 5 M and 0.5 M, where the fixed per-file cost decides the
+ratio); the text and UFF formats (pure-Python parsers) use a tenth of that, and so does MDF4
+in quick mode, as the ``setting`` column says. Everything runs on one thread (h5py, numpy and the
 page-cache copy of ``numpy.fromfile`` alike).
 """
 
@@ -64,7 +64,7 @@ def run(quick: bool) -> list[Row]:
     # HDF5 (the issue-21 rows) also at 5 M in the full run; at 5 M a read lasts ~5 ms, so
     # more rounds cost little and steady the median
     runs = [(".h5", n_full, 9 if quick else repeats)]
-    runs += [] if quick else [(".h5", n_full // 10, 9)]
+    runs += [] if quick else [(".h5", n_full // 10, 9), (".h5", n_full // 100, 15)]
     runs += [(ext, n_full // slow.get(ext, 1), repeats)
              for ext in (".nc", ".tdms", ".wav", ".mf4", ".uff", ".csv")]
     try:
