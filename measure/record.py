@@ -236,10 +236,11 @@ def _runs_at(x: np.ndarray, level, blocks) -> tuple[np.ndarray, np.ndarray]:
                   for g in np.split(blocks, cut) if g.size]
     starts, stops = [], []
     for a, b in groups:
-        at = x[a:b] == level
-        edges = np.diff(np.concatenate(([0], at.view(np.int8), [0])))
-        starts.append(np.flatnonzero(edges == 1) + a)
-        stops.append(np.flatnonzero(edges == -1) + a)
+        at = np.flatnonzero(x[a:b] == level)  # few: a level is an extreme of the signal
+        if at.size:
+            cut = np.flatnonzero(np.diff(at) != 1) + 1  # gaps between runs
+            starts.append(at[np.concatenate(([0], cut))] + a)
+            stops.append(at[np.concatenate((cut - 1, [at.size - 1]))] + a + 1)
     if not starts:
         return np.zeros(0, int), np.zeros(0, int)
     return np.concatenate(starts), np.concatenate(stops)

@@ -323,7 +323,7 @@ def sampled_time(n: int, sample_rate: float, *, start: float = 0.0, dim: str = "
     """
     index = SampledTimeIndex(SampleClock(start, sample_rate, n, coord_name=dim, dim=dim))
     coords = xr.Coordinates.from_xindex(index)
-    coords[dim].attrs.update(attrs if attrs is not None
+    coords.variables[dim].attrs.update(attrs if attrs is not None
                              else {"units": "s", "long_name": "time from record start"})
     return coords
 

@@ -30,7 +30,8 @@ def _file(tmp_path, **storage):
 
 
 @pytest.mark.parametrize("storage, direct", [
-    ({}, True),                                          # as written: 1 MB chunks
+    ({}, True),                                          # as written: contiguous
+    ({"chunks": (262144,)}, True),                       # as written before: 1 MB chunks
     ({"chunks": None}, True),                            # contiguous
     ({"chunks": (4096,)}, True),                         # many small chunks
     ({"chunks": (65536,), "compression": "gzip"}, False),  # filtered: HDF5 decodes
@@ -46,15 +47,75 @@ def test_every_storage_reads_back_exactly(tmp_path, storage, direct):
     np.testing.assert_array_equal(got.astype(np.float64), x.astype(np.float64))
 
 
-def test_chunks_written_in_order_are_one_read(tmp_path):
-    path, _ = _file(tmp_path)
+@pytest.mark.parametrize("chunked", [False, True])  # written now; before (1 MB chunks)
+def test_chunks_written_in_order_are_one_read(tmp_path, chunked):
+    path, x = _file(tmp_path)
+    if chunked:  # a fresh file (no space freed by a deleted dataset), chunks in order
+        src, path = path, tmp_path / "chunked.h5"
+        with h5py.File(src, "r") as f, h5py.File(path, "w") as g:
+            g.attrs.update(f.attrs)
+            f.copy(f["dims"], g)
+            ds = g.create_group("channels").create_dataset("acc", data=x, chunks=(262144,))
+            ds.attrs.update(f["channels/acc"].attrs)
+        np.testing.assert_array_equal(io.read(path)["acc"].values, x)
     with h5py.File(path, "r") as f:
+        assert (f["channels/acc"].chunks is not None) == chunked
         runs = hdf5._raw_runs(f["channels/acc"])
     assert len(runs) == 1 and runs[0][1:] == (0, N)
+    if not chunked:  # >= 64 KiB: starts on a page, read into a page-aligned array
+        assert runs[0][0] % hdf5.ALIGN_BYTES == 0
+        got = hdf5._congruent_empty(N, np.float32, runs[0][0])
+        assert got.ctypes.data % hdf5.ALIGN_BYTES == 0 and got.shape == (N,)
 
 
 def test_bytes_that_disagree_with_hdf5_fall_back_to_hdf5(tmp_path, monkeypatch):
     """A wrong byte range (simulated) is caught by the three-sample check."""
     path, x = _file(tmp_path)
-    monkeypatch.setattr(hdf5, "_raw_runs", lambda ds: [(0, 0, ds.shape[0])])
+    monkeypatch.setattr(hdf5, "_raw_runs", lambda ds, *_: [(0, 0, ds.shape[0])])
     np.testing.assert_array_equal(io.read(path)["acc"].values, x)
+
+
+def test_low_level_attributes_equal_h5py_high_level(tmp_path):
+    """The reader's attribute path (h5py low-level API, scalars) gives exactly what
+    ``clean_attrs(obj.attrs)`` gives, type and value, for every kind of attribute h5py writes;
+    the kinds it does not decode itself (arrays, fixed-length, empty) go through ``attrs``."""
+    from crankbench.measure.readers._common import clean_attrs
+
+    path = tmp_path / "a.h5"
+    with h5py.File(path, "w") as f:
+        a = f.attrs
+        a["s"], a["u"], a["b"], a["i"], a["f"] = "hello", "µm/s² ü", np.bool_(True), 3, 2.5
+        a["i8"], a["u16"], a["f32"] = np.int8(-3), np.uint16(7), np.float32(1.5)
+        a["fixed"], a["arr"], a["sarr"] = np.bytes_(b"abc"), np.arange(3.0), ["x", "y"]
+        a["empty"], a["c"], a["nan"] = h5py.Empty("f8"), 1 + 2j, np.nan
+        a.create("ascii", data="plain", dtype=h5py.string_dtype("ascii"))
+        a.create("bad", data=b"\xff\xfe", dtype=h5py.string_dtype("utf-8"))
+    with h5py.File(path, "r") as f:
+        fast, ref = hdf5._attrs(f), clean_attrs(f.attrs)
+    assert list(fast) == list(ref)
+    assert len(ref) == 16
+    for k in ref:
+        assert type(fast[k]) is type(ref[k]) and repr(fast[k]) == repr(ref[k]), k
+
+
+def test_a_channel_that_is_a_group_is_refused_by_name(tmp_path):
+    from crankbench.predict.errors import RecordError
+
+    path, _ = _file(tmp_path)
+    with h5py.File(path, "r+") as f:
+        attrs = dict(f["channels/acc"].attrs)
+        del f["channels/acc"]
+        f["channels"].create_group("acc").attrs.update(attrs)
+    with pytest.raises(RecordError, match=r"r\.h5: channel 'acc' is an HDF5 group, not a "
+                                          r"dataset; expected one dataset per channel"):
+        io.read(path)
+
+
+def test_the_file_is_closed_after_a_read(tmp_path):
+    """The low-level open closes the file with every object opened in it: the file can be
+    opened for writing right after (HDF5 refuses while a read-only handle is open)."""
+    path, x = _file(tmp_path)
+    rec = io.read(path)
+    with h5py.File(path, "r+") as f:
+        f.attrs["touched"] = 1
+    np.testing.assert_array_equal(rec["acc"].values, x)

@@ -202,3 +202,22 @@ def test_quantised_slow_sine_is_not_clipping():
     noisy = np.round(30000 * np.sin(2 * np.pi * 5 * t)
                      + np.random.default_rng(1).normal(0, 2.0, t.size))
     assert len(clipped_spans(np.clip(noisy, -24000, 24000))) == 10
+
+
+def test_runs_at_a_level_match_a_boolean_edge_count():
+    """``_runs_at`` (indices of the level, split at gaps) equals the runs found from the edges
+    of the boolean mask, on random 3-level signals, whole and by blocks."""
+    from crankbench.measure.record import _SCAN_BLOCK, _runs_at
+
+    rng = np.random.default_rng(1)
+    for _ in range(300):
+        x = rng.integers(0, 3, int(rng.integers(1, 400))).astype(float)
+        for level in (0.0, 2.0, 5.0):
+            edges = np.diff(np.concatenate(([0], (x == level).view(np.int8), [0])))
+            starts, stops = _runs_at(x, level, None)
+            np.testing.assert_array_equal(starts, np.flatnonzero(edges == 1))
+            np.testing.assert_array_equal(stops, np.flatnonzero(edges == -1))
+    x = np.zeros(3 * _SCAN_BLOCK)
+    x[_SCAN_BLOCK - 2:_SCAN_BLOCK + 3] = 1.0  # a run across a block edge, blocks 0 and 1
+    starts, stops = _runs_at(x, 1.0, np.array([0, 1]))
+    assert starts.tolist() == [_SCAN_BLOCK - 2] and stops.tolist() == [_SCAN_BLOCK + 3]
