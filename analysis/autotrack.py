@@ -175,9 +175,12 @@ def _line_caps(res, orders, fs, p):
         peaks = np.flatnonzero(persistent[b])
         if peaks.size == 0:
             continue
-        sel = np.abs(t - t_blk[b]) <= (length / 2.0) * 60.0 / (spr * max(float(r_y.mean()),
-                                                                         1e-9))
-        if not sel.any():
+        half = (length / 2.0) * 60.0 / (spr * max(float(r_y.mean()), 1e-9))
+        # the samples within the block's time span (t is sorted: a slice, not a mask over
+        # the whole record per block, which made this quadratic in the record length)
+        sel = slice(int(np.searchsorted(t, t_blk[b] - half, side="left")),
+                    int(np.searchsorted(t, t_blk[b] + half, side="right")))
+        if sel.stop <= sel.start:
             continue
         n_here = float(np.median(rpm_d[sel]))
         for j, order in enumerate(orders):

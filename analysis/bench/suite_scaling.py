@@ -96,7 +96,7 @@ def _length_rows(quick, rounds, tmp: Path) -> list[Row]:
     durations = [10, 20, 40] if quick else [10, 20, 40, 80]
     runs = [_runup(d) for d in durations]
     n = [int(d * FS) for d in durations]
-    cot = [lambda x=x, r=r: order_track(x, fs=FS, speed_rpm=r, orders=[2, 4, 6])
+    cot = [lambda x=x, r=r: order_track(x, fs=FS, speed_rpm=r, orders=[2, 4, 6], method="cot")
            for x, r in runs]
     rows += _axis("record length", "order_track COT, 3 orders", n, "samples", cot, 1.25,
                   rounds=rounds)
@@ -114,7 +114,8 @@ def _order_rows(quick, rounds) -> list[Row]:
     x, rpm = _runup(10.0)
     counts = [1, 2, 4, 8] if quick else [1, 2, 4, 8, 16]
     orders = {k: list(np.arange(1, k + 1) * 0.5 + 0.5) for k in counts}
-    cot = [lambda o=orders[k]: order_track(x, fs=FS, speed_rpm=rpm, orders=o) for k in counts]
+    cot = [lambda o=orders[k]: order_track(x, fs=FS, speed_rpm=rpm, orders=o, method="cot")
+           for k in counts]
     vkf_counts = [3, 6, 12] if quick else [3, 6, 12, 24]
     vkf_orders = {k: [*(np.arange(1, k) * 0.5 + 0.5), 12.5] for k in vkf_counts}
     vkf = [lambda o=vkf_orders[k]: order_track(x, fs=FS, speed_rpm=rpm, orders=o, method="vkf",
