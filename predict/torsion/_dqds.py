@@ -72,10 +72,16 @@ def _kernel():
 
     # error_model='numpy': a division by zero gives inf/NaN (caught below), not an exception
     @njit(cache=True, error_model="numpy")
-    def dqds(q0, e0, tol):  # pragma: no cover - compiled
+    def dqds(q0, e0, tol, lo, hi):  # pragma: no cover - compiled
         n = q0.shape[0]
         eps = np.finfo(np.float64).eps
         tol2 = tol * tol
+        for i in range(n):
+            if not (lo < q0[i] < hi):
+                return q0, 5
+        for i in range(n - 1):
+            if not (lo < e0[i] < hi):
+                return q0, 5
         Q = np.empty((3, n))
         E = np.zeros((3, n))
         for i in range(n):
@@ -87,11 +93,28 @@ def _kernel():
         st_bot = np.empty(n, np.int64)
         st_s = np.empty(n)
         st_p = np.empty(n, np.int64)
-        ns = 1
-        st_top[0] = 0
-        st_bot[0] = n - 1
-        st_s[0] = 0.0
-        st_p[0] = 0
+        splits = np.empty(n, np.int64)
+        # Demmel-Kahan splits of the input (m: zero-shift pivots, top down)
+        ns = 0
+        top = 0
+        m = Q[0, 0]
+        for j in range(n - 1):
+            if E[0, j] <= tol2 * m:
+                E[0, j] = 0.0
+                st_top[ns] = top
+                st_bot[ns] = j
+                st_s[ns] = 0.0
+                st_p[ns] = 0
+                ns += 1
+                top = j + 1
+                m = Q[0, j + 1]
+            else:
+                m = Q[0, j + 1] * (m / (m + E[0, j]))
+        st_top[ns] = top
+        st_bot[ns] = n - 1
+        st_s[ns] = 0.0
+        st_p[ns] = 0
+        ns += 1
         passes = 0
         max_passes = 30 * n + 100
         while ns > 0:
@@ -199,7 +222,7 @@ def _kernel():
                     m0 = d2
                     m1 = np.inf
                     m2 = np.inf
-                    split = -1
+                    n_split = 0
                     for i in range(i0 + 1, n0):
                         qh = d + e[i]
                         qa[i] = qh
@@ -211,17 +234,32 @@ def _kernel():
                             break
                         # transform 2 at i - 1 (needs qa[i], just written)
                         j = i - 1
-                        qh2 = d2 + ea[j]
+                        eaj = ea[j]
+                        if eaj <= tol2 * d2:
+                            # Demmel-Kahan split of qa: d2 is the j-th zero-shift pivot, so
+                            # dropping eaj moves every σ by a factor within 1 ± tol
+                            qb[j] = d2
+                            eb[j] = 0.0
+                            d2 = qa[i]
+                            splits[n_split] = j
+                            n_split += 1
+                            m2 = np.inf
+                            m1 = np.inf
+                            m0 = d2
+                            continue
+                        qh2 = d2 + eaj
                         qb[j] = qh2
                         t2 = qa[i] / qh2
-                        eh2 = ea[j] * t2
+                        eh2 = eaj * t2
                         eb[j] = eh2
                         d2 = d2 * t2
                         m2 = m1
                         m1 = m0
                         m0 = min(m0, d2)
-                        if eh2 <= tol2 * (S + tau):
-                            split = j
+                        if eh2 <= tol2 * (S + tau):   # Weyl split of qb
+                            eb[j] = 0.0
+                            splits[n_split] = j
+                            n_split += 1
                     qa[n0] = d
                     if dmin >= 0.0 and ok and d == d:
                         # finish transform 2 at n0 - 1
@@ -252,21 +290,18 @@ def _kernel():
                     up0 = m0
                     up1 = m1
                     up2 = m2
+                    # blocks above the splits wait on the stack, the bottom one goes on
+                    for k in range(n_split):
+                        j = splits[k]
+                        st_top[ns] = i0
+                        st_bot[ns] = j
+                        st_s[ns] = S
+                        st_p[ns] = p
+                        ns += 1
+                        i0 = j + 1
                 else:                    # keep the shifted transform alone
                     p = p1
                     up0 = np.inf         # (its pivots were not kept)
-                    up1 = np.inf
-                    up2 = np.inf
-                    split = -1
-                if split >= i0 and split < n0 - 1:
-                    E[p, split] = 0.0
-                    st_top[ns] = i0
-                    st_bot[ns] = split
-                    st_s[ns] = S
-                    st_p[ns] = p
-                    ns += 1
-                    i0 = split + 1
-                    up0 = np.inf
                     up1 = np.inf
                     up2 = np.inf
         for i in range(n):
@@ -306,11 +341,9 @@ def qd_eigenvalues(q: np.ndarray, e2: np.ndarray):
     if kernel is None:
         return None
     lo, hi = _SAFE_RANGE
-    if not (q.min() > lo and q.max() < hi and e2.min() > lo and e2.max() < hi):
-        return None
     lam, status = kernel(np.ascontiguousarray(q, dtype=np.float64),
                          np.ascontiguousarray(e2, dtype=np.float64),
-                         TOL_EPS * np.finfo(float).eps)
+                         TOL_EPS * np.finfo(float).eps, lo, hi)    # status 5: out of range
     # far from under/overflow, intermediate pivots keep their relative accuracy; an
     # eigenvalue outside the range (or any status) hands the array to LAPACK
     if status != 0 or not (lam[0] > lo and lam[-1] < hi):

@@ -137,7 +137,7 @@ def qd_singular_values(q, e2) -> np.ndarray:
     n = q.size
     if n == 0:
         return np.zeros(0)
-    if n >= _dqds.MIN_SIZE and e2.min() > 0.0:
+    if n >= _dqds.MIN_SIZE:
         lam = _dqds.qd_eigenvalues(q, e2)
         if lam is not None:
             return np.sqrt(lam[::-1])
