@@ -12,7 +12,7 @@ import pytest
 
 from crankbench.analysis.bench._sturm import EXTENDED, chain_reference
 from crankbench.predict.torsion import _dqds, chain
-from crankbench.predict.torsion._lapack import qd_singular_values
+from crankbench.predict.torsion._lapack import lapack_qd_singular_values, qd_singular_values
 from crankbench.predict.torsion.eigen import _free_chain_squares
 
 pytestmark = pytest.mark.skipif(not _dqds.available(), reason="numba not available")
@@ -22,7 +22,9 @@ def _lapack_only(q, e2, monkeypatch):
     """Singular values by LAPACK dlasq2 (the kernel's size threshold out of reach)."""
     with monkeypatch.context() as m:
         m.setattr(_dqds, "MIN_SIZE", 10**9)
-        return qd_singular_values(q, e2)
+        out = qd_singular_values(q, e2)
+    np.testing.assert_array_equal(out, lapack_qd_singular_values(q, e2))
+    return out
 
 
 def _hard_chain(n, seed, grounded):
