@@ -126,22 +126,8 @@ def _kernel():
             q = Q[p]
             e = E[p]
             if n0 > i0 and 1.5 * q[i0] < q[n0]:      # small end to the bottom
-                a = i0
-                b = n0
-                while a < b:
-                    t = q[a]
-                    q[a] = q[b]
-                    q[b] = t
-                    a += 1
-                    b -= 1
-                a = i0
-                b = n0 - 1
-                while a < b:
-                    t = e[a]
-                    e[a] = e[b]
-                    e[b] = t
-                    a += 1
-                    b -= 1
+                q[i0:n0 + 1] = q[i0:n0 + 1][::-1].copy()
+                e[i0:n0] = e[i0:n0][::-1].copy()
             up0 = np.inf      # upper bound on the block's smallest eigenvalue (min pivot)
             up1 = np.inf      # the same without the last row
             up2 = np.inf      # ... without the last two
