@@ -13,7 +13,8 @@ Chains (``chain_frequencies``)
     no cancellation). The n−1 elastic ω are then the singular values of the square bidiagonal
     ``diag(√k) L``, and the rigid-body frequency is exactly 0.
     Every bidiagonal entry is a product/quotient of the data, so it carries only a few ulps of
-    relative error; dqds (LAPACK ``dlasq1``) then gives every ω to high relative accuracy
+    relative error; dqds (our compiled kernel, :mod:`predict.torsion._dqds`, from 64 masses;
+    LAPACK ``dlasq2`` below that or on any doubt) then gives every ω to high relative accuracy
     (bound ≈ c·n·eps, measured ≤ 1e-14 for stiffness ratios 1e12 and inertia ratios 1e8).
 
 Trees (``tree_frequencies``)
@@ -87,8 +88,9 @@ def chain_frequencies(inertias, stiffnesses, *, grounded: bool) -> np.ndarray:
 
     Notes
     -----
-    dqds (LAPACK ``dlasq2``) runs on the squared bidiagonal entries formed straight from the
-    data, so no square root is taken before the solve.
+    dqds (:func:`predict.torsion._lapack.qd_singular_values`: the compiled kernel from 64
+    masses, LAPACK ``dlasq2`` otherwise) runs on the squared bidiagonal entries formed straight
+    from the data, so no square root is taken before the solve.
     """
     inertias = np.asarray(inertias, float)
     stiffnesses = np.asarray(stiffnesses, float)

@@ -109,7 +109,7 @@ class TorsionalSystem:
     pendulums). Angles and torques are referred to crankshaft speed: multiply node angles by
     ``node_ratio`` and divide spring torques by ``edge_ratio`` for real values; shear stress per
     real torque is ``predict.torsion.forced.stress_factor(system)`` from ``section_diameters``.
-    Undamped eigen-solvers: bidiagonal dqds for chains (O(n²), ~2·10⁻² s for 1000 masses),
+    Undamped eigen-solvers: bidiagonal dqds for chains (O(n²), ≲10⁻² s for 1000 masses),
     tree bisection for branched systems (O(n) Python-level sweeps × ~35 iterations, about
     1 s per 1000 masses), dense ``eigh`` for systems with closed spring loops.
 

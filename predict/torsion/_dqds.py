@@ -1,0 +1,337 @@
+"""dqds on a qd array, compiled by numba: every eigenvalue of ``BᵀB`` to high relative accuracy.
+
+The array is ``q`` (squared diagonal of an upper bidiagonal ``B``, > 0) and ``e`` (squared
+superdiagonal, > 0). One dqds transform with shift τ (Fernando & Parlett, Numer. Math. 67
+(1994) 191; Parlett & Marques, Linear Algebra Appl. 309 (2000) 217)::
+
+    d = q₁ − τ;  for i: q̂ᵢ = d + eᵢ,  t = qᵢ₊₁ / q̂ᵢ,  êᵢ = eᵢ t,  d = d t − τ;  q̂ₙ = d
+
+maps the array of ``BᵀB`` to that of ``BᵀB − τI`` with relative errors of a few ulps per
+entry, as long as every pivot ``d`` stays ≥ 0 (τ below the smallest eigenvalue); the shifts
+are summed in ``S`` (positive terms only), so an eigenvalue ``S + q̂ₙ`` carries no cancellation.
+
+What this implementation does (its own choices, written from the published algorithm):
+
+* **Shift**: the Rayleigh quotient of ``B``'s near-null vector, ``(v_k / v_n)² = Π eⱼ/qⱼ``
+  (rows above the last give ``Bv = 0`` exactly), ``ρ = qₙ / (1 + a₂)`` with ``a₂ = Σ (v_k/v_n)²``;
+  ρ ≥ λ_min, so the shift is ρ less a margin ``16·a₂·qₙ/qₙ₋₁`` (a multiple of its first-order
+  overshoot, the multiple tuned on the bench chains: fewer failed transforms) and
+  never above the smallest pivot of the last transform (every pivot is ≥ λ_min of the new
+  array: it is the last pivot of a leading block). A transform with a negative pivot is
+  discarded (the loop stops at the first negative pivot) and redone with a smaller shift
+  (ρ(1 − a₂), then a quarter, then zero). Without a usable ρ the shift is half the smallest
+  pivot.
+* **Two transforms per pass**: the inner loop is bound by the latency of one division chain;
+  a second, unshifted transform (dqd, which cannot fail on a positive array) follows the first
+  one element behind in the same loop, so the two chains overlap. Its convergence factor at
+  the bottom, ``(λₙ − S)/(λₙ₋₁ − S)``, is as small as the shifted one's because ``S`` already
+  holds the shift.
+* **Deflation and splitting** where ``e ≤ tol²·S`` (tol = 16 eps): zeroing ``√e`` in ``B`` moves
+  each singular value σ by at most ``√e`` (Weyl), so ``λ = σ² + S`` moves by at most
+  ``2σ√e + e ≤ tol·λ + tol²·S`` — a relative change (tests relative to neighbouring ``q``
+  alone are not safe: a large ``e`` below can make the block's smallest value far smaller than
+  its ``q``). Blocks are
+  reversed at their start when the bottom is larger than the top (dqds finds the small end
+  at the bottom fastest; ``PBᵀP`` has the same singular values).
+
+Any doubt — a non-finite value, a transform that fails even unshifted, too many passes —
+returns a status ≠ 0 and the caller uses LAPACK ``dlasq2`` instead.
+"""
+
+from __future__ import annotations
+
+import functools
+import os
+
+import numpy as np
+
+__all__ = ["available", "qd_eigenvalues"]
+
+#: deflation tolerance, a multiple of eps (see the module docstring)
+TOL_EPS = 16.0
+
+#: smaller arrays go to LAPACK ``dlasq2``: there the call costs microseconds either way, and a
+#: one-shot solve of a small engine model should not pay numba's start-up (about 0.5-1 s once
+#: per process when no other compiled kernel has run yet; about 10 ms after one has)
+MIN_SIZE = 64
+
+#: qd entries outside this range (and eigenvalues outside its square) go to LAPACK ``dlasq2``,
+#: which scales: intermediate pivots far below an eigenvalue must stay clear of underflow
+_SAFE_RANGE = (1e-60, 1e60)
+
+
+@functools.lru_cache(maxsize=1)
+def _kernel():
+    """The compiled kernel, or None (numba missing, or ``CRANKBENCH_NO_NUMBA`` set)."""
+    if os.environ.get("CRANKBENCH_NO_NUMBA"):
+        return None
+    try:
+        from numba import njit
+    except ImportError:  # pragma: no cover - numba is a core dependency
+        return None
+
+    # error_model='numpy': a division by zero gives inf/NaN (caught below), not an exception
+    @njit(cache=True, error_model="numpy")
+    def dqds(q0, e0, tol, lo, hi):  # pragma: no cover - compiled
+        n = q0.shape[0]
+        eps = np.finfo(np.float64).eps
+        tol2 = tol * tol
+        for i in range(n):
+            if not (lo < q0[i] < hi):
+                return q0, 5
+        for i in range(n - 1):
+            if not (lo < e0[i] < hi):
+                return q0, 5
+        Q = np.empty((3, n))
+        E = np.zeros((3, n))
+        for i in range(n):
+            Q[0, i] = q0[i]
+        for i in range(n - 1):
+            E[0, i] = e0[i]
+        lam = np.empty(n)
+        st_top = np.empty(n, np.int64)
+        st_bot = np.empty(n, np.int64)
+        st_s = np.empty(n)
+        st_p = np.empty(n, np.int64)
+        splits = np.empty(n, np.int64)
+        # Demmel-Kahan splits of the input (m: zero-shift pivots, top down)
+        ns = 0
+        top = 0
+        m = Q[0, 0]
+        for j in range(n - 1):
+            if E[0, j] <= tol2 * m:
+                E[0, j] = 0.0
+                st_top[ns] = top
+                st_bot[ns] = j
+                st_s[ns] = 0.0
+                st_p[ns] = 0
+                ns += 1
+                top = j + 1
+                m = Q[0, j + 1]
+            else:
+                m = Q[0, j + 1] * (m / (m + E[0, j]))
+        st_top[ns] = top
+        st_bot[ns] = n - 1
+        st_s[ns] = 0.0
+        st_p[ns] = 0
+        ns += 1
+        passes = 0
+        max_passes = 30 * n + 100
+        while ns > 0:
+            ns -= 1
+            i0 = st_top[ns]
+            n0 = st_bot[ns]
+            S = st_s[ns]
+            p = st_p[ns]
+            q = Q[p]
+            e = E[p]
+            if n0 > i0 and 1.5 * q[i0] < q[n0]:      # small end to the bottom
+                q[i0:n0 + 1] = q[i0:n0 + 1][::-1].copy()
+                e[i0:n0] = e[i0:n0][::-1].copy()
+            up0 = np.inf      # upper bound on the block's smallest eigenvalue (min pivot)
+            up1 = np.inf      # the same without the last row
+            up2 = np.inf      # ... without the last two
+            while n0 >= i0:
+                q = Q[p]
+                e = E[p]
+                if n0 == i0:
+                    lam[n0] = q[n0] + S
+                    n0 -= 1
+                    continue
+                el = e[n0 - 1]
+                if el <= tol2 * S:
+                    lam[n0] = q[n0] + S
+                    n0 -= 1
+                    up0 = up1
+                    up1 = up2
+                    up2 = np.inf
+                    continue
+                if n0 == i0 + 1 or e[n0 - 2] <= tol2 * S:
+                    # 2x2 block [[q1, √(q1 e)], [√(q1 e), q2 + e]]: product q1 q2, sum
+                    # q1 + q2 + e, discriminant (q1 − q2 − e)² + 4 q1 e (no cancellation)
+                    a = q[n0 - 1]
+                    b = q[n0]
+                    c = el
+                    d = a - b - c
+                    big = 0.5 * (a + b + c + np.sqrt(d * d + 4.0 * a * c))
+                    lam[n0] = a * (b / big) + S
+                    lam[n0 - 1] = big + S
+                    n0 -= 2
+                    up0 = up2
+                    up1 = np.inf
+                    up2 = np.inf
+                    continue
+                passes += 1
+                if passes > max_passes:
+                    return lam, 3
+                # shift from the Rayleigh quotient of B's near-null vector
+                dn = q[n0]
+                a2 = 0.0
+                prod = 1.0
+                k = n0 - 1
+                while k >= i0:
+                    prod *= e[k] / q[k]
+                    a2 += prod
+                    if prod <= 1e-3 * a2 or k <= n0 - 30:
+                        break
+                    k -= 1
+                rq = dn / (1.0 + a2)
+                safe = 0.0
+                if a2 < 0.25 and rq < up0:
+                    safe = rq * (1.0 - a2)
+                    margin = max(16.0 * a2 * min(1.0, dn / q[n0 - 1]), 64.0 * eps)
+                    tau = rq * (1.0 - min(margin, 1.0))
+                else:
+                    tau = 0.5 * min(up0, dn)
+                if not (tau >= 0.0 and tau < np.inf):
+                    tau = 0.0
+                p1 = (p + 1) % 3
+                p2 = (p + 2) % 3
+                qa = Q[p1]
+                ea = E[p1]
+                qb = Q[p2]
+                eb = E[p2]
+                fails = 0
+                while True:
+                    # transform 1 (shift tau) into qa/ea; transform 2 (no shift) one element
+                    # behind it, from qa/ea into qb/eb
+                    d = q[i0] - tau
+                    dmin = d
+                    ok = d >= 0.0
+                    qh = d + e[i0]
+                    qa[i0] = qh
+                    t = q[i0 + 1] / qh
+                    ea[i0] = e[i0] * t
+                    d = d * t - tau
+                    dmin = min(dmin, d)
+                    d2 = qh
+                    m0 = d2
+                    m1 = np.inf
+                    m2 = np.inf
+                    n_split = 0
+                    for i in range(i0 + 1, n0):
+                        qh = d + e[i]
+                        qa[i] = qh
+                        t = q[i + 1] / qh
+                        ea[i] = e[i] * t
+                        d = d * t - tau
+                        if d < 0.0:              # shift too large: stop here
+                            dmin = d
+                            break
+                        # transform 2 at i - 1 (needs qa[i], just written)
+                        j = i - 1
+                        eaj = ea[j]
+                        if eaj <= tol2 * d2:
+                            # Demmel-Kahan split of qa: d2 is the j-th zero-shift pivot, so
+                            # dropping eaj moves every σ by a factor within 1 ± tol
+                            qb[j] = d2
+                            eb[j] = 0.0
+                            d2 = qa[i]
+                            splits[n_split] = j
+                            n_split += 1
+                            m2 = np.inf
+                            m1 = np.inf
+                            m0 = d2
+                            continue
+                        qh2 = d2 + eaj
+                        qb[j] = qh2
+                        t2 = qa[i] / qh2
+                        eh2 = eaj * t2
+                        eb[j] = eh2
+                        d2 = d2 * t2
+                        m2 = m1
+                        m1 = m0
+                        m0 = min(m0, d2)
+                        if eh2 <= tol2 * (S + tau):   # Weyl split of qb
+                            eb[j] = 0.0
+                            splits[n_split] = j
+                            n_split += 1
+                    qa[n0] = d
+                    if dmin >= 0.0 and ok and d == d:
+                        # finish transform 2 at n0 - 1
+                        j = n0 - 1
+                        qh2 = d2 + ea[j]
+                        qb[j] = qh2
+                        t2 = d / qh2
+                        eh2 = ea[j] * t2
+                        eb[j] = eh2
+                        d2 = d2 * t2
+                        qb[n0] = d2
+                        m2 = m1
+                        m1 = m0
+                        m0 = min(m0, d2)
+                        break
+                    fails += 1
+                    if fails == 1 and 0.0 < safe < tau:
+                        tau = safe
+                    elif fails >= 3 or tau == 0.0:
+                        if tau == 0.0:
+                            return lam, 2
+                        tau = 0.0
+                    else:
+                        tau = 0.25 * tau
+                S += tau
+                if m0 >= 0.0 and d2 == d2 and qb[n0 - 1] > 0.0:
+                    p = p2
+                    up0 = m0
+                    up1 = m1
+                    up2 = m2
+                    # blocks above the splits wait on the stack, the bottom one goes on
+                    for k in range(n_split):
+                        j = splits[k]
+                        st_top[ns] = i0
+                        st_bot[ns] = j
+                        st_s[ns] = S
+                        st_p[ns] = p
+                        ns += 1
+                        i0 = j + 1
+                else:                    # keep the shifted transform alone
+                    p = p1
+                    up0 = np.inf         # (its pivots were not kept)
+                    up1 = np.inf
+                    up2 = np.inf
+        for i in range(n):
+            if not (lam[i] >= 0.0 and lam[i] < np.inf):
+                return lam, 4
+        lam.sort()
+        return lam, 0
+
+    return dqds
+
+
+def available() -> bool:
+    """True when the compiled kernel is in use (else callers use LAPACK ``dlasq2``)."""
+    return _kernel() is not None
+
+
+def qd_eigenvalues(q: np.ndarray, e2: np.ndarray):
+    """Eigenvalues (ascending) of ``BᵀB`` for the qd array ``q`` (n, > 0), ``e2`` (n−1, > 0),
+    or None when the array is small (:data:`MIN_SIZE`), outside the safe range, the compiled
+    kernel is unavailable or it reports any doubt (the caller then uses LAPACK ``dlasq2``).
+
+    Parameters
+    ----------
+    q : ndarray, shape (n,)
+        Squared diagonal of the upper bidiagonal ``B``.
+    e2 : ndarray, shape (n−1,)
+        Squared superdiagonal.
+
+    Returns
+    -------
+    ndarray or None
+        Squared singular values of ``B``, ascending.
+    """
+    if q.size < MIN_SIZE:
+        return None
+    kernel = _kernel()
+    if kernel is None:
+        return None
+    lo, hi = _SAFE_RANGE
+    lam, status = kernel(np.ascontiguousarray(q, dtype=np.float64),
+                         np.ascontiguousarray(e2, dtype=np.float64),
+                         TOL_EPS * np.finfo(float).eps, lo, hi)    # status 5: out of range
+    # far from under/overflow, intermediate pivots keep their relative accuracy; an
+    # eigenvalue outside the range (or any status) hands the array to LAPACK
+    if status != 0 or not (lam[0] > lo and lam[-1] < hi):
+        return None
+    return lam
