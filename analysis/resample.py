@@ -312,10 +312,28 @@ def _fft_lowpass(data: np.ndarray, fs: float, f_pass: float, f_stop: float, nfft
     filter has already reached its stop band).
 
     Circular convolution with an impulse response of half-length ``T``: the first and last
-    ``ceil(T fs)`` samples are incomplete (the caller never uses them)."""
+    ``ceil(T fs)`` samples are incomplete (the caller never uses them). ``data`` shorter than
+    ``nfft`` is zero padded here (scipy's own padding of a long transform costs as much again
+    as the transform, measured)."""
     from scipy import fft
 
-    spectrum = fft.rfft(data, nfft)
+    if data.shape[0] < nfft:
+        padded = np.zeros(nfft)
+        padded[:data.shape[0]] = data
+        data = padded
+    spectrum = fft.rfft(data[:nfft])
+    keep = n_out // 2 + 1
+    out = spectrum[:keep]
+    out *= _lowpass_response(float(fs), float(f_pass), float(f_stop), int(nfft), int(n_out))
+    return fft.irfft(out, n_out, overwrite_x=True)
+
+
+@functools.lru_cache(maxsize=64)
+def _lowpass_response(fs: float, f_pass: float, f_stop: float, nfft: int,
+                      n_out: int) -> np.ndarray:
+    """The low-pass response at the ``n_out//2 + 1`` kept bins of an ``nfft``-point transform,
+    times the ``n_out/nfft`` of the shorter inverse transform (cached: a record's chunks, and
+    the repeated calls of a batch or a bench, share their filters)."""
     keep = n_out // 2 + 1
     # the response is 1 below the transition band and 0 above it: interpolate only there
     half = _aa_half_length(f_pass, f_stop)
@@ -323,12 +341,13 @@ def _fft_lowpass(data: np.ndarray, fs: float, f_pass: float, f_stop: float, nfft
     reach = 6.0 / half                        # the tabulated step is flat beyond |v| = 6
     lo = int(np.clip(np.floor((f_cut - reach) * nfft / fs), 0, keep))
     hi = int(np.clip(np.ceil((f_cut + reach) * nfft / fs) + 1, lo, keep))
-    out = spectrum[:keep]
-    out[hi:] = 0.0
-    out[lo:hi] *= _lowpass_gain(np.arange(lo, hi) * (fs / nfft), f_pass, f_stop)
+    gain = np.zeros(keep)
+    gain[lo:hi] = _lowpass_gain(np.arange(lo, hi) * (fs / nfft), f_pass, f_stop)
     if lo > 0:                                # below the band: the tabulated 1 - C(-v) ≈ 1
-        out[:lo] *= _lowpass_gain(np.array([0.0]), f_pass, f_stop)[0]
-    return fft.irfft(out, n_out) * (n_out / nfft)
+        gain[:lo] = _lowpass_gain(np.array([0.0]), f_pass, f_stop)[0]
+    gain *= n_out / nfft
+    gain.flags.writeable = False
+    return gain
 
 
 # ---------------------------------------------------------------------------- chunk plan
@@ -500,6 +519,8 @@ def plan_chunks(speed_rpm, *, n: int, fs: float, samples_per_rev: int = 64,
         a = max(0, c0 - half - step)
         b = min(n, c1 + half + step)
         size = _good_size(b - a)
+        if a + size > n:   # the record's end: read real samples before the chunk instead
+            a = max(0, n - size, windows[-1][0] if windows else 0)
         b = min(n, a + size)                  # read real samples rather than pad, if any
         out = size if ratio == 1.0 else min(size, _good_size(int(math.ceil(size / ratio))))
         bands.append((f_pass, f_stop))
