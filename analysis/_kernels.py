@@ -79,7 +79,9 @@ def _numba():
                 out[k] = (values[i + 1] - values[i]) * (u - i) + values[i]
         return out
 
-    @njit(cache=True)
+    # the 16-tap sum may be reassociated (vectorised) and fused: 30 % faster, the same result
+    # to 1e-15 of the signal (tests/analysis/test_kernels.py); NaN/inf semantics kept
+    @njit(cache=True, fastmath={"reassoc", "contract"})
     def sinc(y, pos, table, half, phases):  # pragma: no cover - compiled
         m = y.shape[0]
         out = np.empty(pos.shape[0])

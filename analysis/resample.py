@@ -108,8 +108,26 @@ def _as_signal(x, fs, name: str = "x"):
     if np.ndim(x) == 1 and np.shape(x)[0] == 0:
         raise AnalysisError(f"{label} holds no samples (zero-length channel); order analysis "
                             "needs a record of at least a few revolutions")
-    values = check_finite_array(x, label, ndim=1, min_length=8, error=AnalysisError)
+    values = _finite_fast(x, 8)
+    if values is None:          # something is wrong: the full check names it
+        values = check_finite_array(x, label, ndim=1, min_length=8, error=AnalysisError)
     return values, fs, units, label
+
+
+def _finite_fast(x, min_length: int):
+    """``x`` as a float64 1-D array when it is one of at least ``min_length`` finite values,
+    decided in one pass (a sum is finite only if every term is), else None (then the full
+    check, :func:`check_finite_array`, names what is wrong)."""
+    if isinstance(x, np.ndarray) and x.dtype == np.float64:
+        arr = x
+    else:
+        try:
+            arr = np.asarray(x, dtype=np.float64)
+        except (TypeError, ValueError):
+            return None
+    if arr.ndim != 1 or arr.shape[0] < min_length or not np.isfinite(np.add.reduce(arr)):
+        return None
+    return arr
 
 
 def _as_rpm(rpm, n: int, fs: float | None = None, *, allow_stop: bool = False) -> np.ndarray:
@@ -127,6 +145,9 @@ def _as_rpm(rpm, n: int, fs: float | None = None, *, allow_stop: bool = False) -
         return np.full(n, value)
     if arr.ndim == 1 and arr.shape[0] == 0:
         raise AnalysisError("speed_rpm holds no samples (zero-length speed channel)")
+    fast = _finite_fast(arr, 1)
+    if fast is not None and fast.shape[0] == n and fast.min() > 0:
+        return fast                     # finite, one per sample, turning: the common case
     arr = check_finite_array(arr, "rpm", ndim=1, error=AnalysisError)
     if arr.shape[0] != n:
         raise AnalysisError(f"rpm has {arr.shape[0]} samples but the signal has {n}; "
@@ -423,17 +444,21 @@ def _split_chunks(speed, n: int, chunk: int):
     for b0 in pending[1:]:
         a0 = out[-1]
         sp = speed(a0, b0)
-        if sp.min() <= 0:
-            raise AnalysisError(f"rpm must be > 0 throughout; found {float(sp.min()):.6g} rpm "
+        low = float(sp.min())
+        if low <= 0:
+            raise AnalysisError(f"rpm must be > 0 throughout; found {low:.6g} rpm "
                                 f"between samples {a0} and {b0}")
         a = a0
         stack = [b0]
+        known = (a0, b0, low)            # the whole span's minimum is known already
         while stack:
             b = stack[-1]
             seg = sp[a - a0:b - a0]
-            if seg.max() <= 2.0 * seg.min() or b - a <= 256:
+            lo = known[2] if (a, b) == known[:2] else float(seg.min())
+            hi = float(seg.max())
+            if hi <= 2.0 * lo or b - a <= 256:
                 out.append(b)
-                ranges.append((float(seg.min()), float(seg.max())))
+                ranges.append((lo, hi))
                 stack.pop()
                 a = b
             else:
