@@ -595,12 +595,12 @@ def resample_span(plan: ChunkPlan, ks, values: np.ndarray, start: int, phi: np.n
     stop = int(plan.bounds[ks[-1] + 1])
     top = j_last if last else min(j_last, int(np.floor(phi[-1] / dphi)))
     grid = np.arange(j_first, top + 1) * dphi
-    from ._kernels import lerp, positions
+    from ._kernels import positions_and_values
 
-    u_out = positions(phi, grid, start)
+    u_out, rpm_out = positions_and_values(phi, grid, start, speed_rpm)
     if not last:
         keep = int(np.searchsorted(u_out, stop, side="left"))
-        grid, u_out = grid[:keep], u_out[:keep]
+        grid, u_out, rpm_out = grid[:keep], u_out[:keep], rpm_out[:keep]
     out = np.empty(grid.shape[0])
     for k in ks:
         c0, c1 = int(plan.bounds[k]), int(plan.bounds[k + 1])
@@ -617,7 +617,6 @@ def resample_span(plan: ChunkPlan, ks, values: np.ndarray, start: int, phi: np.n
             data = _fft_lowpass(data, fs, band[0], band[1], nfft, n_out)
             scale = n_out / nfft
         out[lo:hi] = _interp(data, (u_out[lo:hi] - a) * scale, plan.interpolation)
-    rpm_out = lerp(speed_rpm, u_out, start)
     return out, u_out / fs, rpm_out, grid
 
 
