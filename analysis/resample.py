@@ -15,7 +15,9 @@ frequency of ``o`` cycles per revolution whatever the speed does. Steps:
    frequency, so the filtered chunk comes out decimated (by a fractional factor, ≥ 4 samples
    per period of the stop edge) for the cost of about one FFT of the chunk (lengths
    ``2^a 5^b 3^c``, the chunk read with real samples up to that length rather than zero
-   padded). The ``T·fs`` samples at either end of a chunk
+   padded — after the chunk, or before it at the record's end; the anti-alias stop band
+   measured on a 1000→3000 rpm run-up: a unit tone at orders 48–63 leaves ≤ 7.7e-6 at its
+   alias, i.e. ≥ 102 dB). The ``T·fs`` samples at either end of a chunk
    window, where the filter is incomplete, are never used: chunks are read with that margin,
    and the record ends are trimmed rather than padded;
 3. the times of the constant-angle samples from the inverse of φ(t);
