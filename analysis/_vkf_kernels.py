@@ -265,7 +265,7 @@ def _numba():
         return env, mean, model
 
     @njit(cache=True)
-    def quartiles(spec, freq, flat, f_frame, reach, notch):  # pragma: no cover - compiled
+    def quartiles(spec, freq, flat, f_frame, reach):  # pragma: no cover - compiled
         frames, bins = spec.shape
         level = np.zeros(frames)
         buf = np.empty(bins)
@@ -273,15 +273,16 @@ def _numba():
             f0 = f_frame[i]
             cnt = 0
             for b in range(bins):
-                d = abs(freq[b] - f0)
-                if flat[b] and d <= reach and d > notch:
-                    buf[cnt] = spec[i, b]
+                v = spec[i, b]
+                if flat[b] and v == v and abs(freq[b] - f0) <= reach:
+                    buf[cnt] = v
                     cnt += 1
             if cnt < 5:
                 cnt = 0
                 for b in range(bins):
-                    if flat[b]:
-                        buf[cnt] = spec[i, b]
+                    v = spec[i, b]
+                    if flat[b] and v == v:
+                        buf[cnt] = v
                         cnt += 1
             if cnt == 0:
                 continue
@@ -571,21 +572,22 @@ def envelopes(coef, cosp, sinp, m: int, trend: bool):
 # ---------------------------------------------------------------------------- noise level
 
 
-def lower_quartiles(spec, freq, flat, f_frame, reach: float, notch: float) -> np.ndarray:
+def lower_quartiles(spec, freq, flat, f_frame, reach: float) -> np.ndarray:
     """Per frame ``i``: the 25th percentile (numpy's linear rule) of ``spec[i]`` over the bins
-    of ``flat`` within ``reach`` of ``f_frame[i]`` but farther than ``notch`` (all ``flat`` bins
-    when fewer than 5 qualify; 0 when none)."""
+    of ``flat`` within ``reach`` of ``f_frame[i]``, NaN bins left out (all non-NaN ``flat``
+    bins when fewer than 5 qualify; 0 when none)."""
     kernels = _numba()
     if kernels is not None:
         return kernels["quartiles"](np.ascontiguousarray(spec), np.ascontiguousarray(freq),
                                     np.ascontiguousarray(flat), np.ascontiguousarray(f_frame,
                                                                                      dtype=float),
-                                    float(reach), float(notch))
+                                    float(reach))
     level = np.zeros(spec.shape[0])
     for i, f0 in enumerate(f_frame):
-        near = flat & (np.abs(freq - f0) <= reach) & (np.abs(freq - f0) > notch)
+        ok = flat & ~np.isnan(spec[i])
+        near = ok & (np.abs(freq - f0) <= reach)
         if near.sum() < 5:
-            near = flat
+            near = ok
         if near.any():
             level[i] = float(np.percentile(spec[i, near], 25.0))
     return level

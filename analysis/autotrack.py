@@ -216,7 +216,9 @@ def _peaks(amp, noise, t, fs_d, probe_bw):
     ten times the local amplitude noise (and the median noise), and lies at least ``2/B``
     from the record's ends (where the filter has not settled). ``T`` is the width at half the
     peak's prominence divided by √3 (for a resonance's envelope ``1/√(1 + (2t/T)²)`` the
-    half-height width is √3 T)."""
+    half-height width is √3 T). A peak less prominent than 0.1 % of its amplitude is none
+    (a smoothing filter cannot take more than the prominence off it; on a noise-free record
+    round-off ripples would otherwise pass ten times a noise of 1e-13)."""
     from scipy.ndimage import uniform_filter1d
     from scipy.signal import find_peaks, peak_widths
 
@@ -239,6 +241,8 @@ def _peaks(amp, noise, t, fs_d, probe_bw):
     for i, prom, w, lo, hi in zip(idx, props["prominences"], widths, left, right):
         if prom < _PEAK_SIGMAS * float(noise[i]):
             continue                                # a bump of the local noise
+        if prom < 0.5 * _ERROR_TARGET * float(amp[i]):
+            continue    # flattened entirely it would cost < 0.1 %: no reason to widen
         out.append((int(i), int(np.floor(lo)), int(np.ceil(hi)), float(w * dt / np.sqrt(3.0))))
     return out
 

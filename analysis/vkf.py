@@ -488,7 +488,8 @@ def _vold_kalman_arrays(x, *, fs, speed_rpm, orders, bandwidth_hz, bandwidth_ord
         model[start:stop] = mdl[start - a: stop - a]
     residual = xd - model
     noise, smear = _uncertainty(env, residual, fs_d, orders, rpm_d if speeds is None
-                                else speeds[:, index].T, bw_d, p, f_max)
+                                else speeds[:, index].T, bw_d, p, f_max,
+                                trend_hz=b_trend if trend else 0.0)
     std = np.sqrt(np.einsum("ij,ij->j", noise, noise) / nd)      # rms over time, per order
     attrs = {"method": "Vold-Kalman filter (joint with an order-0 trend, banded Cholesky)"
                        if trend else "Vold-Kalman filter (joint, banded Cholesky)",
@@ -508,22 +509,25 @@ def _vold_kalman_arrays(x, *, fs, speed_rpm, orders, bandwidth_hz, bandwidth_ord
             "attrs": attrs}
 
 
-def _uncertainty(env, residual, fs_d, orders, rpm_d, bw_d, p, f_pass):
+def _uncertainty(env, residual, fs_d, orders, rpm_d, bw_d, p, f_pass, *, trend_hz=0.0):
     """(noise, smearing) per sample and order, both 1-σ-like amplitudes in signal units.
 
     Noise: ``sqrt(N0 · ENBW)`` with ``N0`` the residual's one-sided density beside each order,
     local in time and frequency: short-time spectra of the residual (frames of at least 2 s),
-    median over the bins within ±max(8 B, 20 bins) of the order's frequency outside its own
-    notch (±2 B): the lower quartile divided by ln(4/3) (quartile of an exponential variable),
-    robust to the lines of orders not tracked that pass by (up to three quarters of the
-    bins). Smearing: for a Lorentzian envelope of
+    over the bins within ±max(8 B, 20 bins) of the order's frequency: the lower quartile
+    divided by ln(4/3) (quartile of an exponential variable), robust to the lines of orders
+    not tracked that pass by (up to three quarters of the bins). The joint solve empties the
+    residual around every tracked order and order 0 by the filter's own response,
+    ``∏ (1 − H_m)²`` averaged over the frame (the orders move in a sweep): each bin is divided
+    by it, and bins emptied below a quarter left out (read raw, bins beside the other orders
+    had put the noise up to 2× low at wide bands). Smearing: for a Lorentzian envelope of
     half-power crossing time ``T`` the relative peak loss is ``K_p/(πTB)^{2p}``; ``T`` follows
     from the solved envelope as ``T² = 8|A|/|A''|``, i.e. loss
     ``K_p (|A''|/(8|A|))^p/(πB)^{2p}``, with the noise part of ``|A''|²`` removed first."""
     nd, k = env.shape
     f_ord = orders[None, :] * (rpm_d if rpm_d.ndim == 2 else rpm_d[:, None]) / 60.0
     b_med = np.median(bw_d, axis=0)
-    n0 = _local_noise(residual, fs_d, f_ord, b_med, f_pass)
+    n0 = _local_noise(residual, fs_d, f_ord, b_med, f_pass, p, trend_hz)
     noise = np.sqrt(n0 * enbw_hz(bw_d, p))
     if nd < 8:
         return noise, np.zeros_like(noise)
@@ -547,9 +551,10 @@ def _uncertainty(env, residual, fs_d, orders, rpm_d, bw_d, p, f_pass):
                                         smearing_constant(p), fs_d)
 
 
-def _local_noise(residual, fs_d, f_ord, b_med, f_pass):
+def _local_noise(residual, fs_d, f_ord, b_med, f_pass, p=2, trend_hz=0.0):
     """One-sided noise density (units²/Hz) of the residual beside each order, per sample
-    (``b_med``: each order's median bandwidth, Hz)."""
+    (``b_med``: each order's median bandwidth, Hz; ``trend_hz``: the order-0 trend's bandwidth,
+    0 without one), each bin corrected for the solve's own notches (see :func:`_uncertainty`)."""
     nd, k = f_ord.shape
     length = int(2 ** np.ceil(np.log2(max(64.0, 2.0 * fs_d))))
     length = min(length, int(2 ** np.floor(np.log2(max(64, nd)))))
@@ -564,6 +569,8 @@ def _local_noise(residual, fs_d, f_ord, b_med, f_pass):
     df = float(freq[1]) if freq.shape[0] > 1 else fs_d
     centre = starts + 0.5 * frames.shape[1]
     flat = (freq > 0) & (freq <= f_pass)
+    spec = spec / _notch_depth(f_ord, starts, frames.shape[1], win, freq, b_med, trend_hz,
+                               fs_d, p)
     out = np.empty((nd, k))
     for j in range(k):
         b = float(b_med[j])
@@ -571,7 +578,34 @@ def _local_noise(residual, fs_d, f_ord, b_med, f_pass):
         f_frame = np.interp(centre, np.arange(nd), f_ord[:, j])
         # lower quartile of an exponential variable: ln(4/3) of its mean (robust to up to
         # three quarters of the bins holding lines of orders not tracked)
-        level = _vkf_kernels.lower_quartiles(spec, freq, flat, f_frame, reach,
-                                             2.0 * b) / np.log(4.0 / 3.0)
+        level = _vkf_kernels.lower_quartiles(spec, freq, flat, f_frame, reach) / np.log(4.0 / 3.0)
         out[:, j] = np.interp(np.arange(nd), centre, level)
     return out
+
+
+def _notch_depth(f_ord, starts, length, win, freq, b_med, trend_hz, fs_d, p):
+    """Expected residual power per (frame, bin) relative to the input's: ``∏_m (1 − H_m)²``
+    over every tracked order (and its mirror) and the order-0 trend, ``H`` the filter's
+    envelope response :func:`vkf_weight`, averaged over 5 instants of the frame weighted by
+    the window's energy (in a sweep the notch moves within the frame); NaN below 1/4 (too
+    empty to read)."""
+    nd, k = f_ord.shape
+    offsets = (np.arange(5) + 0.5) / 5.0 * length
+    weights = np.interp(offsets, np.arange(length), win ** 2)
+    weights = weights / weights.sum()
+    r2 = vkf_weight(np.asarray(b_med, float), fs_d, p) ** 2
+    r2_trend = vkf_weight(float(trend_hz), fs_d, p) ** 2 if trend_hz > 0 else None
+    depth = np.zeros((starts.shape[0], freq.shape[0]))
+    for off, w in zip(offsets, weights):
+        at = np.clip(starts + off, 0, nd - 1)
+        g = np.ones_like(depth)
+        for j in range(k):
+            f_j = np.interp(at, np.arange(nd), f_ord[:, j])[:, None]
+            for nu in (freq[None, :] - f_j, freq[None, :] + f_j):
+                h = 1.0 / (1.0 + 2.0 * r2[j] * (2.0 * np.sin(np.pi * nu / fs_d)) ** (2 * p))
+                g *= (1.0 - h) ** 2
+        if r2_trend is not None:
+            h = 1.0 / (1.0 + 2.0 * r2_trend * (2.0 * np.sin(np.pi * freq / fs_d)) ** (2 * p))
+            g *= ((1.0 - h) ** 2)[None, :]
+        depth += w * g
+    return np.where(depth >= 0.25, depth, np.nan)

@@ -152,3 +152,28 @@ def test_steady_record_gives_the_order_table():
         assert row["amplitude_uncertainty"] == pytest.approx(sigma, rel=0.5)
         dp = (row["phase_deg"] - p + 180.0) % 360.0 - 180.0
         assert abs(dp) <= 3 * row["phase_uncertainty_deg"] + 1e-9
+
+
+@pytest.mark.parametrize("seed", [7, 8])
+def test_slow_noisy_runup_without_resonance_keeps_the_narrow_band(seed):
+    """10 rpm/s over 60 s, two steady orders under 0.5 rms noise, no resonance: nothing is
+    sharp, so the defaults keep the narrow band everywhere (a noise bump once widened order
+    1.5 to 15 Hz at 1300 rpm, 6 % off, with a stated uncertainty of 100 %), and the
+    amplitudes are within their stated 3 σ."""
+    fs = 4000.0
+    t = np.arange(int(60 * fs)) / fs
+    rpm = 800 + 10 * t
+    phi = shaft_angle(rpm, fs)
+    x = (2 * np.cos(1.5 * phi) + np.cos(3 * phi)
+         + 0.5 * np.random.default_rng(seed).standard_normal(t.size))
+    ds = order_track(x, fs=fs, speed_rpm=rpm, orders=[1.5, 3.0])
+    floor = max(8 / 60.0, 0.005 * 800 / 60)
+    assert float(ds["bandwidth_hz"].max()) < 1.5 * floor, ds.attrs["auto_settings"]
+    for order, true in ((1.5, 2.0), (3.0, 1.0)):
+        a = ds["amplitude"].sel(order=order).values
+        u = ds["amplitude_uncertainty"].sel(order=order).values
+        ok = np.isfinite(a)
+        assert ok.mean() > 0.7                 # 1/B = 7.5 s unsettled at each end
+        # a Gaussian error passes 3 σ 0.3 % of the time (and the stated σ, not the truth)
+        assert np.mean(np.abs(a[ok] - true) <= 3 * u[ok]) > 0.98
+        assert np.abs(a[ok] / true - 1).max() < 0.015

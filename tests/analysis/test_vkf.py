@@ -119,3 +119,29 @@ def test_knot_representation_matches_classical_solve():
     assert diff < 2e-3
     # and both follow the slow modulation (|H(0.3 Hz)| ≈ 1 for B = 3 Hz)
     assert np.abs(np.abs(knots.envelope[0].values[mid]) - env[mid]).max() < 5e-3
+
+
+@pytest.mark.parametrize("bandwidth_hz", [0.5, 5.0])
+def test_stated_noise_matches_the_scatter_at_wide_bands(bandwidth_hz):
+    """The amplitude noise the filter states is the scatter it has: white noise of known
+    density N0 = σ²/(fs/2) beside two jointly solved orders and the order-0 trend. Theory
+    sqrt(N0 · ENBW(B)); the estimate once counted the bins the joint solve empties beside
+    the other order and order 0, and stated half the scatter at 5 Hz."""
+    fs, sigma = 4000.0, 0.5
+    t = np.arange(int(40 * fs)) / fs
+    rpm = np.full(t.size, 1200.0)
+    phi = shaft_angle(rpm, fs)
+    theory = np.sqrt(sigma ** 2 / (0.5 * fs) * enbw_hz(bandwidth_hz, 2))
+    scatter, stated = [], []
+    for seed in range(3):
+        x = (2.0 * np.cos(1.5 * phi) + np.cos(3.0 * phi)
+             + sigma * np.random.default_rng(seed).standard_normal(t.size))
+        ds = order_track(x, fs=fs, speed_rpm=rpm, orders=[1.5, 3.0], method="vkf",
+                         bandwidth_hz=bandwidth_hz)
+        sel = ((ds["time"] > 8) & (ds["time"] < 32)).values
+        a = ds["amplitude"].sel(order=1.5).values[sel]
+        scatter.append(np.sqrt(np.mean((a - 2.0) ** 2)))
+        stated.append(np.median(ds["amplitude_uncertainty"].sel(order=1.5).values[sel]))
+    assert np.mean(stated) == pytest.approx(theory, rel=0.1)
+    if bandwidth_hz > 1:             # enough independent samples in 24 s for the scatter
+        assert np.mean(scatter) == pytest.approx(theory, rel=0.15)
