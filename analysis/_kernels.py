@@ -46,28 +46,9 @@ def _numba():
         return phi
 
     @njit(cache=True)
-    def invert(phi, targets, offset):     # pragma: no cover - compiled
-        # both sorted: one merge pass; the same interpolation formula as numpy.interp
-        n, m = phi.shape[0], targets.shape[0]
-        out = np.empty(m)
-        i = 0
-        for k in range(m):
-            x = targets[k]
-            if x <= phi[0]:
-                out[k] = offset
-                continue
-            if x >= phi[n - 1]:
-                out[k] = offset + n - 1.0
-                continue
-            while phi[i + 1] <= x:
-                i += 1
-            slope = 1.0 / (phi[i + 1] - phi[i])
-            out[k] = slope * (x - phi[i]) + (offset + i)
-        return out
-
-    @njit(cache=True)
     def invert_lerp(phi, targets, offset, values):   # pragma: no cover - compiled
-        # invert (above) and interp_at of `values` at the positions found, in the same pass
+        # both sorted: one merge pass, the same interpolation formula as numpy.interp for the
+        # positions, and interp_at's for `values` there
         n, m = phi.shape[0], targets.shape[0]
         out = np.empty(m)
         at = np.empty(m)
@@ -132,7 +113,7 @@ def _numba():
             out[k] = acc
         return out
 
-    return {"integrate": integrate, "invert": invert, "interp_at": interp_at, "sinc": sinc,
+    return {"integrate": integrate, "interp_at": interp_at, "sinc": sinc,
             "invert_lerp": invert_lerp}
 
 
@@ -167,8 +148,9 @@ def positions(phi: np.ndarray, targets: np.ndarray, offset: int) -> np.ndarray:
     the increasing ``targets``; like ``numpy.interp(targets, phi, offset + arange)``."""
     kernels = _numba()
     if kernels is not None and phi.shape[0] > 1:
-        return kernels["invert"](np.ascontiguousarray(phi, dtype=float),
-                                 np.ascontiguousarray(targets, dtype=float), float(offset))
+        phi = np.ascontiguousarray(phi, dtype=float)
+        return kernels["invert_lerp"](phi, np.ascontiguousarray(targets, dtype=float),
+                                      float(offset), phi)[0]
     return np.interp(targets, phi, np.arange(offset, offset + phi.shape[0], dtype=float))
 
 
