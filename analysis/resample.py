@@ -127,9 +127,11 @@ def _finite_fast(x, min_length: int):
             arr = np.asarray(x, dtype=np.float64)
         except (TypeError, ValueError):
             return None
-    if arr.ndim != 1 or arr.shape[0] < min_length or not np.isfinite(np.add.reduce(arr)):
+    if arr.ndim != 1 or arr.shape[0] < min_length:
         return None
-    return arr
+    with np.errstate(over="ignore", invalid="ignore"):     # an overflow means: check fully
+        total = np.add.reduce(arr)
+    return arr if np.isfinite(total) else None
 
 
 def _as_rpm(rpm, n: int, fs: float | None = None, *, allow_stop: bool = False) -> np.ndarray:
