@@ -586,26 +586,38 @@ def _local_noise(residual, fs_d, f_ord, b_med, f_pass, p=2, trend_hz=0.0):
 def _notch_depth(f_ord, starts, length, win, freq, b_med, trend_hz, fs_d, p):
     """Expected residual power per (frame, bin) relative to the input's: ``∏_m (1 − H_m)²``
     over every tracked order (and its mirror) and the order-0 trend, ``H`` the filter's
-    envelope response :func:`vkf_weight`, averaged over 5 instants of the frame weighted by
+    envelope response :func:`vkf_weight`, averaged over 3 instants of the frame weighted by
     the window's energy (in a sweep the notch moves within the frame); NaN below 1/4 (too
-    empty to read)."""
+    empty to read). ``H`` < 1e-3 beyond 3 B of its line (2nd order; 1st order: 6 B): only
+    those bins are computed."""
     nd, k = f_ord.shape
-    offsets = (np.arange(5) + 0.5) / 5.0 * length
+    frames, bins = starts.shape[0], freq.shape[0]
+    df = float(freq[1] - freq[0]) if bins > 1 else fs_d
+    offsets = (np.arange(3) + 0.5) / 3.0 * length
     weights = np.interp(offsets, np.arange(length), win ** 2)
     weights = weights / weights.sum()
-    r2 = vkf_weight(np.asarray(b_med, float), fs_d, p) ** 2
-    r2_trend = vkf_weight(float(trend_hz), fs_d, p) ** 2 if trend_hz > 0 else None
-    depth = np.zeros((starts.shape[0], freq.shape[0]))
+    b_all = np.append(np.asarray(b_med, float), float(trend_hz))
+    r2 = vkf_weight(np.maximum(b_all, 1e-12), fs_d, p) ** 2
+    reach = (3.0 if p == 2 else 6.0) * b_all
+    rows = np.arange(frames)[:, None]
+    depth = np.zeros((frames, bins))
     for off, w in zip(offsets, weights):
         at = np.clip(starts + off, 0, nd - 1)
-        g = np.ones_like(depth)
-        for j in range(k):
-            f_j = np.interp(at, np.arange(nd), f_ord[:, j])[:, None]
-            for nu in (freq[None, :] - f_j, freq[None, :] + f_j):
-                h = 1.0 / (1.0 + 2.0 * r2[j] * (2.0 * np.sin(np.pi * nu / fs_d)) ** (2 * p))
-                g *= (1.0 - h) ** 2
-        if r2_trend is not None:
-            h = 1.0 / (1.0 + 2.0 * r2_trend * (2.0 * np.sin(np.pi * freq / fs_d)) ** (2 * p))
-            g *= ((1.0 - h) ** 2)[None, :]
+        g = np.ones((frames, bins))
+        for m in range(k + 1):
+            if b_all[m] <= 0.0:
+                continue
+            centres = (np.zeros(frames) if m == k
+                       else np.interp(at, np.arange(nd), f_ord[:, m]))
+            span = int(np.ceil(reach[m] / df)) + 1
+            for sign in ((1.0,) if m == k else (1.0, -1.0)):     # the line and its mirror
+                first = np.floor((sign * centres - reach[m]) / df).astype(np.int64)
+                cols = first[:, None] + np.arange(2 * span + 1)[None, :]
+                inside = (cols >= 0) & (cols < bins)
+                cols = np.clip(cols, 0, bins - 1)
+                nu = cols * df - sign * centres[:, None]
+                h = 1.0 / (1.0 + 2.0 * r2[m] * (2.0 * np.sin(np.pi * nu / fs_d)) ** (2 * p))
+                np.multiply.at(g, (np.broadcast_to(rows, cols.shape)[inside], cols[inside]),
+                               ((1.0 - h) ** 2)[inside])
         depth += w * g
     return np.where(depth >= 0.25, depth, np.nan)
