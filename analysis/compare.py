@@ -123,7 +123,8 @@ class CriticalComparison:
         Resonances no critical explains (within the gate).
     unmatched_predicted : pandas.DataFrame
         Criticals inside the measured speed range with no measured resonance; column
-        ``significant`` marks those that should have been visible.
+        ``significant`` marks those that should have been visible, ``status`` says 'not
+        found' or why the record could not show them (see ``unresolved``).
     natural_frequencies : pandas.DataFrame
         Per mode: ``frequency_hz_measured`` (confidence-weighted over the matched orders),
         ``frequency_hz_predicted`` (the same weighting over the same orders; the mode's first
@@ -134,6 +135,14 @@ class CriticalComparison:
         ratio tolerance (ratio within [1/(1+t), 1+t]).
     flags : tuple of str
         Human-readable disagreements; empty when measurement and prediction agree.
+    unresolved : tuple of str
+        Significant criticals not found where the record could not be shown to contradict
+        them: amplitudes not judged (the expected rise is unknown), or the expected rise
+        (predicted amplitude less the measured level) below ``(1 + amplitude_tolerance)`` times the
+        finder's detection limit there (column ``detection_limit`` of the predicted table,
+        :func:`analysis.resonance.detect.detection_limits`). They make the verdict
+        inconclusive, not failed. Without a ``detection_limit`` column every significant
+        critical not found is a flag.
     """
 
     matched: object
@@ -145,6 +154,7 @@ class CriticalComparison:
     amplitude_tolerance: float
     flags: tuple = ()
     settings: dict = field(default_factory=dict)
+    unresolved: tuple = ()
 
     @property
     def agrees(self) -> bool:
@@ -154,10 +164,12 @@ class CriticalComparison:
     def verdict(self, *, steady=False, basis=""):
         """The comparison as a three-state :class:`analysis.verdict.Verdict`.
 
-        Fail when a significant critical disagrees (speed, amplitude, missing, unexplained
-        peak); inconclusive when nothing was compared — a steady run (no critical speed is
-        crossed at constant speed) or no significant predicted critical and no matched
-        resonance in the measured range; pass otherwise.
+        Fail when a significant critical disagrees (speed, amplitude, missing though the
+        record could have shown it, unexplained peak); inconclusive when nothing was compared —
+        a steady run (no critical speed is crossed at constant speed) or no significant
+        predicted critical and no matched resonance in the measured range — or when a
+        significant critical was not found where the record's noise hides it
+        (``unresolved``); pass otherwise.
 
         Parameters
         ----------
@@ -203,6 +215,13 @@ class CriticalComparison:
                                   reason="; ".join(self.flags[:3])
                                   + (f" (+{len(self.flags) - 3} more)" if len(self.flags) > 3
                                      else ""))
+        if self.unresolved:
+            return Verdict.inconclusive(
+                name, rule=rule, basis=basis,
+                reason=f"{len(m)} critical(s) matched; "
+                       + "; ".join(self.unresolved[:2])
+                       + (f" (+{len(self.unresolved) - 2} more)" if len(self.unresolved) > 2
+                          else ""))
         if n_sig == 0 and len(m) == 0:
             return Verdict.inconclusive(
                 name, rule=rule, basis=basis,
@@ -232,6 +251,7 @@ class CriticalComparison:
             float("nan"),
             "agrees": self.agrees,
             "flags": list(self.flags),
+            "unresolved": list(self.unresolved),
         }
 
     def plot(self, ax=None):
@@ -441,11 +461,35 @@ def match_criticals(measured, predicted, *, gate=0.15, tolerance=0.03,
             flags.append(f"mode {r['mode']} order {r.order:g}: amplitude ratio measured/"
                          f"predicted {r.amplitude_ratio:.2f} outside "
                          f"[{amp_lo:.2f}, {amp_hi:.2f}]")
-    for _, r in unmatched_predicted.iterrows():
-        if r.significant:
-            flags.append(f"mode {r['mode']} order {r.order:g}: predicted critical at "
-                         f"{r.speed_rpm:.1f} rpm not found in the measurement (gate "
-                         f"±{100 * gate:g} %)")
+    unresolved = []
+    scale = _amplitude_scale(amplitudes_not_judged)
+    status = ["" if not sig else "not found" for sig in unmatched_predicted["significant"]]
+    for row, (_, r) in enumerate(unmatched_predicted.iterrows()):
+        if not r.significant:
+            continue
+        missing = (f"mode {r['mode']} order {r.order:g}: predicted critical at "
+                   f"{r.speed_rpm:.1f} rpm not found in the measurement (gate ±{100 * gate:g} %)")
+        limit = float(r.get("detection_limit", np.nan))
+        if not np.isfinite(limit):           # what the record could show is not known
+            flags.append(missing)
+            continue
+        rise = float(r.amplitude) * scale - float(r.get("measured_level", 0.0))
+        if np.isfinite(rise) and rise >= (1.0 + amplitude_tolerance) * limit:
+            flags.append(f"{missing}: its expected rise {rise:.3g} is above the detection "
+                         f"limit {limit:.3g}")
+        else:
+            if not np.isfinite(rise):
+                why = "expected rise unknown (amplitudes not judged)"
+            elif rise <= 0:
+                why = (f"its predicted amplitude {float(r.amplitude):.3g} does not rise above "
+                       f"the measured level {float(r.get('measured_level', 0.0)):.3g}")
+            else:
+                why = f"expected rise {rise:.3g}"
+            unresolved.append(f"mode {r['mode']} order {r.order:g} at {r.speed_rpm:.1f} rpm "
+                              f"not found and not resolvable: {why} against a detection limit "
+                              f"{limit:.3g} (the track's noise there × the finder's SNR)")
+            status[row] = f"not found, not resolvable: {why} (detection limit {limit:.3g})"
+    unmatched_predicted["status"] = status
     meas_amp = unmatched_measured["amplitude"].to_numpy(float) if "amplitude" in \
         unmatched_measured else np.full(len(unmatched_measured), np.nan)
     top = np.nanmax(meas["amplitude_used"].to_numpy(float)) if n_m and \
@@ -461,7 +505,16 @@ def match_criticals(measured, predicted, *, gate=0.15, tolerance=0.03,
                     [float(v) for v in speed_range_rpm], combine_sweeps=bool(combine_sweeps),
                     amplitudes_not_judged=amplitudes_not_judged)
     return CriticalComparison(matched, unmatched_measured, unmatched_predicted, nat, gate,
-                              tolerance, amplitude_tolerance, tuple(flags), settings)
+                              tolerance, amplitude_tolerance, tuple(flags), settings,
+                              tuple(unresolved))
+
+
+def _amplitude_scale(amplitudes_not_judged) -> float:
+    """Factor on a predicted amplitude for the rise expected in the record: 1 when amplitudes
+    are judged, NaN (unknown) when they rest on an assumed load — the other criticals' ratios
+    do not scale it (under a propeller law the load, and so the ratio, changes with speed:
+    0.13 at the 6L32's 247 rpm critical against 0.32 at 543 rpm)."""
+    return 1.0 if amplitudes_not_judged is None else float("nan")
 
 
 def not_judged_reason(predicted, mode, order) -> str:

@@ -585,6 +585,13 @@ def analyse(record, model, *, channel=None, speed_channel=None, orders=None, max
 
     step("comparison")
     predicted, measured = _swept_like_with_like(predicted, resonances, track, quantity, gate)
+    from .resonance.detect import detection_limits
+
+    fs_set = resonances.settings
+    predicted["detection_limit"], predicted["measured_level"] = detection_limits(
+        track, predicted["order"], predicted["speed_rpm"], min_snr=fs_set["min_snr"],
+        min_prominence=fs_set["min_prominence"], min_confidence=fs_set["min_confidence"],
+        min_amplitude_fraction=fs_set["min_amplitude_fraction"])
     comparison = match_criticals(measured, predicted, gate=gate, tolerance=tolerance,
                                  amplitude_tolerance=amplitude_tolerance,
                                  speed_range_rpm=(lo, hi), amplitudes_not_judged=unstated)

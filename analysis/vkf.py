@@ -527,7 +527,7 @@ def _uncertainty(env, residual, fs_d, orders, rpm_d, bw_d, p, f_pass, *, trend_h
     nd, k = env.shape
     f_ord = orders[None, :] * (rpm_d if rpm_d.ndim == 2 else rpm_d[:, None]) / 60.0
     b_med = np.median(bw_d, axis=0)
-    n0 = _local_noise(residual, fs_d, f_ord, b_med, f_pass, p, trend_hz)
+    n0 = _local_noise(residual, fs_d, f_ord, b_med, f_pass, p, trend_hz, bw_d)
     noise = np.sqrt(n0 * enbw_hz(bw_d, p))
     if nd < 8:
         return noise, np.zeros_like(noise)
@@ -551,10 +551,11 @@ def _uncertainty(env, residual, fs_d, orders, rpm_d, bw_d, p, f_pass, *, trend_h
                                         smearing_constant(p), fs_d)
 
 
-def _local_noise(residual, fs_d, f_ord, b_med, f_pass, p=2, trend_hz=0.0):
+def _local_noise(residual, fs_d, f_ord, b_med, f_pass, p=2, trend_hz=0.0, bw_d=None):
     """One-sided noise density (units²/Hz) of the residual beside each order, per sample
     (``b_med``: each order's median bandwidth, Hz; ``trend_hz``: the order-0 trend's bandwidth,
-    0 without one), each bin corrected for the solve's own notches (see :func:`_uncertainty`)."""
+    0 without one; ``bw_d``: the bandwidth per sample and order, default ``b_med``), each bin
+    corrected for the solve's own notches (see :func:`_uncertainty`)."""
     nd, k = f_ord.shape
     length = int(2 ** np.ceil(np.log2(max(64.0, 2.0 * fs_d))))
     length = min(length, int(2 ** np.floor(np.log2(max(64, nd)))))
@@ -569,7 +570,9 @@ def _local_noise(residual, fs_d, f_ord, b_med, f_pass, p=2, trend_hz=0.0):
     df = float(freq[1]) if freq.shape[0] > 1 else fs_d
     centre = starts + 0.5 * frames.shape[1]
     flat = (freq > 0) & (freq <= f_pass)
-    spec = spec / _notch_depth(f_ord, starts, frames.shape[1], win, freq, b_med, trend_hz,
+    if bw_d is None:
+        bw_d = np.broadcast_to(np.asarray(b_med, float)[None, :], f_ord.shape)
+    spec = spec / _notch_depth(f_ord, starts, frames.shape[1], win, freq, bw_d, trend_hz,
                                fs_d, p)
     out = np.empty((nd, k))
     for j in range(k):
@@ -583,40 +586,44 @@ def _local_noise(residual, fs_d, f_ord, b_med, f_pass, p=2, trend_hz=0.0):
     return out
 
 
-def _notch_depth(f_ord, starts, length, win, freq, b_med, trend_hz, fs_d, p):
+def _notch_depth(f_ord, starts, length, win, freq, bw_d, trend_hz, fs_d, p):
     """Expected residual power per (frame, bin) relative to the input's: ``∏_m (1 − H_m)²``
     over every tracked order (and its mirror) and the order-0 trend, ``H`` the filter's
-    envelope response :func:`vkf_weight`, averaged over 3 instants of the frame weighted by
-    the window's energy (in a sweep the notch moves within the frame); NaN below 1/4 (too
-    empty to read). ``H`` < 1e-3 beyond 3 B of its line (2nd order; 1st order: 6 B): only
-    those bins are computed."""
+    envelope response :func:`vkf_weight` at the order's bandwidth there (``bw_d``, per sample
+    and order: an adaptive band widened around a resonance notches wider), averaged over 3
+    instants of the frame weighted by the window's energy (in a sweep the notch moves within
+    the frame); NaN below 1/4 (too empty to read). ``H`` < 1e-3 beyond 3 B of its line (2nd
+    order; 1st order: 6 B): only those bins are computed."""
     nd, k = f_ord.shape
     frames, bins = starts.shape[0], freq.shape[0]
     df = float(freq[1] - freq[0]) if bins > 1 else fs_d
     offsets = (np.arange(3) + 0.5) / 3.0 * length
     weights = np.interp(offsets, np.arange(length), win ** 2)
     weights = weights / weights.sum()
-    b_all = np.append(np.asarray(b_med, float), float(trend_hz))
-    r2 = vkf_weight(np.maximum(b_all, 1e-12), fs_d, p) ** 2
-    reach = (3.0 if p == 2 else 6.0) * b_all
+    reach_per_hz = 3.0 if p == 2 else 6.0
     rows = np.arange(frames)[:, None]
+    grid = np.arange(nd)
     depth = np.zeros((frames, bins))
     for off, w in zip(offsets, weights):
         at = np.clip(starts + off, 0, nd - 1)
         g = np.ones((frames, bins))
         for m in range(k + 1):
-            if b_all[m] <= 0.0:
-                continue
-            centres = (np.zeros(frames) if m == k
-                       else np.interp(at, np.arange(nd), f_ord[:, m]))
-            span = int(np.ceil(reach[m] / df)) + 1
+            if m == k:
+                if trend_hz <= 0:
+                    continue
+                centres, band = np.zeros(frames), np.full(frames, float(trend_hz))
+            else:
+                centres = np.interp(at, grid, f_ord[:, m])
+                band = np.maximum(np.interp(at, grid, bw_d[:, m]), 1e-12)
+            r2 = vkf_weight(band, fs_d, p)[:, None] ** 2
+            span = int(np.ceil(reach_per_hz * float(band.max()) / df)) + 1
             for sign in ((1.0,) if m == k else (1.0, -1.0)):     # the line and its mirror
-                first = np.floor((sign * centres - reach[m]) / df).astype(np.int64)
+                first = np.floor((sign * centres - reach_per_hz * band) / df).astype(np.int64)
                 cols = first[:, None] + np.arange(2 * span + 1)[None, :]
                 inside = (cols >= 0) & (cols < bins)
                 cols = np.clip(cols, 0, bins - 1)
                 nu = cols * df - sign * centres[:, None]
-                h = 1.0 / (1.0 + 2.0 * r2[m] * (2.0 * np.sin(np.pi * nu / fs_d)) ** (2 * p))
+                h = 1.0 / (1.0 + 2.0 * r2 * (2.0 * np.sin(np.pi * nu / fs_d)) ** (2 * p))
                 np.multiply.at(g, (np.broadcast_to(rows, cols.shape)[inside], cols[inside]),
                                ((1.0 - h) ** 2)[inside])
         depth += w * g

@@ -109,8 +109,8 @@ def run(args) -> int:
             sig = sig[sig["significant"]]
         if len(sig):
             print()
-            print_table(sig[["mode", "order", "speed_rpm", "amplitude"]],
-                        title="predicted criticals not found")
+            print_table(sig[[c for c in ("mode", "order", "speed_rpm", "amplitude", "status")
+                             if c in sig]], title="predicted criticals not found")
         listed = comp.unmatched_predicted
         if len(listed):
             listed = listed[~listed["significant"]]

@@ -528,7 +528,7 @@ def critical_speed_table(comparison, predicted=None):
                      "frequency_hz_predicted": r.get("frequency_hz"),
                      "amplitude_predicted": r.get("amplitude"),
                      "significant": bool(r["significant"]),
-                     "status": "not found" if r["significant"] else
+                     "status": r.get("status") or "not found" if r["significant"] else
                      "not found, not judged: " + not_judged_reason(predicted, r["mode"],
                                                                    r["order"])})
     for _, r in comparison.unmatched_measured.iterrows():

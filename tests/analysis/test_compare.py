@@ -175,3 +175,37 @@ def test_no_measured_resonance_leaves_criticals_unmatched():
     assert len(c.matched) == 0 and len(c.unmatched_predicted) == 1
     assert c.flags == ("mode 1 order 2: predicted critical at 3000.0 rpm not found in the "
                        "measurement (gate ±15 %)",)
+
+
+def test_a_critical_hidden_by_noise_is_unresolved_not_failed():
+    """A significant critical not found fails the comparison only where the record could have
+    shown it: its expected rise (predicted amplitude less the measured level) at least
+    (1 + amplitude_tolerance) times the finder's detection limit there. Below that, or with
+    amplitudes not judged (the rise is unknown), it is unresolved: verdict inconclusive."""
+    meas = pd.DataFrame({"order": [6.0], "speed_rpm": [401.0], "amplitude": [1e-3]})
+
+    def pred(limit):
+        return pd.DataFrame({"mode": [1, 2], "order": [6.0, 3.0],
+                             "speed_rpm": [400.0, 600.0], "amplitude": [1e-3, 4e-4],
+                             "detection_limit": [1e-5, limit],
+                             "measured_level": [2e-4, 1e-4]})
+
+    # rise 3e-4 against a limit of 1e-4: 3 >= 1.5, it should have been seen
+    seen = match_criticals(meas, pred(1e-4), speed_range_rpm=(300, 700))
+    assert seen.verdict().status == "fail" and not seen.unresolved
+    assert "above the detection limit" in seen.flags[0]
+    # the same critical under 3x the noise: 3e-4 < 1.5 x 3e-4
+    hidden = match_criticals(meas, pred(3e-4), speed_range_rpm=(300, 700))
+    v = hidden.verdict()
+    assert not hidden.flags and v.status == "inconclusive"
+    assert "mode 2 order 3 at 600.0 rpm not found and not resolvable" in v.reason
+    up = hidden.unmatched_predicted.set_index("mode")
+    assert up.loc[2, "status"].startswith("not found, not resolvable: expected rise 0.0003")
+    # amplitudes on an assumed load: the rise is unknown, whatever the limit
+    unknown = match_criticals(meas, pred(1e-6), speed_range_rpm=(300, 700),
+                              amplitudes_not_judged="the run's load is not stated")
+    assert not unknown.flags and "expected rise unknown" in unknown.unresolved[0]
+    # without a detection limit, not found is a disagreement as before
+    plain = match_criticals(meas, pred(1e-4).drop(columns=["detection_limit"]),
+                            speed_range_rpm=(300, 700))
+    assert plain.verdict().status == "fail" and "not found" in plain.flags[0]

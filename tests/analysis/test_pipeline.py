@@ -307,3 +307,24 @@ def test_requested_orders_do_not_drop_the_others_from_the_stress_checks(marine):
     basis = check(result, worst).basis
     assert "not measured, taken as predicted" in basis and "% of the worst stress" in basis
     assert list(result.comparison.matched["order"]) == [4.5]
+
+
+@pytest.mark.slow
+def test_ten_times_the_noise_is_never_a_false_fail(marine):
+    """The synthetic run-up comes from the model itself, so the model is right: with ten
+    times the torsiograph's noise (white, 2e-4 rad rms added) the criticals the noise hides
+    must make the comparison inconclusive — never a failure — and every critical still found
+    agrees within the tolerances. (Before: either spurious peaks 4–8 % off that failed the
+    model, or 'not found' failures of criticals the record could not show.)"""
+    run, _ = marine
+    scene_load = LoadCase(imep=2.4e6, law="propeller", reference_rpm=720.0)
+    rec = run.record.copy()
+    x = rec["tv_free_end"]
+    rec["tv_free_end"] = x + 2e-4 * np.random.default_rng(3).standard_normal(x.shape[0])
+    comp = analyse(rec, MODEL, load=scene_load).comparison
+    v = comp.verdict()
+    assert v.status != "fail", v.reason
+    assert len(comp.matched) >= 4 and comp.matched["speed_ok"].all()
+    assert comp.matched.loc[comp.matched["significant"], "amplitude_ok"].all()
+    if v.status == "inconclusive":
+        assert comp.unresolved and "not resolvable" in v.reason
