@@ -15,7 +15,8 @@ import functools
 
 import numpy as np
 
-__all__ = ["accelerated", "integrate_speed", "positions", "lerp", "sinc_interp"]
+__all__ = ["accelerated", "integrate_speed", "positions", "lerp", "positions_and_values",
+           "sinc_interp"]
 
 
 @functools.lru_cache(maxsize=1)
@@ -45,24 +46,29 @@ def _numba():
         return phi
 
     @njit(cache=True)
-    def invert(phi, targets, offset):     # pragma: no cover - compiled
-        # both sorted: one merge pass; the same interpolation formula as numpy.interp
+    def invert_lerp(phi, targets, offset, values):   # pragma: no cover - compiled
+        # both sorted: one merge pass, the same interpolation formula as numpy.interp for the
+        # positions, and interp_at's for `values` there
         n, m = phi.shape[0], targets.shape[0]
         out = np.empty(m)
+        at = np.empty(m)
         i = 0
         for k in range(m):
             x = targets[k]
             if x <= phi[0]:
                 out[k] = offset
+                at[k] = values[0]
                 continue
             if x >= phi[n - 1]:
                 out[k] = offset + n - 1.0
+                at[k] = values[n - 1]
                 continue
             while phi[i + 1] <= x:
                 i += 1
-            slope = 1.0 / (phi[i + 1] - phi[i])
-            out[k] = slope * (x - phi[i]) + (offset + i)
-        return out
+            frac = (1.0 / (phi[i + 1] - phi[i])) * (x - phi[i])
+            out[k] = frac + (offset + i)
+            at[k] = (values[i + 1] - values[i]) * frac + values[i]
+        return out, at
 
     @njit(cache=True)
     def interp_at(values, pos, offset):   # pragma: no cover - compiled
@@ -79,7 +85,9 @@ def _numba():
                 out[k] = (values[i + 1] - values[i]) * (u - i) + values[i]
         return out
 
-    @njit(cache=True)
+    # the 16-tap sum may be reassociated (vectorised) and fused: 30 % faster, the same result
+    # to 1e-15 of the signal (tests/analysis/test_kernels.py); NaN/inf semantics kept
+    @njit(cache=True, fastmath={"reassoc", "contract"})
     def sinc(y, pos, table, half, phases):  # pragma: no cover - compiled
         m = y.shape[0]
         out = np.empty(pos.shape[0])
@@ -105,7 +113,8 @@ def _numba():
             out[k] = acc
         return out
 
-    return {"integrate": integrate, "invert": invert, "interp_at": interp_at, "sinc": sinc}
+    return {"integrate": integrate, "interp_at": interp_at, "sinc": sinc,
+            "invert_lerp": invert_lerp}
 
 
 def accelerated() -> bool:
@@ -139,9 +148,23 @@ def positions(phi: np.ndarray, targets: np.ndarray, offset: int) -> np.ndarray:
     the increasing ``targets``; like ``numpy.interp(targets, phi, offset + arange)``."""
     kernels = _numba()
     if kernels is not None and phi.shape[0] > 1:
-        return kernels["invert"](np.ascontiguousarray(phi, dtype=float),
-                                 np.ascontiguousarray(targets, dtype=float), float(offset))
+        phi = np.ascontiguousarray(phi, dtype=float)
+        return kernels["invert_lerp"](phi, np.ascontiguousarray(targets, dtype=float),
+                                      float(offset), phi)[0]
     return np.interp(targets, phi, np.arange(offset, offset + phi.shape[0], dtype=float))
+
+
+def positions_and_values(phi: np.ndarray, targets: np.ndarray, offset: int,
+                         values: np.ndarray):
+    """:func:`positions` and :func:`lerp` of ``values`` (samples ``offset …``, like ``phi``)
+    at those positions, in one pass when compiled: ``(positions, values there)``."""
+    kernels = _numba()
+    if kernels is not None and phi.shape[0] > 1:
+        return kernels["invert_lerp"](np.ascontiguousarray(phi, dtype=float),
+                                      np.ascontiguousarray(targets, dtype=float),
+                                      float(offset), np.ascontiguousarray(values, dtype=float))
+    pos = positions(phi, targets, offset)
+    return pos, lerp(values, pos, offset)
 
 
 def lerp(values: np.ndarray, pos: np.ndarray, offset: int) -> np.ndarray:

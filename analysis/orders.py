@@ -709,13 +709,16 @@ def _stopped_spans(x, fs, speed_rpm):
     if np.isscalar(speed_rpm) or np.ndim(getattr(speed_rpm, "values", speed_rpm)) != 1:
         return None
     speed = np.asarray(getattr(speed_rpm, "values", speed_rpm), dtype=float)
-    if not np.isfinite(speed).all() or speed.max() <= 0:
+    if speed.shape[0] == 0:
         return None
-    if speed.min() < 0:
+    lo, hi = float(speed.min()), float(speed.max())     # NaN/inf show in one or the other
+    if not (np.isfinite(lo) and np.isfinite(hi)) or hi <= 0:
+        return None
+    if lo < 0:
         return None                       # reverse rotation: _as_rpm names it
-    stopped = speed <= 5e-3 * speed.max()
-    if not stopped.any():
+    if lo > 5e-3 * hi:                    # running throughout (two passes, no masks)
         return None
+    stopped = speed <= 5e-3 * hi
     edges = np.flatnonzero(np.diff(np.concatenate([[0], stopped.astype(np.int8), [0]])))
     return list(zip(edges[0::2], edges[1::2]))
 

@@ -45,6 +45,29 @@ def test_speed_integration_and_angle_inversion_agree(monkeypatch):
     np.testing.assert_allclose(compiled_v, plain_v, rtol=0, atol=1e-12)
 
 
+def test_positions_and_speed_in_one_pass_agree(monkeypatch):
+    """The fused inversion + speed interpolation gives the two separate kernels' results, and a
+    speed linear in the sample index is read exactly at the positions (closed form)."""
+    rng = np.random.default_rng(8)
+    fs = 8_000.0
+    speed = 900 + 0.05 * np.arange(30_001) + rng.normal(0, 1, 30_001)
+    phi = _kernels.integrate_speed(speed, fs, 0.0)
+    targets = np.concatenate([[phi[0] - 1.0], np.linspace(phi[0], phi[-1], 4_001),
+                              [phi[-1] + 1.0]])
+    ramp = 3.0 + 0.5 * np.arange(speed.size)          # linear: lerp is exact
+    for values in (speed, ramp):
+        plain, compiled = _both(monkeypatch, lambda: _kernels.positions_and_values(
+            phi, targets, 11, values))
+        separate = (_kernels.positions(phi, targets, 11),)
+        separate += (_kernels.lerp(values, separate[0], 11),)
+        for got in (plain, compiled):
+            np.testing.assert_allclose(got[0], separate[0], rtol=0, atol=1e-9)
+            np.testing.assert_allclose(got[1], separate[1], rtol=1e-13, atol=1e-12)
+    pos, at = _kernels.positions_and_values(phi, targets, 11, ramp)
+    np.testing.assert_allclose(at, 3.0 + 0.5 * (pos - 11), rtol=1e-14)
+    assert pos[0] == 11 and pos[-1] == 11 + speed.size - 1     # clamped outside the angle span
+
+
 def test_band_limited_interpolation_agrees_and_is_accurate(monkeypatch):
     n = 4_000
     t = np.arange(n)
