@@ -63,6 +63,7 @@ from crankbench.predict._validate import (check_finite_array, check_int, check_o
 from crankbench.predict.errors import AnalysisError
 
 from .resample import INTERPOLATIONS, _angle_input, _as_rpm, _as_signal, resample_arrays
+from .spans import stopped_spans as _stopped_spans
 
 __all__ = ["order_track", "order_map", "order_spectrum", "band_amplitude", "campbell_map",
            "AMPLITUDES", "amplitude_factor", "get_window", "BlockFit", "OrderWarning"]
@@ -701,26 +702,6 @@ def _track_around_dropouts(x, fs, spans, *, speed_rpm, shaft_angle, **options):
             ds[name] = ds[name].where(~hit)
     ds.attrs["masked_spans_s"] = [v for span in times for v in span]
     return ds
-
-
-def _stopped_spans(x, fs, speed_rpm):
-    """Sample spans where the shaft stands (speed ≤ 0.5 % of the record's highest speed),
-    when the record also runs; None if it runs throughout (or not at all)."""
-    if np.isscalar(speed_rpm) or np.ndim(getattr(speed_rpm, "values", speed_rpm)) != 1:
-        return None
-    speed = np.asarray(getattr(speed_rpm, "values", speed_rpm), dtype=float)
-    if speed.shape[0] == 0:
-        return None
-    lo, hi = float(speed.min()), float(speed.max())     # NaN/inf show in one or the other
-    if not (np.isfinite(lo) and np.isfinite(hi)) or hi <= 0:
-        return None
-    if lo < 0:
-        return None                       # reverse rotation: _as_rpm names it
-    if lo > 5e-3 * hi:                    # running throughout (two passes, no masks)
-        return None
-    stopped = speed <= 5e-3 * hi
-    edges = np.flatnonzero(np.diff(np.concatenate([[0], stopped.astype(np.int8), [0]])))
-    return list(zip(edges[0::2], edges[1::2]))
 
 
 def _track_running_spans(x, fs, speed_rpm, stops, *, shaft_angle, compute=None,
