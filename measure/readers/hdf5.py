@@ -30,7 +30,7 @@ import xarray as xr
 
 from crankbench.predict.errors import RecordError
 
-from ..record import is_pulse_dim
+from ..record import is_pulse_dim, note_block_extremes
 from ..timeindex import regular_clock, sampled_time
 from ._common import (
     build_dataset,
@@ -374,12 +374,31 @@ def _congruent_empty(n: int, dtype, file_offset: int) -> np.ndarray:
     return buf[shift:shift + n * dtype.itemsize].view(dtype)
 
 
-def _read_all(ds, userblock: int | None = None) -> np.ndarray:
-    """All samples of a 1-D dataset. Unfiltered chunked or contiguous data (what :func:`write`
-    produces) is read straight from the file's byte ranges into the result -- one system read
-    per run of adjacent chunks, as ``numpy.fromfile`` does -- instead of chunk by chunk
-    through HDF5 (about twice the time for 20 MB); three samples are then checked against
-    HDF5's own read. Anything else goes through ``read_direct``."""
+#: blocks of :data:`measure.record._SCAN_BLOCK` samples read per system call: each piece is
+#: scanned (minimum, maximum, NaN/inf) right after the kernel copied it, while it is still in
+#: cache, instead of once more from memory by the record checks
+_PIECE_BLOCKS = 1
+
+
+def _read_all(ds, userblock: int | None = None):
+    """All samples of a 1-D dataset, and their per-block extremes when scanned while read.
+
+    Unfiltered chunked or contiguous data (what :func:`write` produces) is read straight from
+    the file's byte ranges -- given by HDF5 itself (:func:`_raw_runs`) -- into the result, one
+    system read per block of :data:`measure.record._SCAN_BLOCK` samples (as ``numpy.fromfile``
+    reads, without HDF5's chunk-by-chunk path, about twice the time for 20 MB); each block's
+    minimum and maximum (NaN/inf propagate) are taken while it is in cache, for the record's
+    NaN/inf and clipping checks (:func:`measure.record.note_block_extremes`). Three samples
+    are then checked against HDF5's own read. Anything else goes through ``read_direct``.
+
+    Returns
+    -------
+    values : numpy.ndarray
+    extremes : tuple of numpy.ndarray or None
+        ``(lows, highs)`` per block for float data read directly, else None.
+    """
+    from ..record import _SCAN_BLOCK
+
     runs = None
     if ds.size:
         try:
@@ -391,25 +410,62 @@ def _read_all(ds, userblock: int | None = None) -> np.ndarray:
     else:
         out = _congruent_empty(ds.shape[0], ds.dtype, runs[0][0])
     if not out.size:
-        return out
+        return out, None
     if runs is not None:
-        flat = out.view(np.uint8)
-        item = out.dtype.itemsize
-        with builtins.open(_h5().h5f.get_name(ds.id), "rb") as fh:
-            for offset, first, count in runs:
-                fh.seek(offset)
-                view = memoryview(flat[first * item:(first + count) * item])
-                if fh.readinto(view) != count * item:
-                    runs = None  # truncated file: let HDF5 report it
-                    break
+        extremes = _read_runs(ds, runs, out, _SCAN_BLOCK)
         probe = sorted({0, out.size // 2, out.size - 1})
         # one sample at a time: h5py's fast path for a scalar index, ~20x cheaper than a
         # point selection
-        if runs is not None and np.array_equal(np.array([ds[i] for i in probe], out.dtype),
-                                               out[probe], equal_nan=True):
-            return out
+        if extremes is not False and np.array_equal(
+                np.array([ds[i] for i in probe], out.dtype), out[probe], equal_nan=True):
+            return out, extremes
     ds.read_direct(out)
-    return out
+    return out, None
+
+
+def _read_runs(ds, runs, out: np.ndarray, block: int):
+    """Fill ``out`` from the file's byte ``runs`` (:func:`_raw_runs`) in pieces ending on
+    multiples of ``block`` samples; per-block ``(lows, highs)`` of float data (None for other
+    kinds), False if the file ended early (truncated: HDF5 then reads and reports it)."""
+    flat = out.view(np.uint8)
+    item = out.dtype.itemsize
+    n = out.size
+    scan = out.dtype.kind == "f"
+    step = block * _PIECE_BLOCKS
+    if scan:
+        nb = -(-n // block)
+        lows = np.full(nb, np.inf, out.dtype)
+        highs = np.full(nb, -np.inf, out.dtype)
+    with builtins.open(_h5().h5f.get_name(ds.id), "rb", buffering=0) as fh:
+        for offset, first, count in runs:
+            fh.seek(offset)
+            a, stop = first, first + count
+            while a < stop:
+                b = min(stop, (a // step + 1) * step)
+                if fh.readinto(memoryview(flat[a * item:b * item])) != (b - a) * item:
+                    return False
+                if scan:
+                    _piece_extremes(out, a, b, block, lows, highs)
+                a = b
+    return (lows, highs) if scan else None
+
+
+def _piece_extremes(out, a: int, b: int, block: int, lows, highs) -> None:
+    """Fold the extremes of ``out[a:b]`` (inside blocks ``a // block ..``) into ``lows``,
+    ``highs``; whole blocks by one reduction each, a partial block combined with what an
+    earlier piece found (NaN propagates)."""
+    with np.errstate(invalid="ignore"):
+        while a < b:
+            k = a // block
+            e = min(b, (k + 1) * block)
+            piece = out[a:e]
+            lo, hi = piece.min(), piece.max()
+            if a == k * block and e == min(out.size, (k + 1) * block):
+                lows[k], highs[k] = lo, hi
+            else:
+                lows[k] = np.minimum(lows[k], lo)
+                highs[k] = np.maximum(highs[k], hi)
+            a = e
 
 
 def _open_read(path):
@@ -435,7 +491,11 @@ def read(path, *, channels=None) -> xr.Dataset:
         for name in names:
             ds = _dataset(group, name)
             dim, attrs = _channel_attrs(ds, name, dims, file)
-            values, attrs = si_channel(name, _read_all(ds, userblock), attrs, file=file)
+            raw, extremes = _read_all(ds, userblock)
+            unit = attrs.get("units")
+            values, attrs = si_channel(name, raw, attrs, file=file)
+            if extremes is not None and values is raw and attrs["units"] == unit:
+                note_block_extremes(values, *extremes)  # samples unchanged since the scan
             out.append((name, dim, values, attrs))
             used[dim] = True
         explicit, implicit = {}, []
