@@ -1,17 +1,28 @@
 """HDF5 in crankbench's native layout (h5py): read, write, stream.
 
-Layout (``crankbench_format = "record"``, ``crankbench_format_version = 1`` on the root)::
+Layout (``crankbench_format = "record"`` and ``crankbench_format_version`` on the root)::
 
-    /                      attrs: record attrs (start_time, engine_id, ...), channel_order
-    /dims/<dim>            group, attrs kind = "regular" | "explicit" | "index", length
-                             regular:  start (s), sample_rate (Hz) -> t = start + i/sample_rate
-                             explicit: dataset "values" (s, float64)
-                             index:    pulse dims, no coordinate
+    /                      attrs: crankbench_format, crankbench_format_version = 2 and
+                           crankbench_meta: the record's metadata as one JSON text (below)
+    /dims/<dim>            group per time or pulse dim (dataset "values": explicit times, s)
     /channels/<name>       dataset (float32/float64; contiguous, starting on a 4 KiB boundary
                            when >= 64 KiB; files written before 2026-11 are chunked: both
-                           read the same), attrs: the channel's Record attrs plus "dim"
+                           read the same)
     /truth                 optional netCDF4 group (h5netcdf) holding the synthetic bench's
                            ground truth (order amplitudes along a run, critical speeds)
+
+``crankbench_meta`` (version 2) is ``{"attrs": {record attrs}, "channel_order": [names],
+"dims": {dim: {"kind": "regular" | "explicit" | "index", "length": n, "start": s,
+"sample_rate": Hz}}, "channels": {name: {Record attrs..., "dim": dim}}}`` (numeric arrays as
+``{"__ndarray__": [...], "dtype": "<f8"}``): one attribute read instead of one per attribute
+and object (a read of a small record spends more on those than on its samples). The groups
+and datasets carry no attribute of ours; any attribute found on them (or on the root besides
+the three above) -- set with h5py after writing, say -- overrides the JSON's value of that
+name, so a file edited by hand reads as edited. Version 1 files (every value an attribute of
+its object: root record attrs and ``channel_order``, ``/dims/<dim>`` kind, length, start,
+sample_rate, ``/channels/<name>`` its Record attrs and ``dim``), as written before 2026-11
+or by other tools, read the same. Shapes, types, storage and byte offsets always come from
+HDF5 itself, never from the JSON.
 
 Regular clocks are stored as three numbers, not as a time array, and read back as an implicit
 time coordinate (:class:`measure.timeindex.SampledTimeIndex`: values generated on access,
@@ -46,7 +57,11 @@ __all__ = ["FORMAT", "check_magic", "read", "write", "open", "read_truth", "writ
 
 FORMAT = "HDF5 (crankbench layout)"
 MAGIC = b"\x89HDF\r\n\x1a\n"
-FORMAT_VERSION = 1
+#: layout written (2: metadata in one JSON attribute); versions 1 and 2 are read
+FORMAT_VERSION = 2
+#: root attribute holding the version-2 metadata
+META_ATTR = "crankbench_meta"
+_OWN_ROOT = ("crankbench_format", "crankbench_format_version", "channel_order", META_ATTR)
 #: Datasets of at least this many bytes start at a multiple of :data:`ALIGN_BYTES` in the
 #: file (HDF5's alignment property): a full read then copies whole pages from the page cache
 #: into a page-aligned array, the cheapest copy the kernel makes.
@@ -98,28 +113,59 @@ def _from_attr(value):
     return value
 
 
-def write(record: xr.Dataset, path, *, truth: xr.Dataset | None = None) -> dict:
+def _to_json(value):
+    """An attribute value as JSON-ready data (numeric arrays tagged with their dtype)."""
+    value = clean_attr(value)
+    if isinstance(value, np.ndarray):
+        return {"__ndarray__": value.tolist(), "dtype": value.dtype.str}
+    return value
+
+
+def _json_default(value):  # numpy scalars and arrays nested in lists or dicts
+    value = clean_attr(value)
+    return value.tolist() if isinstance(value, np.ndarray) else value
+
+
+def _from_json(value):
+    if isinstance(value, dict) and value.keys() == {"__ndarray__", "dtype"}:
+        return np.asarray(value["__ndarray__"], dtype=np.dtype(value["dtype"]))
+    return value
+
+
+def write(record: xr.Dataset, path, *, truth: xr.Dataset | None = None,
+          _version: int = FORMAT_VERSION) -> dict:
     """Write ``record`` (numpy- or dask-backed) to ``path`` in the layout above.
 
     Dask-backed channels are written block by block (bounded memory) into contiguous
-    datasets.
+    datasets. ``_version=1`` writes the older layout (one attribute per value; tests).
     """
     h5py = _h5()
+    if _version not in (1, 2):
+        raise ValueError(f"_version={_version!r}; expected 1 or 2")
+    meta = {"attrs": {}, "channel_order": [str(n) for n in record.data_vars], "dims": {},
+            "channels": {}}
     with h5py.File(path, "w", alignment_threshold=ALIGN_THRESHOLD,
                    alignment_interval=ALIGN_BYTES) as f:
         f.attrs["crankbench_format"] = "record"
-        f.attrs["crankbench_format_version"] = FORMAT_VERSION
+        f.attrs["crankbench_format_version"] = _version
         for k, v in record.attrs.items():
-            f.attrs[str(k)] = _attr_value(v)
-        f.attrs["channel_order"] = json.dumps([str(n) for n in record.data_vars])
+            if _version == 1:
+                f.attrs[str(k)] = _attr_value(v)
+            else:
+                meta["attrs"][str(k)] = _to_json(v)
+        if _version == 1:
+            f.attrs["channel_order"] = json.dumps(meta["channel_order"])
         gdims = f.create_group("dims")
         gch = f.create_group("channels")
         for dim, names in dims_of(record).items():
             info = _dim_info(record, dim, record[names[0]])
             g = gdims.create_group(dim)
             values = info.pop("values", None)
-            for k, v in info.items():
-                g.attrs[k] = v
+            if _version == 1:
+                for k, v in info.items():
+                    g.attrs[k] = v
+            else:
+                meta["dims"][dim] = info
             if values is not None:
                 g.create_dataset("values", data=values)
         for name, var in record.data_vars.items():
@@ -139,9 +185,16 @@ def write(record: xr.Dataset, path, *, truth: xr.Dataset | None = None) -> dict:
                     start += arr.size
             elif n:
                 ds[...] = np.asarray(var.values, dtype=dtype)
-            for k, v in var.attrs.items():
-                ds.attrs[str(k)] = _attr_value(v)
-            ds.attrs["dim"] = str(var.dims[0])
+            if _version == 1:
+                for k, v in var.attrs.items():
+                    ds.attrs[str(k)] = _attr_value(v)
+                ds.attrs["dim"] = str(var.dims[0])
+            else:
+                meta["channels"][name] = {**{str(k): _to_json(v) for k, v in var.attrs.items()},
+                                          "dim": str(var.dims[0])}
+        if _version == 2:
+            f.attrs[META_ATTR] = json.dumps(meta, default=_json_default, allow_nan=True,
+                                            separators=(",", ":"))
     if truth is not None:
         write_truth(truth, path)
     return {}
@@ -230,12 +283,58 @@ def _group(parent, name: str):
     return obj if isinstance(obj, h5py.h5g.GroupID) else None
 
 
-def _layout(fid, file: str, root=None) -> tuple[list[str], dict, object]:
-    """Channel order, dims and the ``/channels`` group (low-level GroupID) of an open file
-    (``h5py.h5f.FileID``: h5py's low-level API, several times cheaper per call than its
-    high-level objects); ``root`` = its cleaned root attrs if read."""
+def _scalar_attr(oid, name: str):
+    """Value of the scalar attribute ``name`` of a low-level object, None if it has none (by
+    name: the attributes of our layout, without listing the others)."""
     h5py = _h5()
-    root = _attrs(fid) if root is None else root
+    bname = name.encode()
+    if not h5py.h5a.exists(oid, bname):
+        return None
+    a = h5py.h5a.open(oid, bname)
+    dtype = a.dtype
+    if a.get_space().get_simple_extent_type() == h5py.h5s.SCALAR:
+        if dtype.kind in "biuf":
+            buf = np.empty((), dtype)
+            a.read(buf)
+            return clean_attr(buf[()])
+        info = h5py.check_string_dtype(dtype)
+        if dtype.kind == "O" and info is not None and info.length is None:
+            buf = np.empty((), dtype)
+            a.read(buf, mtype=h5py.h5t.py_create(dtype))
+            raw = buf[()]
+            return raw.decode(info.encoding, "surrogateescape") if isinstance(raw, bytes) else raw
+    return clean_attr(h5py.AttributeManager(_Bound(oid))[name])
+
+
+def _root(fid, file: str) -> tuple[dict, dict | None]:
+    """The root's attributes of ours -- and the record attrs set on it -- and the version-2
+    metadata (None for version 1, whose record attrs are all in the first dict)."""
+    h5py = _h5()
+    text = _scalar_attr(fid, META_ATTR)
+    if text is None:  # version 1 (or not ours): every attribute of the root
+        return _attrs(fid), None
+    try:
+        meta = json.loads(text)
+        if not (isinstance(meta, dict) and all(isinstance(meta.get(k), dict)
+                                               for k in ("attrs", "dims", "channels"))):
+            raise ValueError("attrs, dims or channels missing")
+    except (TypeError, ValueError) as exc:
+        raise RecordError(f"{file}: root attribute {META_ATTR!r} is not the JSON object of "
+                          f"crankbench's layout ({exc}); damaged or edited file?") from None
+    if h5py.h5a.get_num_attrs(fid) == 3:  # as written: format, version, meta
+        root = {k: _scalar_attr(fid, k) for k in _OWN_ROOT[:2]}
+    else:  # attributes set on the root after writing override the JSON's
+        root = _attrs(fid)
+    return root, meta
+
+
+def _layout(fid, file: str) -> tuple[dict, list[str], dict, object, dict]:
+    """Record attrs, channel order, dims, the ``/channels`` group (low-level GroupID) and the
+    channels' attrs as far as known without opening them (version 2's JSON) of an open file
+    (``h5py.h5f.FileID``: h5py's low-level API, several times cheaper per call than its
+    high-level objects)."""
+    h5py = _h5()
+    root, meta = _root(fid, file)
     fmt = root.get("crankbench_format")
     if isinstance(fmt, bytes):
         fmt = fmt.decode()
@@ -246,26 +345,39 @@ def _layout(fid, file: str, root=None) -> tuple[list[str], dict, object]:
             f"{file}: HDF5 file is not in crankbench's record layout (expected root attr "
             "crankbench_format='record' and groups /channels, /dims); netCDF files should be "
             "named .nc")
-    version = int(root.get("crankbench_format_version", 0))
-    if version > FORMAT_VERSION:
-        raise RecordError(f"{file}: layout version {version} is newer than this crankbench "
-                          f"reads ({FORMAT_VERSION}); upgrade crankbench")
     try:
-        order = json.loads(root["channel_order"])
+        version = int(root.get("crankbench_format_version", 0))
+    except (TypeError, ValueError):
+        version = -1
+    if version > FORMAT_VERSION or version < 0:
+        raise RecordError(f"{file}: layout version {root.get('crankbench_format_version')!r} "
+                          f"is not one this crankbench reads (1..{FORMAT_VERSION}); upgrade "
+                          "crankbench")
+    if meta is not None and version < 2:
+        meta = None  # a version-1 file holding an attribute of that name: not ours
+    meta = meta or {}
+    record_attrs = {k: _from_json(v) for k, v in meta.get("attrs", {}).items()}
+    record_attrs.update({k: _from_attr(v) for k, v in root.items() if k not in _OWN_ROOT})
+    try:
+        order = json.loads(root["channel_order"]) if "channel_order" in root else list(
+            meta["channel_order"])
     except (KeyError, TypeError, ValueError):
         order = sorted(_members(gch))
     missing = [n for n in order if not _has(gch, str(n))]
     if missing:
         raise RecordError(f"{file}: header lists channel(s) {missing} that have no data "
                           "(header/body mismatch; file truncated?)")
-    dims = {}
+    dims = {dim: dict(info) for dim, info in meta.get("dims", {}).items()}
     for dim in _members(gdims):
         g = h5py.h5o.open(gdims, dim.encode("utf-8", "surrogateescape"))
-        info = _attrs(g)
+        info = dims.setdefault(dim, {})
+        if h5py.h5a.get_num_attrs(g):
+            info.update(_attrs(g))
         if isinstance(g, h5py.h5g.GroupID) and _has(g, "values"):
             info["values_ds"] = h5py.Dataset(h5py.h5d.open(g, b"values"))
-        dims[dim] = info
-    return order, dims, gch
+    channels = {name: {k: _from_json(v) for k, v in attrs.items()}
+                for name, attrs in meta.get("channels", {}).items()}
+    return record_attrs, order, dims, gch, channels
 
 
 def _dataset(gch, name: str):
@@ -278,8 +390,13 @@ def _dataset(gch, name: str):
     return h5py.Dataset(obj)
 
 
-def _channel_attrs(ds, name: str, dims: dict, file: str) -> tuple[str, dict]:
-    attrs = {k: _from_attr(v) for k, v in _attrs(ds).items()}
+def _channel_attrs(ds, name: str, dims: dict, file: str, known: dict | None = None
+                   ) -> tuple[str, dict]:
+    """Dim and attrs of channel dataset ``ds``: ``known`` (version 2's JSON) updated with the
+    dataset's own attributes, if it has any."""
+    attrs = dict(known or {})
+    if _h5().h5a.get_num_attrs(ds.id):
+        attrs.update({k: _from_attr(v) for k, v in _attrs(ds).items()})
     dim = attrs.pop("dim", None)
     if dim not in dims:
         raise RecordError(f"{file}: channel {name!r} refers to dim {dim!r} which is not in "
@@ -483,20 +600,19 @@ def read(path, *, channels=None) -> xr.Dataset:
     fid = _open_read(path)
     try:
         refuse_external_links(path, file=file, h5file=fid)
-        root = _attrs(fid)
-        order, dims, group = _layout(fid, file, root)
+        attrs, order, dims, group, known = _layout(fid, file)
         names = select(order, channels, file=file)
         out, used = [], {}
         userblock = _userblock(fid)
         for name in names:
             ds = _dataset(group, name)
-            dim, attrs = _channel_attrs(ds, name, dims, file)
+            dim, cattrs = _channel_attrs(ds, name, dims, file, known.get(name))
             raw, extremes = _read_all(ds, userblock)
-            unit = attrs.get("units")
-            values, attrs = si_channel(name, raw, attrs, file=file)
-            if extremes is not None and values is raw and attrs["units"] == unit:
+            unit = cattrs.get("units")
+            values, cattrs = si_channel(name, raw, cattrs, file=file)
+            if extremes is not None and values is raw and cattrs["units"] == unit:
                 note_block_extremes(values, *extremes)  # samples unchanged since the scan
-            out.append((name, dim, values, attrs))
+            out.append((name, dim, values, cattrs))
             used[dim] = True
         explicit, implicit = {}, []
         for dim in used:
@@ -505,8 +621,6 @@ def read(path, *, channels=None) -> xr.Dataset:
                 explicit[dim] = c
             elif c is not None:
                 implicit.append(c)
-        attrs = {k: _from_attr(v) for k, v in root.items()
-                 if k not in ("crankbench_format", "crankbench_format_version", "channel_order")}
     finally:
         fid.close()  # strong close degree: every object opened above closes with it
     if explicit or len(implicit) != 1:
@@ -553,12 +667,12 @@ def open(path, *, chunk_seconds: float = 10.0, channels=None) -> xr.Dataset:  # 
     file = str(path)
     refuse_external_links(path, file=file)
     with h5py.File(path, "r") as f:
-        order, dims, _ = _layout(f.id, file)
+        record_attrs, order, dims, _, known = _layout(f.id, file)
         names = select(order, channels, file=file)
         data_vars, used = {}, {}
         for name in names:
             ds = f["channels"][name]
-            dim, attrs = _channel_attrs(ds, name, dims, file)
+            dim, attrs = _channel_attrs(ds, name, dims, file, known.get(name))
             fs = attrs.get("sample_rate")
             n = ds.shape[0]
             if fs is not None and n:
@@ -584,9 +698,7 @@ def open(path, *, chunk_seconds: float = 10.0, channels=None) -> xr.Dataset:  # 
                 plain[dim] = (dim, c, {"units": "s", "long_name": "time from record start"})
             else:
                 coords.append(c)
-        attrs = {k: _from_attr(v) for k, v in _attrs(f).items()
-                 if k not in ("crankbench_format", "crankbench_format_version", "channel_order")}
-    ds = xr.Dataset(data_vars, coords=plain, attrs=attrs)
+    ds = xr.Dataset(data_vars, coords=plain, attrs=record_attrs)
     for c in coords:
         ds = ds.assign_coords(c)
     return ds
