@@ -42,7 +42,7 @@ import xarray as xr
 from crankbench.predict.errors import RecordError
 
 from ..record import is_pulse_dim, note_block_extremes
-from ..timeindex import regular_clock, sampled_time
+from ..timeindex import regular_clock, sampled_dataset, sampled_time
 from ._common import (
     build_dataset,
     clean_attr,
@@ -274,12 +274,38 @@ def _has(gid, name: str) -> bool:
         return False
 
 
+def _open_member(parent, name: str):
+    """Low-level object ``name`` of ``parent`` (a FileID or GroupID), opened only when it is
+    this file's own: a link other than a hard link (external, soft) or a virtual dataset makes
+    the whole file checked by :func:`refuse_external_links`, which refuses external links and
+    virtual datasets anywhere in it (naming them) and lets soft links within it pass. The
+    objects a read opens are thus checked one by one (a few microseconds each) instead of by a
+    walk over the whole file at every read."""
+    h5py = _h5()
+    bname = name.encode("utf-8", "surrogateescape")
+    if parent.links.get_info(bname).type != h5py.h5l.TYPE_HARD:
+        _refuse_outside(parent)
+    obj = h5py.h5o.open(parent, bname)
+    if (isinstance(obj, h5py.h5d.DatasetID)
+            and obj.get_create_plist().get_layout() == h5py.h5d.VIRTUAL):
+        _refuse_outside(parent)
+    return obj
+
+
+def _refuse_outside(oid) -> None:
+    """:func:`refuse_external_links` on the open file holding low-level object ``oid``."""
+    h5py = _h5()
+    fid = h5py.h5i.get_file_id(oid)
+    name = h5py.h5f.get_name(fid).decode("utf-8", "surrogateescape")
+    refuse_external_links(name, file=name, h5file=fid)
+
+
 def _group(parent, name: str):
     """Low-level group ``name`` of ``parent`` (a FileID or GroupID), None if not a group."""
     h5py = _h5()
     if not _has(parent, name):
         return None
-    obj = h5py.h5o.open(parent, name.encode("utf-8", "surrogateescape"))
+    obj = _open_member(parent, name)
     return obj if isinstance(obj, h5py.h5g.GroupID) else None
 
 
@@ -369,12 +395,12 @@ def _layout(fid, file: str) -> tuple[dict, list[str], dict, object, dict]:
                           "(header/body mismatch; file truncated?)")
     dims = {dim: dict(info) for dim, info in meta.get("dims", {}).items()}
     for dim in _members(gdims):
-        g = h5py.h5o.open(gdims, dim.encode("utf-8", "surrogateescape"))
+        g = _open_member(gdims, dim)
         info = dims.setdefault(dim, {})
         if h5py.h5a.get_num_attrs(g):
             info.update(_attrs(g))
         if isinstance(g, h5py.h5g.GroupID) and _has(g, "values"):
-            info["values_ds"] = h5py.Dataset(h5py.h5d.open(g, b"values"))
+            info["values_ds"] = h5py.Dataset(_open_member(g, "values"))
     channels = {name: {k: _from_json(v) for k, v in attrs.items()}
                 for name, attrs in meta.get("channels", {}).items()}
     return record_attrs, order, dims, gch, channels
@@ -383,7 +409,7 @@ def _layout(fid, file: str) -> tuple[dict, list[str], dict, object, dict]:
 def _dataset(gch, name: str):
     """Channel ``name`` of the low-level ``/channels`` group as an ``h5py.Dataset``."""
     h5py = _h5()
-    obj = h5py.h5o.open(gch, name.encode("utf-8", "surrogateescape"))
+    obj = _open_member(gch, name)
     if not isinstance(obj, h5py.h5d.DatasetID):
         raise RecordError(f"channel {name!r} is an HDF5 {type(obj).__name__[:-2].lower()}, "
                           "not a dataset; expected one dataset per channel under /channels")
@@ -409,6 +435,15 @@ def _channel_attrs(ds, name: str, dims: dict, file: str, known: dict | None = No
     return dim, attrs
 
 
+def _regular(dim: str, info: dict, file: str) -> tuple[int, float, float]:
+    """``(length, sample_rate Hz, start s)`` of a regular clock, checked."""
+    fs = float(info["sample_rate"])
+    if not np.isfinite(fs) or fs <= 0:
+        raise RecordError(f"{file}: dim {dim!r} declares sample_rate={fs!r} Hz; expected a "
+                          "finite value > 0")
+    return int(info.get("length", 0)), fs, float(info.get("start", 0.0))
+
+
 def _coordinate(dim: str, info: dict, file: str):
     """The dim's time coordinate: ``xarray.Coordinates`` (implicit, regular clocks), a float64
     array (explicit times) or None (pulse dims)."""
@@ -417,11 +452,7 @@ def _coordinate(dim: str, info: dict, file: str):
     if kind == "index":
         return None
     if kind == "regular":
-        fs = float(info["sample_rate"])
-        start = float(info.get("start", 0.0))
-        if not np.isfinite(fs) or fs <= 0:
-            raise RecordError(f"{file}: dim {dim!r} declares sample_rate={fs!r} Hz; expected a "
-                              "finite value > 0")
+        n, fs, start = _regular(dim, info, file)
         return sampled_time(n, fs, start=start, dim=dim)
     if kind == "explicit":
         values = np.asarray(info["values_ds"][...], dtype=np.float64)
@@ -598,8 +629,7 @@ def read(path, *, channels=None) -> xr.Dataset:
     """Read a crankbench HDF5 record fully into memory."""
     file = str(path)
     fid = _open_read(path)
-    try:
-        refuse_external_links(path, file=file, h5file=fid)
+    try:  # every object opened is checked to be the file's own (_open_member)
         attrs, order, dims, group, known = _layout(fid, file)
         names = select(order, channels, file=file)
         out, used = [], {}
@@ -614,23 +644,29 @@ def read(path, *, channels=None) -> xr.Dataset:
                 note_block_extremes(values, *extremes)  # samples unchanged since the scan
             out.append((name, dim, values, cattrs))
             used[dim] = True
-        explicit, implicit = {}, []
-        for dim in used:
-            c = _coordinate(dim, dims[dim], file)
-            if isinstance(c, np.ndarray):
-                explicit[dim] = c
-            elif c is not None:
-                implicit.append(c)
+        clock = None
+        if len(used) == 1 and dims[next(iter(used))].get("kind") == "regular":
+            clock = next(iter(used))  # the usual record: one regular clock
+            clock_numbers = _regular(clock, dims[clock], file)
+        else:
+            explicit, implicit = {}, []
+            for dim in used:
+                c = _coordinate(dim, dims[dim], file)
+                if isinstance(c, np.ndarray):
+                    explicit[dim] = c
+                elif c is not None:
+                    implicit.append(c)
     finally:
         fid.close()  # strong close degree: every object opened above closes with it
-    if explicit or len(implicit) != 1:
-        ds = build_dataset(out, explicit, attrs)
-        for coords in implicit:
-            ds = ds.assign_coords(coords)
-        return ds
-    # the usual record, one regular clock: build it in one step (no merge/align pass)
-    data_vars = {name: xr.Variable((dim,), values, vattrs) for name, dim, values, vattrs in out}
-    return xr.Dataset(data_vars, coords=implicit[0], attrs=attrs)
+    if clock is not None:  # built in one step (no merge/align pass)
+        n, fs, start = clock_numbers
+        data_vars = {name: xr.Variable((dim,), values, vattrs)
+                     for name, dim, values, vattrs in out}
+        return sampled_dataset(data_vars, n, fs, start=start, dim=clock, attrs=attrs)
+    ds = build_dataset(out, explicit, attrs)
+    for coords in implicit:
+        ds = ds.assign_coords(coords)
+    return ds
 
 
 class _LazyH5:

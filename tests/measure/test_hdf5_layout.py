@@ -207,3 +207,25 @@ def test_read_finds_nonfinite_and_clipping_from_the_read_scan(tmp_path, units):
     with pytest.raises(RecordError, match=r"c\.h5.*channel 'acc' has 1 NaN/inf sample\(s\) "
                                           r"in 1 run\(s\): samples 150000\.\.150000"):
         io.read(path)
+
+
+def test_links_on_the_read_path_are_checked(tmp_path):
+    """A soft link within the file reads; an external link where the read goes is refused by
+    name (the whole file is then checked), one elsewhere is never followed."""
+    rec = _rich_record()
+    path = tmp_path / "r.h5"
+    io.write(rec, path)
+    with h5py.File(path, "r+") as f:
+        f["notes"] = h5py.ExternalLink("elsewhere.h5", "/notes")  # not part of the record
+    np.testing.assert_array_equal(io.read(path)["acc"].values, rec["acc"].values)
+    with h5py.File(path, "r+") as f:
+        del f["notes"]
+        f.move("channels/acc", "stored_acc")
+        f["channels/acc"] = h5py.SoftLink("/stored_acc")
+    np.testing.assert_array_equal(io.read(path)["acc"].values, rec["acc"].values)
+    with h5py.File(path, "r+") as f:
+        f.move("dims/time_slow", "stored_dim")
+        f["dims/time_slow"] = h5py.ExternalLink("elsewhere.h5", "/dims/time_slow")
+    with pytest.raises(RecordError, match=r"r\.h5: HDF5 object 'dims/time_slow' is an "
+                                          r"external link to elsewhere\.h5:/dims/time_slow"):
+        io.read(path)
