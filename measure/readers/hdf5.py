@@ -477,6 +477,8 @@ def _raw_runs(ds, userblock: int | None = None):
     h5py = _h5()
     if ds.ndim != 1 or not ds.dtype.isnative or ds.dtype.kind not in "fiu":
         return None
+    if ds.id.get_type() != h5py.h5t.py_create(ds.dtype):  # bytes not numpy's (bit offset,
+        return None                                        # precision, custom float): HDF5
     plist = ds.id.get_create_plist()
     if (plist.get_layout() not in (h5py.h5d.CONTIGUOUS, h5py.h5d.CHUNKED)
             or plist.get_nfilters() or plist.get_external_count()):
@@ -536,8 +538,10 @@ def _read_all(ds, userblock: int | None = None):
     system read per block of :data:`measure.record._SCAN_BLOCK` samples (as ``numpy.fromfile``
     reads, without HDF5's chunk-by-chunk path, about twice the time for 20 MB); each block's
     minimum and maximum (NaN/inf propagate) are taken while it is in cache, for the record's
-    NaN/inf and clipping checks (:func:`measure.record.note_block_extremes`). Three samples
-    are then checked against HDF5's own read. Anything else goes through ``read_direct``.
+    NaN/inf and clipping checks (:func:`measure.record.note_block_extremes`). The byte ranges
+    are HDF5's own answer for this dataset (never stored by us) and are used only when the
+    file's datatype is exactly numpy's (same bytes, no conversion). Anything else goes through
+    ``read_direct``.
 
     Returns
     -------
@@ -561,11 +565,7 @@ def _read_all(ds, userblock: int | None = None):
         return out, None
     if runs is not None:
         extremes = _read_runs(ds, runs, out, _SCAN_BLOCK)
-        probe = sorted({0, out.size // 2, out.size - 1})
-        # one sample at a time: h5py's fast path for a scalar index, ~20x cheaper than a
-        # point selection
-        if extremes is not False and np.array_equal(
-                np.array([ds[i] for i in probe], out.dtype), out[probe], equal_nan=True):
+        if extremes is not False:
             return out, extremes
     ds.read_direct(out)
     return out, None
