@@ -303,9 +303,12 @@ def _refuse_outside(oid) -> None:
 def _group(parent, name: str):
     """Low-level group ``name`` of ``parent`` (a FileID or GroupID), None if not a group."""
     h5py = _h5()
-    if not _has(parent, name):
+    try:
+        obj = _open_member(parent, name)
+    except (KeyError, RuntimeError):  # h5py's "name doesn't exist" -- or damage
+        if _has(parent, name):
+            raise
         return None
-    obj = _open_member(parent, name)
     return obj if isinstance(obj, h5py.h5g.GroupID) else None
 
 
@@ -313,10 +316,10 @@ def _scalar_attr(oid, name: str):
     """Value of the scalar attribute ``name`` of a low-level object, None if it has none (by
     name: the attributes of our layout, without listing the others)."""
     h5py = _h5()
-    bname = name.encode()
-    if not h5py.h5a.exists(oid, bname):
+    try:
+        a = h5py.h5a.open(oid, name.encode())
+    except KeyError:
         return None
-    a = h5py.h5a.open(oid, bname)
     dtype = a.dtype
     if a.get_space().get_simple_extent_type() == h5py.h5s.SCALAR:
         if dtype.kind in "biuf":
