@@ -527,10 +527,10 @@ def _congruent_empty(n: int, dtype, file_offset: int) -> np.ndarray:
     return buf[shift:shift + n * dtype.itemsize].view(dtype)
 
 
-#: blocks of :data:`measure.record._SCAN_BLOCK` samples read per system call: each piece is
-#: scanned (minimum, maximum, NaN/inf) right after the kernel copied it, while it is still in
-#: cache, instead of once more from memory by the record checks
-_PIECE_BLOCKS = 1
+#: bytes read per system call: each piece is scanned (minimum, maximum, NaN/inf) right after
+#: the kernel copied it, while it is still in cache, instead of once more from memory by the
+#: record checks
+_PIECE_BYTES = 1 << 21
 
 
 def _read_all(ds, userblock: int | None = None):
@@ -582,7 +582,7 @@ def _read_runs(ds, runs, out: np.ndarray, block: int):
     item = out.dtype.itemsize
     n = out.size
     scan = out.dtype.kind == "f"
-    step = block * _PIECE_BLOCKS
+    step = max(1, _PIECE_BYTES // item)
     if scan:
         nb = -(-n // block)
         lows = np.full(nb, np.inf, out.dtype)
@@ -592,7 +592,7 @@ def _read_runs(ds, runs, out: np.ndarray, block: int):
             fh.seek(offset)
             a, stop = first, first + count
             while a < stop:
-                b = min(stop, (a // step + 1) * step)
+                b = min(stop, a + step)
                 if fh.readinto(memoryview(flat[a * item:b * item])) != (b - a) * item:
                     return False
                 if scan:
@@ -602,21 +602,23 @@ def _read_runs(ds, runs, out: np.ndarray, block: int):
 
 
 def _piece_extremes(out, a: int, b: int, block: int, lows, highs) -> None:
-    """Fold the extremes of ``out[a:b]`` (inside blocks ``a // block ..``) into ``lows``,
-    ``highs``; whole blocks by one reduction each, a partial block combined with what an
-    earlier piece found (NaN propagates)."""
+    """Fold the extremes of ``out[a:b]`` into the per-block ``lows``, ``highs`` (which start
+    at +inf / -inf; NaN propagates): the whole blocks inside by one reduction along rows, the
+    part-blocks at either end combined with what other pieces found there."""
+    k0 = -(-a // block)               # first block starting inside the piece
+    full_end = (b // block) * block   # whole full-length blocks end here
     with np.errstate(invalid="ignore"):
-        while a < b:
-            k = a // block
-            e = min(b, (k + 1) * block)
-            piece = out[a:e]
-            lo, hi = piece.min(), piece.max()
-            if a == k * block and e == min(out.size, (k + 1) * block):
-                lows[k], highs[k] = lo, hi
-            else:
-                lows[k] = np.minimum(lows[k], lo)
-                highs[k] = np.maximum(highs[k], hi)
-            a = e
+        if k0 * block < full_end:
+            rows = out[k0 * block:full_end].reshape(-1, block)
+            k1 = k0 + rows.shape[0]
+            np.minimum(lows[k0:k1], np.minimum.reduce(rows, axis=1), out=lows[k0:k1])
+            np.maximum(highs[k0:k1], np.maximum.reduce(rows, axis=1), out=highs[k0:k1])
+        for lo, hi in ((a, min(b, k0 * block)), (max(a, full_end, k0 * block), b)):
+            if hi > lo:  # within one block
+                k = lo // block
+                piece = out[lo:hi]
+                lows[k] = np.minimum(lows[k], np.minimum.reduce(piece))
+                highs[k] = np.maximum(highs[k], np.maximum.reduce(piece))
 
 
 def _open_read(path):

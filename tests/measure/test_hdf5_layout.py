@@ -149,9 +149,13 @@ def test_a_newer_layout_is_refused_by_name(tmp_path):
     {"chunks": (50_000,)},                     # chunks not on block edges
     {"chunks": (_SCAN_BLOCK,)},                # chunks on block edges
 ])
-def test_block_extremes_taken_while_reading_are_the_samples_own(tmp_path, storage):
+@pytest.mark.parametrize("piece_bytes", [None, 400_012])  # pieces across block edges
+def test_block_extremes_taken_while_reading_are_the_samples_own(tmp_path, storage,
+                                                                piece_bytes, monkeypatch):
     """Per-block min/max from the read equal numpy's over the samples, NaN and inf
-    included, also where a block spans chunks read by separate runs."""
+    included, also where a block spans chunks read by separate runs or pieces."""
+    if piece_bytes:
+        monkeypatch.setattr(hdf5, "_PIECE_BYTES", piece_bytes)
     n = 3 * _SCAN_BLOCK + 12_345
     x = np.random.default_rng(5).standard_normal(n).astype(np.float32)
     x[_SCAN_BLOCK + 7] = np.nan
