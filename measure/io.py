@@ -17,8 +17,8 @@ extension      format                      streams with :func:`open`
 
 Text and spreadsheet exports whose headers do not say what a column is are read through a
 channel map (``read(path, map=...)``, :mod:`measure.channelmap`), which also decodes raw wheel
-and TDC signals into pulse trains. HDF5/netCDF files holding external links or virtual
-datasets are refused (a record holds its own data).
+and TDC signals into pulse trains. HDF5/netCDF records whose channels, clocks or groups are
+external links or virtual datasets are refused (a record holds its own data).
 
 Input files are opened read-only and never modified. :func:`write` is atomic (temporary file
 in the target folder, then rename) and refuses to replace an existing file unless

@@ -350,11 +350,28 @@ def _root(fid, file: str) -> tuple[dict, dict | None]:
     except (TypeError, ValueError) as exc:
         raise RecordError(f"{file}: root attribute {META_ATTR!r} is not the JSON object of "
                           f"crankbench's layout ({exc}); damaged or edited file?") from None
-    if h5py.h5a.get_num_attrs(fid) == 3:  # as written: format, version, meta
-        root = {k: _scalar_attr(fid, k) for k in _OWN_ROOT[:2]}
+    if h5py.h5a.get_num_attrs(fid) == 3:  # as written: format, version, meta -- the JSON of
+        # our layout says the format; the version is read (one typed read, no type query)
+        root = {"crankbench_format": "record",
+                "crankbench_format_version": _int_attr(fid, "crankbench_format_version")}
     else:  # attributes set on the root after writing override the JSON's
         root = _attrs(fid)
     return root, meta
+
+
+def _int_attr(oid, name: str):
+    """Attribute ``name`` read as an integer by HDF5's conversion (anything else -- a string,
+    an array, a float -- through :func:`_scalar_attr`)."""
+    h5py = _h5()
+    try:
+        a = h5py.h5a.open(oid, name.encode())
+        buf = np.empty((), np.int64)
+        if a.get_type().get_class() == h5py.h5t.INTEGER:
+            a.read(buf)
+            return int(buf)
+    except (KeyError, TypeError, ValueError, OSError):
+        pass
+    return _scalar_attr(oid, name)
 
 
 def _layout(fid, file: str) -> tuple[dict, list[str], dict, object, dict]:
@@ -478,24 +495,28 @@ def _raw_runs(ds, userblock: int | None = None):
     (filters, foreign byte order, external or virtual storage, a user block, unallocated
     chunks). ``userblock``: the file's user-block size if known (else asked here)."""
     h5py = _h5()
-    if ds.ndim != 1 or not ds.dtype.isnative or ds.dtype.kind not in "fiu":
+    did = ds.id  # h5py's low-level calls: each high-level property costs several
+    dtype = did.dtype
+    shape = did.shape
+    if len(shape) != 1 or not dtype.isnative or dtype.kind not in "fiu":
         return None
-    if ds.id.get_type() != h5py.h5t.py_create(ds.dtype):  # bytes not numpy's (bit offset,
-        return None                                        # precision, custom float): HDF5
-    plist = ds.id.get_create_plist()
-    if (plist.get_layout() not in (h5py.h5d.CONTIGUOUS, h5py.h5d.CHUNKED)
+    if did.get_type() != h5py.h5t.py_create(dtype):  # bytes not numpy's (bit offset,
+        return None                                  # precision, custom float): HDF5 converts
+    plist = did.get_create_plist()
+    layout = plist.get_layout()
+    if (layout not in (h5py.h5d.CONTIGUOUS, h5py.h5d.CHUNKED)
             or plist.get_nfilters() or plist.get_external_count()):
         return None
-    if (_userblock(ds.file.id) if userblock is None else userblock) != 0:
+    if (_userblock(h5py.h5i.get_file_id(did)) if userblock is None else userblock) != 0:
         return None
-    item = ds.dtype.itemsize
-    n = ds.shape[0]
-    if ds.chunks is None:
-        offset = ds.id.get_offset()
+    item = dtype.itemsize
+    n = shape[0]
+    if layout == h5py.h5d.CONTIGUOUS:
+        offset = did.get_offset()
         return None if offset is None else [(int(offset), 0, n)]
-    chunk = ds.chunks[0]
+    chunk = plist.get_chunk()[0]
     info = []
-    ds.id.chunk_iter(lambda si: info.append((si.chunk_offset[0], si.byte_offset, si.size,
+    did.chunk_iter(lambda si: info.append((si.chunk_offset[0], si.byte_offset, si.size,
                                              si.filter_mask)))
     if len(info) != -(-n // chunk):
         return None
