@@ -54,6 +54,8 @@ __all__ = ["SampleClock", "SampledTimeIndex", "sampled_time", "sampled_dataset",
 
 #: a label within this fraction of a sample step of a sample's time selects it exactly
 LABEL_RTOL = 1e-9
+#: attrs of an implicit time coordinate
+TIME_ATTRS = {"units": "s", "long_name": "time from record start"}
 
 
 class SampleClock(CoordinateTransform):
@@ -324,7 +326,7 @@ def sampled_time(n: int, sample_rate: float, *, start: float = 0.0, dim: str = "
     index = SampledTimeIndex(SampleClock(start, sample_rate, n, coord_name=dim, dim=dim))
     coords = xr.Coordinates.from_xindex(index)
     coords.variables[dim].attrs.update(attrs if attrs is not None
-                             else {"units": "s", "long_name": "time from record start"})
+                             else TIME_ATTRS)
     return coords
 
 
@@ -371,7 +373,7 @@ def sampled_dataset(variables: Mapping[Hashable, xr.Variable], n: int, sample_ra
                           attrs=attrs)
     index = SampledTimeIndex(SampleClock(start, sample_rate, n, coord_name=dim, dim=dim))
     coord = index.create_variables()
-    coord[dim].attrs.update({"units": "s", "long_name": "time from record start"})
+    coord[dim].attrs.update(TIME_ATTRS)
     return construct({**variables, **coord}, {dim}, {dim: n}, attrs, indexes={dim: index})
 
 
