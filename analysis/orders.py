@@ -63,6 +63,7 @@ from crankbench.predict._validate import (check_finite_array, check_int, check_o
 from crankbench.predict.errors import AnalysisError
 
 from .resample import INTERPOLATIONS, _angle_input, _as_rpm, _as_signal, resample_arrays
+from .block_smearing import smearing_bias, warn_block_smearing as _warn_block_smearing
 from .spans import stopped_spans as _stopped_spans
 
 __all__ = ["order_track", "order_map", "order_spectrum", "band_amplitude", "campbell_map",
@@ -335,37 +336,6 @@ class BlockFit:
     def noise(self, floor: np.ndarray) -> np.ndarray:
         """1-σ amplitude error per (block, order) from the noise floor (mean square per bin)."""
         return np.sqrt(floor * self.enbw)[:, None] * self.noise_gain[None, :]
-
-
-def smearing_bias(coef: np.ndarray, t: np.ndarray, span_s: np.ndarray, mu2: float,
-                  rpm=None):
-    """Estimated envelope-smearing error of block (or filter) estimates: ``(μ₂/2)|A''|``.
-
-    ``coef`` (blocks, orders) complex amplitudes at times ``t`` (s), ``span_s`` the averaging
-    span (s) of each estimate and ``mu2`` its second moment in units of the span². The second
-    derivative is taken by finite differences of neighbouring estimates (exact for a quadratic
-    envelope; it under-reads a peak much narrower than the span, which the automatic settings
-    avoid). With ``rpm`` (per block) the blocks average over shaft angle, so the derivative is
-    the angle-domain one, ``(A'' − A' ṙ/r)/ω²`` scaled back by the span: in a sweep the
-    first-derivative term is what a time-domain ``A''`` misses (a 2-rev block at 100 rpm/s
-    read up to 6e-4 off where ``A''`` stated 1e-4). The larger of each estimate and its two
-    neighbours is returned: ``A''`` passes through zero on a flank where the error does not."""
-    n = coef.shape[0]
-    out = np.zeros(coef.shape)
-    if n < 3:
-        return out
-    d1 = np.gradient(coef, t, axis=0)
-    d2 = np.gradient(d1, t, axis=0)
-    if rpm is not None:
-        r = np.asarray(rpm, dtype=float)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            rel = np.where(r > 0, np.gradient(r, t) / r, 0.0)
-        d2 = d2 - d1 * rel[:, None]
-    bias = 0.5 * mu2 * (span_s ** 2)[:, None] * np.abs(d2)
-    out[:] = bias
-    out[1:] = np.maximum(out[1:], bias[:-1])
-    out[:-1] = np.maximum(out[:-1], bias[1:])
-    return out
 
 
 # ---------------------------------------------------------------------------- order track
@@ -644,29 +614,6 @@ def _cot_dataset(coef, mean, floor, fitter, t, r, span, context, *, overlap, int
                      "noise_gain": fitter.noise_gain.tolist(),
                      "decimation": list(plan.decimation) if plan is not None else []})
     return ds
-
-
-#: stated smearing (relative to the block's amplitude) above which COT warns: beyond it the
-#: envelope changes within a block and the finite-difference A'' itself under-reads (a Q = 20
-#: crossing at 1000 rpm/s with 2-rev blocks: 4 % stated, 8 % lost at the peak)
-_SMEAR_WARN = 0.02
-
-
-def _warn_block_smearing(coef, bias, rpm, fitter, label):
-    amp = np.abs(coef)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        rel = np.where(amp > 0, bias / amp, 0.0)
-    rel = np.where(amp >= 0.05 * amp.max(axis=0, initial=0.0), rel, 0.0)   # not in dips
-    if rel.size == 0 or not np.nanmax(rel) > _SMEAR_WARN:
-        return
-    i, j = np.unravel_index(int(np.nanargmax(rel)), rel.shape)
-    warnings.warn(
-        f"{label}: order {fitter.orders[j]:g} changes within a {fitter.revolutions}-revolution "
-        f"block near {float(rpm[i]):.0f} rpm: stated smearing {100 * rel[i, j]:.2g} % of the "
-        "amplitude, and where the envelope changes this fast within a block the estimate of "
-        "it reads low (the loss can be twice that); use method='auto' (adaptive Vold-Kalman) "
-        "or method='vkf' with a bandwidth wider than the envelope's changes",
-        OrderWarning, stacklevel=4)
 
 
 def _block_coords(t_rel, rpm, starts, length, centroid=None):
