@@ -17,17 +17,43 @@ __all__ = ["smearing_bias", "warn_block_smearing"]
 
 def smearing_bias(coef: np.ndarray, t: np.ndarray, span_s: np.ndarray, mu2: float,
                   rpm=None):
-    """Estimated envelope-smearing error of block (or filter) estimates: ``(μ₂/2)|A''|``.
+    """Estimated envelope-smearing error of block (or filter) estimates: ``(μ₂/2) span² |A''|``.
 
-    ``coef`` (blocks, orders) complex amplitudes at times ``t`` (s), ``span_s`` the averaging
-    span (s) of each estimate and ``mu2`` its second moment in units of the span². The second
-    derivative is taken by finite differences of neighbouring estimates (exact for a quadratic
-    envelope; it under-reads a peak much narrower than the span, which the automatic settings
-    avoid). With ``rpm`` (per block) the blocks average over shaft angle, so the derivative is
-    the angle-domain one, ``(A'' − A' ṙ/r)/ω²`` scaled back by the span: in a sweep the
-    first-derivative term is what a time-domain ``A''`` misses (a 2-rev block at 100 rpm/s
-    read up to 6e-4 off where ``A''`` stated 1e-4). The larger of each estimate and its two
-    neighbours is returned: ``A''`` passes through zero on a flank where the error does not."""
+    The second derivative is taken by finite differences of neighbouring estimates (exact for
+    a quadratic envelope; it under-reads a peak much narrower than the span, which the
+    automatic settings avoid). With ``rpm`` the blocks average over shaft angle, so the
+    derivative is the angle-domain one, ``(A'' − A' ṙ/r)/ω²`` scaled back by the span: in a
+    sweep the first-derivative term is what a time-domain ``A''`` misses (a 2-rev block at
+    100 rpm/s read up to 6e-4 off where ``A''`` stated 1e-4). The larger of each estimate and
+    its two neighbours is returned: ``A''`` passes through zero on a flank where the error
+    does not.
+
+    Parameters
+    ----------
+    coef : ndarray, complex, shape (blocks, orders)
+        Block estimates of each order's complex amplitude (signal units).
+    t : ndarray, shape (blocks,)
+        Time of each estimate, s.
+    span_s : ndarray, shape (blocks,)
+        Duration each estimate averages over, s.
+    mu2 : float
+        Second moment of the averaging weight in units of the span² (Hann: 0.0327).
+    rpm : ndarray, shape (blocks,), optional
+        Shaft speed at each estimate, rpm (angle-domain averaging).
+
+    Returns
+    -------
+    ndarray, shape (blocks, orders)
+        Smearing error (signal units, ≥ 0).
+
+    Examples
+    --------
+    >>> t = np.linspace(0.0, 10.0, 101)
+    >>> coef = (2.0 + 0.5 * t ** 2)[:, None] + 0j            # A'' = 1 (units/s²)
+    >>> b = smearing_bias(coef, t, np.full(101, 0.2), 1.0 / 12.0)
+    >>> round(float(b[50, 0]), 6)                            # (1/12)/2 · 0.2² · 1
+    0.001667
+    """
     n = coef.shape[0]
     out = np.zeros(coef.shape)
     if n < 3:
@@ -53,9 +79,23 @@ _SMEAR_WARN = 0.02
 
 
 def warn_block_smearing(coef, bias, rpm, fitter, label):
-    """Warn (:class:`OrderWarning`) when the stated smearing of a block estimate passes
-    ``_SMEAR_WARN`` of its amplitude (blocks in a dip below 5 % of the order's largest
-    amplitude are not judged); ``fitter`` a :class:`analysis.orders.BlockFit`."""
+    """Warn (:class:`analysis.orders.OrderWarning`) when the stated smearing of a block
+    estimate passes 2 % (``_SMEAR_WARN``) of its amplitude; blocks in a dip below 5 % of the
+    order's largest amplitude are not judged.
+
+    Parameters
+    ----------
+    coef : ndarray, complex, shape (blocks, orders)
+        Block estimates (signal units).
+    bias : ndarray, shape (blocks, orders)
+        Their stated smearing (:func:`smearing_bias`, signal units).
+    rpm : ndarray, shape (blocks,)
+        Shaft speed at each block, rpm (named in the warning).
+    fitter : analysis.orders.BlockFit
+        The block fit (orders and revolutions per block, named in the warning).
+    label : str
+        Channel name.
+    """
     from .orders import OrderWarning
 
     amp = np.abs(coef)
