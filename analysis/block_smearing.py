@@ -16,12 +16,12 @@ __all__ = ["smearing_bias", "warn_block_smearing"]
 
 
 def smearing_bias(coef: np.ndarray, t: np.ndarray, span_s: np.ndarray, mu2: float,
-                  rpm=None):
+                  speed_rpm=None):
     """Estimated envelope-smearing error of block (or filter) estimates: ``(μ₂/2) span² |A''|``.
 
     The second derivative is taken by finite differences of neighbouring estimates (exact for
     a quadratic envelope; it under-reads a peak much narrower than the span, which the
-    automatic settings avoid). With ``rpm`` the blocks average over shaft angle, so the
+    automatic settings avoid). With ``speed_rpm`` the blocks average over shaft angle, so the
     derivative is the angle-domain one, ``(A'' − A' ṙ/r)/ω²`` scaled back by the span: in a
     sweep the first-derivative term is what a time-domain ``A''`` misses (a 2-rev block at
     100 rpm/s read up to 6e-4 off where ``A''`` stated 1e-4). The larger of each estimate and
@@ -38,7 +38,7 @@ def smearing_bias(coef: np.ndarray, t: np.ndarray, span_s: np.ndarray, mu2: floa
         Duration each estimate averages over, s.
     mu2 : float
         Second moment of the averaging weight in units of the span² (Hann: 0.0327).
-    rpm : ndarray, shape (blocks,), optional
+    speed_rpm : ndarray, shape (blocks,), optional
         Shaft speed at each estimate, rpm (angle-domain averaging).
 
     Returns
@@ -60,8 +60,8 @@ def smearing_bias(coef: np.ndarray, t: np.ndarray, span_s: np.ndarray, mu2: floa
         return out
     d1 = np.gradient(coef, t, axis=0)
     d2 = np.gradient(d1, t, axis=0)
-    if rpm is not None:
-        r = np.asarray(rpm, dtype=float)
+    if speed_rpm is not None:
+        r = np.asarray(speed_rpm, dtype=float)
         with np.errstate(divide="ignore", invalid="ignore"):
             rel = np.where(r > 0, np.gradient(r, t) / r, 0.0)
         d2 = d2 - d1 * rel[:, None]
@@ -78,7 +78,7 @@ def smearing_bias(coef: np.ndarray, t: np.ndarray, span_s: np.ndarray, mu2: floa
 _SMEAR_WARN = 0.02
 
 
-def warn_block_smearing(coef, bias, rpm, fitter, label):
+def warn_block_smearing(coef, bias, speed_rpm, fitter, label, noise=None):
     """Warn (:class:`analysis.orders.OrderWarning`) when the stated smearing of a block
     estimate passes 2 % (``_SMEAR_WARN``) of its amplitude; blocks in a dip below 5 % of the
     order's largest amplitude are not judged.
@@ -89,12 +89,15 @@ def warn_block_smearing(coef, bias, rpm, fitter, label):
         Block estimates (signal units).
     bias : ndarray, shape (blocks, orders)
         Their stated smearing (:func:`smearing_bias`, signal units).
-    rpm : ndarray, shape (blocks,)
+    speed_rpm : ndarray, shape (blocks,)
         Shaft speed at each block, rpm (named in the warning).
     fitter : analysis.orders.BlockFit
         The block fit (orders and revolutions per block, named in the warning).
     label : str
         Channel name.
+    noise : ndarray, shape (blocks, orders), optional
+        1-σ amplitude noise of each estimate (signal units): a smearing below 3× it is the
+        noise's own curvature (finite differences of noisy estimates), not judged.
     """
     from .orders import OrderWarning
 
@@ -102,12 +105,14 @@ def warn_block_smearing(coef, bias, rpm, fitter, label):
     with np.errstate(divide="ignore", invalid="ignore"):
         rel = np.where(amp > 0, bias / amp, 0.0)
     rel = np.where(amp >= 0.05 * amp.max(axis=0, initial=0.0), rel, 0.0)   # not in dips
+    if noise is not None:
+        rel = np.where(bias > 3.0 * np.broadcast_to(noise, bias.shape), rel, 0.0)
     if rel.size == 0 or not np.nanmax(rel) > _SMEAR_WARN:
         return
     i, j = np.unravel_index(int(np.nanargmax(rel)), rel.shape)
     warnings.warn(
         f"{label}: order {fitter.orders[j]:g} changes within a {fitter.revolutions}-revolution "
-        f"block near {float(rpm[i]):.0f} rpm: stated smearing {100 * rel[i, j]:.2g} % of the "
+        f"block near {float(speed_rpm[i]):.0f} rpm: stated smearing {100 * rel[i, j]:.2g} % of the "
         "amplitude, and where the envelope changes this fast within a block the estimate of "
         "it reads low (the loss can be twice that); use method='auto' (adaptive Vold-Kalman) "
         "or method='vkf' with a bandwidth wider than the envelope's changes",

@@ -593,7 +593,7 @@ def _cot_dataset(coef, mean, floor, fitter, t, r, span, context, *, overlap, int
     units, label = context["units"], context["label"]
     noise = fitter.noise(floor)
     bias = smearing_bias(coef, t, span, fitter.mu2, r)
-    _warn_block_smearing(coef, bias, r, fitter, label)
+    _warn_block_smearing(coef, bias, r, fitter, label, noise)
     ds = _track_dataset(np.abs(coef).T * factor, np.angle(coef).T, orders, t, r, units, label,
                         context["reference"])
     ds["mean"] = ("time", mean, {"units": units, "long_name":
