@@ -142,9 +142,21 @@ def _kernel():
             up0 = np.inf      # upper bound on the block's smallest eigenvalue (min pivot)
             up1 = np.inf      # the same without the last row
             up2 = np.inf      # ... without the last two
-            tr0 = np.inf      # trace of the block's inverse (Σ 1/λ: 1/tr0 ≤ λ_min)
-            tr1 = np.inf      # the same without the last row
-            tr2 = np.inf      # ... without the last two
+            # trace of the block's inverse (Σ 1/λ: 1/tr0 ≤ λ_min), the same without the last
+            # row and without the last two (column norms of B⁻¹: cⱼ₊₁ = 1 + cⱼ eⱼ/qⱼ)
+            tc = 1.0
+            tt = 0.0
+            tt1 = 0.0
+            tt2 = 0.0
+            for j in range(i0, n0 + 1):
+                w = tc * (1.0 / Q[p, j])
+                tt2 = tt1
+                tt1 = tt
+                tt += w
+                tc = 1.0 + E[p, j] * w
+            tr0 = tt if tt == tt else np.inf
+            tr1 = tt1 if tt1 == tt1 else np.inf
+            tr2 = tt2 if tt2 == tt2 else np.inf
             while n0 >= i0:
                 q = Q[p]
                 e = E[p]
@@ -248,6 +260,7 @@ def _kernel():
                     tt1 = 0.0
                     tt2 = 0.0
                     n_split = 0
+                    last_only = False
                     for i in range(i0 + 1, n0):
                         qh = d + e[i]
                         qa[i] = qh
@@ -256,6 +269,7 @@ def _kernel():
                         d = d * t - tau
                         if d < 0.0:              # shift too large: stop here
                             dmin = d
+                            last_only = i == n0 - 1
                             break
                         # transform 2 at i - 1 (needs qa[i], just written)
                         j = i - 1
@@ -343,7 +357,13 @@ def _kernel():
                         tt += tc / d3
                         break
                     fails += 1
-                    if fails == 1 and 0.0 < safe < tau:
+                    if fails < 3 and last_only and ok and tau + d > 0.0:
+                        # only the last pivot dₙ(τ) < 0: one eigenvalue below τ (Sylvester),
+                        # and dₙ(x) falls with slope ≤ −1 from 0 at λ_min, so λ_min ≥ τ + dₙ
+                        tau = tau + d - 8.0 * eps * tau
+                    elif 0.0 < newton < tau:     # a lower bound on λ_min (up to rounding)
+                        tau = newton
+                    elif fails == 1 and 0.0 < safe < tau:
                         tau = safe
                     elif fails >= 3 or tau == 0.0:
                         if tau == 0.0:
