@@ -22,9 +22,14 @@ What this implementation does (its own choices, written from the published algor
   ``1/tr(A⁻¹) ≤ λ_min``, when that is larger (graded arrays, where the smallest eigenvalue
   sits far from the bottom and ρ is useless): ``tr(A⁻¹) = ‖B⁻¹‖_F² = Σ cⱼ/qⱼ`` with
   ``c₁ = 1``, ``cⱼ₊₁ = 1 + cⱼ eⱼ/qⱼ`` (column norms of ``B⁻¹``: sums of positive terms),
-  accumulated during the last transform, less ``4·n·eps`` for its rounding. A transform with
-  a negative pivot is discarded (the loop stops at the first negative pivot) and redone with
-  a smaller shift (the unraised shift or ρ(1 − a₂), then a quarter, then zero).
+  accumulated during the last transform (or in one pass at a block's start), less
+  ``4·n·eps`` for its rounding. A transform with a negative pivot is discarded (the loop stops
+  at the first negative pivot) and redone with a smaller shift: ``τ + dₙ`` when only the last
+  pivot ``dₙ(τ)`` is negative (then exactly one eigenvalue lies below τ, Sylvester's law of
+  inertia, and ``dₙ(x) = 1/(eₙᵀ(A − x)⁻¹eₙ)`` falls from 0 at λ_min with slope ≤ −1, so
+  ``λ_min ≥ τ + dₙ``), else Newton's step, else the unraised shift or ρ(1 − a₂), then a
+  quarter, then zero. The shift only decides the speed: a transform is kept only when every
+  pivot is ≥ 0.
 * **Three transforms per pass**: the inner loop is bound by the latency of one division
   chain; two unshifted transforms (dqd, which cannot fail on a positive array) follow the
   shifted one one and two elements behind in the same loop, so the three chains overlap. Their convergence factor at the bottom,
