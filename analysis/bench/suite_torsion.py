@@ -31,9 +31,10 @@ Rows
   vectors for the same index range (errors against the closed-form shapes).
 * **Speed target rows** (``… speed``, issue 21): the paired ratio to ``dsterf`` as the row's
   value and the target as its bound -- within 2x at 100 masses, 1.2x from 1000 masses on --,
-  so a slower solver fails the bench (README gives the figures: every target row met except
-  the hard chain at 10 000 masses, about 1.5x, where ``dsterf`` deflates the graded matrix
-  early; ``dlasq2`` is 3x there).
+  so a slower solver fails the bench (README gives the figures: every target row met, the
+  hard chain at 10 000 masses with the least margin, about 1.0x, where ``dsterf`` deflates
+  the graded matrix early with its absolute test and loses the small modes; ``dlasq2`` is
+  3x there).
 * **A random tree** against mpmath at 50 digits: tree bisection vs dense ``eigh``.
 * **Forced response** of a 20-mass engine model over 1000 speeds × 24 orders (300 with
   ``--quick``): batched tree elimination, per order and with cycle superposition, against a

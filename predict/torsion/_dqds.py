@@ -17,22 +17,38 @@ What this implementation does (its own choices, written from the published algor
   ρ ≥ λ_min, so the shift is ρ less a margin ``16·a₂·qₙ/qₙ₋₁`` (a multiple of its first-order
   overshoot, the multiple tuned on the bench chains: fewer failed transforms) and
   never above the smallest pivot of the last transform (every pivot is ≥ λ_min of the new
-  array: it is the last pivot of a leading block). A transform with a negative pivot is
-  discarded (the loop stops at the first negative pivot) and redone with a smaller shift
-  (ρ(1 − a₂), then a quarter, then zero). Without a usable ρ the shift is half the smallest
-  pivot.
-* **Two transforms per pass**: the inner loop is bound by the latency of one division chain;
-  a second, unshifted transform (dqd, which cannot fail on a positive array) follows the first
-  one element behind in the same loop, so the two chains overlap. Its convergence factor at
-  the bottom, ``(λₙ − S)/(λₙ₋₁ − S)``, is as small as the shifted one's because ``S`` already
-  holds the shift.
+  array: it is the last pivot of a leading block). Without a usable ρ the shift is half the
+  smallest pivot. Either is raised to Newton's step from below on ``f(x) = Σ 1/(λᵢ − x)``,
+  ``1/tr(A⁻¹) ≤ λ_min``, when that is larger (graded arrays, where the smallest eigenvalue
+  sits far from the bottom and ρ is useless): ``tr(A⁻¹) = ‖B⁻¹‖_F² = Σ cⱼ/qⱼ`` with
+  ``c₁ = 1``, ``cⱼ₊₁ = 1 + cⱼ eⱼ/qⱼ`` (column norms of ``B⁻¹``: sums of positive terms),
+  accumulated during the last transform (or in one pass at a block's start), less
+  ``4·n·eps`` for its rounding. A transform with a negative pivot is discarded (the loop stops
+  at the first negative pivot) and redone with a smaller shift: ``τ + dₙ`` when only the last
+  pivot ``dₙ(τ)`` is negative (then exactly one eigenvalue lies below τ, Sylvester's law of
+  inertia, and ``dₙ(x) = 1/(eₙᵀ(A − x)⁻¹eₙ)`` falls from 0 at λ_min with slope ≤ −1, so
+  ``λ_min ≥ τ + dₙ``), else Newton's step, else the unraised shift or ρ(1 − a₂), then a
+  quarter, then zero. The shift only decides the speed: a transform is kept only when every
+  pivot is ≥ 0.
+* **Three transforms per pass**: the inner loop is bound by the latency of one division
+  chain; two unshifted transforms (dqd, which cannot fail on a positive array) follow the
+  shifted one one and two elements behind in the same loop, so the three chains overlap. Their convergence factor at the bottom,
+  ``(λₙ − S)/(λₙ₋₁ − S)``, is as small as the shifted one's because ``S`` already holds the
+  shift.
 * **Deflation and splitting** where ``e ≤ tol²·S`` (tol = 16 eps): zeroing ``√e`` in ``B`` moves
   each singular value σ by at most ``√e`` (Weyl), so ``λ = σ² + S`` moves by at most
   ``2σ√e + e ≤ tol·λ + tol²·S`` — a relative change (tests relative to neighbouring ``q``
   alone are not safe: a large ``e`` below can make the block's smallest value far smaller than
-  its ``q``). Blocks are
-  reversed at their start when the bottom is larger than the top (dqds finds the small end
-  at the bottom fastest; ``PBᵀP`` has the same singular values).
+  its ``q``); Demmel-Kahan splits where ``e ≤ tol²·d`` (``d`` the zero-shift pivot above).
+  The bottom row also deflates by a **gap test**: ``BᵀB = [[A₁, c], [cᵀ, qₙ + eₙ₋₁]]`` with
+  ``‖c‖² = qₙ₋₁ eₙ₋₁`` and ``A₁`` the array without its last row, so if ``qₙ + eₙ₋₁`` lies
+  below ``λ_min(A₁) ≥ 1/tr(A₁⁻¹)`` by ``g > 0``, dropping ``c`` moves every eigenvalue by at
+  most ``‖c‖²/g`` (quadratic residual bound: Li & Li, Linear Algebra Appl. 395 (2005) 183;
+  Mathias, SIAM J. Matrix Anal. Appl. 19 (1998) 541); the test ``qₙ₋₁ eₙ₋₁ ≤ eps·g·(S +
+  1/tr(A⁻¹))`` keeps that below eps relative to every eigenvalue, and the deflated value is
+  ``S + qₙ + eₙ₋₁``; with dqds converging faster than linearly it usually saves a pass.
+  Blocks are reversed at their start when the bottom is larger than the top (dqds finds the
+  small end at the bottom fastest; ``PBᵀP`` has the same singular values).
 
 Any doubt — a non-finite value, a transform that fails even unshifted, too many passes —
 returns a status ≠ 0 and the caller uses LAPACK ``dlasq2`` instead.
@@ -82,8 +98,8 @@ def _kernel():
         for i in range(n - 1):
             if not (lo < e0[i] < hi):
                 return q0, 5
-        Q = np.empty((3, n))
-        E = np.zeros((3, n))
+        Q = np.empty((4, n))
+        E = np.zeros((4, n))
         for i in range(n):
             Q[0, i] = q0[i]
         for i in range(n - 1):
@@ -131,6 +147,21 @@ def _kernel():
             up0 = np.inf      # upper bound on the block's smallest eigenvalue (min pivot)
             up1 = np.inf      # the same without the last row
             up2 = np.inf      # ... without the last two
+            # trace of the block's inverse (Σ 1/λ: 1/tr0 ≤ λ_min), the same without the last
+            # row and without the last two (column norms of B⁻¹: cⱼ₊₁ = 1 + cⱼ eⱼ/qⱼ)
+            tc = 1.0
+            tt = 0.0
+            tt1 = 0.0
+            tt2 = 0.0
+            for j in range(i0, n0 + 1):
+                w = tc * (1.0 / Q[p, j])
+                tt2 = tt1
+                tt1 = tt
+                tt += w
+                tc = 1.0 + E[p, j] * w
+            tr0 = tt if tt == tt else np.inf
+            tr1 = tt1 if tt1 == tt1 else np.inf
+            tr2 = tt2 if tt2 == tt2 else np.inf
             while n0 >= i0:
                 q = Q[p]
                 e = E[p]
@@ -139,12 +170,20 @@ def _kernel():
                     n0 -= 1
                     continue
                 el = e[n0 - 1]
-                if el <= tol2 * S:
-                    lam[n0] = q[n0] + S
+                # quadratic (gap) test: BᵀB = [[A₁, c], [cᵀ, qₙ + e]] with ‖c‖² = qₙ₋₁ e;
+                # every eigenvalue moves by at most ‖c‖²/g, g = λ_min(A₁) − qₙ − e and
+                # λ_min(A₁) ≥ 1/tr1; all eigenvalues are ≥ S + 1/tr0
+                gap = (1.0 - 4.0 * (n0 - i0 + 1) * eps) / tr1 - (q[n0] + el)
+                if el <= tol2 * S or (gap > 0.0 and q[n0 - 1] * el
+                                      <= eps * gap * (S + 1.0 / tr0)):
+                    lam[n0] = q[n0] + el + S
                     n0 -= 1
                     up0 = up1
                     up1 = up2
                     up2 = np.inf
+                    tr0 = tr1
+                    tr1 = tr2
+                    tr2 = np.inf
                     continue
                 if n0 == i0 + 1 or e[n0 - 2] <= tol2 * S:
                     # 2x2 block [[q1, √(q1 e)], [√(q1 e), q2 + e]]: product q1 q2, sum
@@ -160,6 +199,9 @@ def _kernel():
                     up0 = up2
                     up1 = np.inf
                     up2 = np.inf
+                    tr0 = tr2
+                    tr1 = np.inf
+                    tr2 = np.inf
                     continue
                 passes += 1
                 if passes > max_passes:
@@ -183,18 +225,27 @@ def _kernel():
                     tau = rq * (1.0 - min(margin, 1.0))
                 else:
                     tau = 0.5 * min(up0, dn)
+                # Newton's step from below on Σ 1/(λᵢ − x): 1/tr0 ≤ λ_min, less its rounding
+                newton = (1.0 - 4.0 * (n0 - i0 + 1) * eps) / tr0
+                if newton > tau:
+                    if tau > 0.0:
+                        safe = tau
+                    tau = newton
                 if not (tau >= 0.0 and tau < np.inf):
                     tau = 0.0
-                p1 = (p + 1) % 3
-                p2 = (p + 2) % 3
+                p1 = (p + 1) % 4
+                p2 = (p + 2) % 4
+                p3 = (p + 3) % 4
                 qa = Q[p1]
                 ea = E[p1]
                 qb = Q[p2]
                 eb = E[p2]
+                qc = Q[p3]
+                ec = E[p3]
                 fails = 0
                 while True:
-                    # transform 1 (shift tau) into qa/ea; transform 2 (no shift) one element
-                    # behind it, from qa/ea into qb/eb
+                    # transform 1 (shift tau) into qa/ea; transforms 2 and 3 (no shift) one
+                    # and two elements behind it, qa/ea -> qb/eb -> qc/ec
                     d = q[i0] - tau
                     dmin = d
                     ok = d >= 0.0
@@ -205,10 +256,16 @@ def _kernel():
                     d = d * t - tau
                     dmin = min(dmin, d)
                     d2 = qh
-                    m0 = d2
+                    d3 = 0.0
+                    m0 = np.inf
                     m1 = np.inf
                     m2 = np.inf
+                    tc = 1.0          # ‖B⁻¹eⱼ‖² qⱼ of transform 3's array, top down
+                    tt = 0.0          # Σ ‖B⁻¹eⱼ‖² so far (its bottom block's)
+                    tt1 = 0.0
+                    tt2 = 0.0
                     n_split = 0
+                    last_only = False
                     for i in range(i0 + 1, n0):
                         qh = d + e[i]
                         qa[i] = qh
@@ -217,52 +274,101 @@ def _kernel():
                         d = d * t - tau
                         if d < 0.0:              # shift too large: stop here
                             dmin = d
+                            last_only = i == n0 - 1
                             break
                         # transform 2 at i - 1 (needs qa[i], just written)
                         j = i - 1
-                        eaj = ea[j]
-                        if eaj <= tol2 * d2:
-                            # Demmel-Kahan split of qa: d2 is the j-th zero-shift pivot, so
-                            # dropping eaj moves every σ by a factor within 1 ± tol
-                            qb[j] = d2
-                            eb[j] = 0.0
-                            d2 = qa[i]
+                        qh2 = d2 + ea[j]
+                        qb[j] = qh2
+                        t2 = qa[i] / qh2
+                        eb[j] = ea[j] * t2
+                        d2 = d2 * t2
+                        if j == i0:
+                            d3 = qh2
+                            m0 = d3
+                            continue
+                        # transform 3 at i - 2 (needs qb[i - 1], just written)
+                        j = i - 2
+                        ebj = eb[j]
+                        if ebj <= tol2 * d3:
+                            # Demmel-Kahan split of qb: d3 is the j-th zero-shift pivot, so
+                            # dropping ebj moves every σ by a factor within 1 ± tol
+                            qc[j] = d3
+                            ec[j] = 0.0
+                            d3 = qb[j + 1]
                             splits[n_split] = j
                             n_split += 1
                             m2 = np.inf
                             m1 = np.inf
-                            m0 = d2
+                            m0 = d3
+                            tc = 1.0
+                            tt = 0.0
+                            tt1 = 0.0
+                            tt2 = 0.0
                             continue
-                        qh2 = d2 + eaj
-                        qb[j] = qh2
-                        t2 = qa[i] / qh2
-                        eh2 = eaj * t2
-                        eb[j] = eh2
-                        d2 = d2 * t2
+                        qh3 = d3 + ebj
+                        qc[j] = qh3
+                        t3 = qb[j + 1] / qh3
+                        eh3 = ebj * t3
+                        ec[j] = eh3
+                        d3 = d3 * t3
                         m2 = m1
                         m1 = m0
-                        m0 = min(m0, d2)
-                        if eh2 <= tol2 * (S + tau):   # Weyl split of qb
-                            eb[j] = 0.0
+                        m0 = min(m0, d3)
+                        # trace of the inverse (column norms of B⁻¹: cⱼ₊₁ = 1 + cⱼ eⱼ/qⱼ)
+                        w = tc * (1.0 / qh3)
+                        tt2 = tt1
+                        tt1 = tt
+                        tt += w
+                        tc = 1.0 + eh3 * w
+                        if eh3 <= tol2 * (S + tau):   # Weyl split of qc
+                            ec[j] = 0.0
                             splits[n_split] = j
                             n_split += 1
+                            tc = 1.0
+                            tt = 0.0
+                            tt1 = 0.0
+                            tt2 = 0.0
                     qa[n0] = d
                     if dmin >= 0.0 and ok and d == d:
-                        # finish transform 2 at n0 - 1
+                        # finish transform 2 at n0 - 1, transform 3 at n0 - 2 and n0 - 1
                         j = n0 - 1
                         qh2 = d2 + ea[j]
                         qb[j] = qh2
                         t2 = d / qh2
-                        eh2 = ea[j] * t2
-                        eb[j] = eh2
-                        d2 = d2 * t2
-                        qb[n0] = d2
-                        m2 = m1
-                        m1 = m0
-                        m0 = min(m0, d2)
+                        eb[j] = ea[j] * t2
+                        qb[n0] = d2 * t2
+                        if n0 - 2 == i0:
+                            d3 = qb[i0]
+                            m0 = d3
+                        for j in range(n0 - 2, n0):
+                            qh3 = d3 + eb[j]
+                            qc[j] = qh3
+                            t3 = qb[j + 1] / qh3
+                            eh3 = eb[j] * t3
+                            ec[j] = eh3
+                            d3 = d3 * t3
+                            m2 = m1
+                            m1 = m0
+                            m0 = min(m0, d3)
+                            w = tc / qh3
+                            tt2 = tt1
+                            tt1 = tt
+                            tt += w
+                            tc = 1.0 + eh3 * w
+                        qc[n0] = d3
+                        tt2 = tt1
+                        tt1 = tt
+                        tt += tc / d3
                         break
                     fails += 1
-                    if fails == 1 and 0.0 < safe < tau:
+                    if fails < 3 and last_only and ok and tau + d > 0.0:
+                        # only the last pivot dₙ(τ) < 0: one eigenvalue below τ (Sylvester),
+                        # and dₙ(x) falls with slope ≤ −1 from 0 at λ_min, so λ_min ≥ τ + dₙ
+                        tau = tau + d - 8.0 * eps * tau
+                    elif 0.0 < newton < tau:     # a lower bound on λ_min (up to rounding)
+                        tau = newton
+                    elif fails == 1 and 0.0 < safe < tau:
                         tau = safe
                     elif fails >= 3 or tau == 0.0:
                         if tau == 0.0:
@@ -271,11 +377,14 @@ def _kernel():
                     else:
                         tau = 0.25 * tau
                 S += tau
-                if m0 >= 0.0 and d2 == d2 and qb[n0 - 1] > 0.0:
-                    p = p2
+                if m0 >= 0.0 and d3 == d3 and qc[n0 - 1] > 0.0:
+                    p = p3
                     up0 = m0
                     up1 = m1
                     up2 = m2
+                    tr0 = tt if tt == tt else np.inf
+                    tr1 = tt1 if tt1 == tt1 else np.inf
+                    tr2 = tt2 if tt2 == tt2 else np.inf
                     # blocks above the splits wait on the stack, the bottom one goes on
                     for k in range(n_split):
                         j = splits[k]
@@ -290,6 +399,9 @@ def _kernel():
                     up0 = np.inf         # (its pivots were not kept)
                     up1 = np.inf
                     up2 = np.inf
+                    tr0 = np.inf
+                    tr1 = np.inf
+                    tr2 = np.inf
         for i in range(n):
             if not (lam[i] >= 0.0 and lam[i] < np.inf):
                 return lam, 4

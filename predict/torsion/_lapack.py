@@ -117,9 +117,9 @@ def qd_singular_values(q, e2) -> np.ndarray:
     squared superdiagonal ``e2``, to high relative accuracy (dqds).
 
     From ``_dqds.MIN_SIZE`` values on, the compiled dqds of :mod:`predict.torsion._dqds`
-    runs first (two transforms per pass: about 0.5-0.7x the time of LAPACK ``dlasq2``, bench
-    suite ``torsion``); where it reports any doubt (range, convergence), and for smaller
-    arrays, LAPACK ``dlasq2`` does the work. Callers that know the squares exactly (a product of the
+    runs first (three transforms per pass: 0.3-0.45x the time of LAPACK ``dlasq2`` from 300
+    values on in the bench suite ``torsion``); where it reports any doubt (range,
+    convergence), and for smaller arrays, LAPACK ``dlasq2`` does the work. Callers that know the squares exactly (a product of the
     data) skip the square roots of :func:`bidiagonal_singular_values` and dlasq1's scaling
     pass; squares outside ``[1e-290, 1e290]`` take that scaled route instead.
 

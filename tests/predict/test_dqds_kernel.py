@@ -104,3 +104,50 @@ def test_without_numba_the_public_call_gives_the_same_modes(monkeypatch):
 def test_small_chains_do_not_start_the_compiler():
     q, e2 = np.ones(_dqds.MIN_SIZE - 1), np.ones(_dqds.MIN_SIZE - 2)
     assert _dqds.qd_eigenvalues(q, e2) is None
+
+
+# --- the pass of three transforms, the Newton shift and the gap deflation (issue 21) -------
+
+def test_grounded_uniform_chain_matches_closed_form():
+    # fixed-free chain of n masses (first spring to ground): ω_m² = 4 (k/J) sin²((2m−1)π/(4n+2));
+    # 2000 masses: thousands of passes that deflate by the gap test and the Weyl test
+    n, jj, kk = 2000, 1.5, 4.0e5
+    j, k = np.full(n, jj), np.full(n, kk)
+    assert _dqds.qd_eigenvalues(k / j, k[1:] / j[:-1]) is not None
+    omega = chain(j, k).natural_frequencies("rad/s")
+    m = np.arange(1, n + 1)
+    ref = 2 * np.sqrt(kk / jj) * np.sin((2 * m - 1) * np.pi / (4 * n + 2))
+    assert np.max(np.abs(omega - ref) / ref) < 1e-13
+
+
+@pytest.mark.skipif(not EXTENDED, reason="needs an extended long double")
+def test_clusters_of_local_modes_far_from_the_bottom_against_sturm_counts():
+    # 40 copies of a light mass between two stiff springs, each between heavy masses, spread
+    # along a graded random chain: 40 eigenvalues within 1e-3 of each other, their modes far
+    # from the bottom of the array (where dqds deflates) -- the case the Newton shift and the
+    # gap test are for; every mode against bisection on extended-precision Sturm counts
+    rng = np.random.default_rng(21)
+    n = 400
+    j = 10 ** rng.uniform(0, 8, n)
+    k = 10 ** rng.uniform(0, 12, n)
+    for pos in range(5, n, 10):
+        j[pos] = 1.0 * (1 + 1e-4 * rng.standard_normal())
+        j[pos - 1] = j[pos + 1] = 1e8
+        k[pos] = k[pos + 1] = 1e6
+    omega = chain(j, k).natural_frequencies("rad/s")
+    assert _dqds.qd_eigenvalues(k / j, k[1:] / j[:-1]) is not None
+    ref = chain_reference(j, k, grounded=True, start=omega)
+    near = np.abs(ref / np.sqrt(2e6) - 1) < 1e-3
+    assert near.sum() >= 40                                  # the cluster is there
+    assert np.max(np.abs(omega - ref) / ref) < 1e-13
+
+
+def test_hard_10000_mass_chain_agrees_with_lapack_dlasq2(monkeypatch):
+    # the bench's target case (stiffness ratio 1e12, inertia ratio 1e8): every mode of the
+    # compiled kernel against LAPACK's own dqds on the same array
+    j, k = _hard_chain(10_000, 7, True)
+    q, e2 = k / j, k[1:] / j[:-1]
+    lam = _dqds.qd_eigenvalues(q, e2)
+    assert lam is not None
+    ref = np.sort(_lapack_only(q, e2, monkeypatch)) ** 2
+    assert np.max(np.abs(lam - ref) / ref) < 1e-13
