@@ -16,6 +16,8 @@ passes and library calls:
 * :func:`envelopes` — the complex envelopes, the trend and the model at every sample;
 * :func:`lower_quartiles` — the lower quartile of the residual's spectrum beside each order
   (twin: ``np.percentile`` frame by frame);
+* :func:`notch_depth` — the joint solve's own notches in the residual's short-time spectra
+  (twin: :func:`analysis.vkf._notch_depth`, one scatter of all lines' log factors);
 * :func:`smearing` — the envelope-smearing estimate from the envelopes' second differences.
 
 Matrix storage: a symmetric band matrix of half-bandwidth ``u`` is held by columns,
@@ -33,7 +35,7 @@ import functools
 import numpy as np
 
 __all__ = ["accelerated", "fir_decimate", "order_basis", "assemble", "solve", "envelopes",
-           "lower_quartiles", "smearing", "NotPositiveDefinite"]
+           "lower_quartiles", "notch_depth", "smearing", "NotPositiveDefinite"]
 
 _DIFF = {1: np.array([-1.0, 1.0]), 2: np.array([1.0, -2.0, 1.0])}
 
@@ -346,6 +348,73 @@ def _numba():
             level[i] = v[lo] + (v[hi] - v[lo]) * frac
         return level
 
+    @njit(cache=True, error_model="numpy")
+    def notch(f_ord, bw_d, starts, offsets, weights, bins, df, trend_hz, fs_d, p,
+              reach_per_hz):                   # pragma: no cover - compiled
+        # analysis.vkf._notch_depth (the numpy twin) frame by frame: the product of the
+        # (1 - H)² factors of every line near each bin at 3 instants, window-weighted
+        nd, k = f_ord.shape
+        frames = starts.shape[0]
+        lines = 2 * k + (1 if trend_hz > 0 else 0)
+        depth = np.zeros((frames, bins))
+        if lines == 0:
+            depth[:, :] = 1.0
+            return depth
+        inst = offsets.shape[0]
+        centre = np.empty((inst, lines, frames))
+        band = np.full((inst, lines, frames), trend_hz)
+        if trend_hz > 0:
+            centre[:, lines - 1, :] = 0.0
+        for i in range(inst):
+            for f in range(frames):
+                at = min(max(starts[f] + offsets[i], 0.0), nd - 1.0)
+                g = min(int(np.floor(at)), nd - 2) if nd > 1 else 0
+                frac = at - g
+                for m in range(k):
+                    if nd > 1:
+                        c = f_ord[g, m] + (f_ord[g + 1, m] - f_ord[g, m]) * frac
+                        b = bw_d[g, m] + (bw_d[g + 1, m] - bw_d[g, m]) * frac
+                    else:
+                        c = f_ord[0, m]
+                        b = bw_d[0, m]
+                    centre[i, 2 * m, f] = c
+                    centre[i, 2 * m + 1, f] = -c
+                    b = max(b, 1e-12)
+                    band[i, 2 * m, f] = b
+                    band[i, 2 * m + 1, f] = b
+        # bins from the line's lowest reach on, as many as its widest band there reaches
+        span = np.empty((inst, lines), np.int64)
+        for i in range(inst):
+            for ln in range(lines):
+                top = 0.0
+                for f in range(frames):
+                    top = max(top, band[i, ln, f])
+                span[i, ln] = int(np.ceil(reach_per_hz * top / df)) + 1
+        r2_scale = 0.5 * (np.sqrt(2.0) - 1.0)
+        prod = np.empty(bins)
+        for i in range(inst):
+            w = weights[i]
+            for f in range(frames):
+                prod[:] = 1.0
+                for ln in range(lines):
+                    c = centre[i, ln, f]
+                    b = band[i, ln, f]
+                    d = 2.0 * np.sin(np.pi * b / (2.0 * fs_d))
+                    r2 = r2_scale / d ** (2 * p)       # vkf_weight(b, fs_d, p)²
+                    first = int(np.floor((c - reach_per_hz * b) / df))
+                    for col in range(max(first, 0), min(first + 2 * span[i, ln] + 1, bins)):
+                        s = 2.0 * np.sin(np.pi * (col * df - c) / fs_d)
+                        s2 = s * s
+                        h = 1.0 / (1.0 + 2.0 * r2 * (s2 if p == 1 else s2 * s2))
+                        prod[col] *= (1.0 - h) * (1.0 - h)
+                for col in range(bins):
+                    depth[f, col] += w * prod[col]
+        for f in range(frames):
+            for col in range(bins):
+                if not depth[f, col] >= 0.25:
+                    depth[f, col] = np.nan
+        return depth
+
     @njit(cache=True)
     def smearing(env, n0, bw_d, per_n0, b_med, span, p, kp, fs_d):  # pragma: no cover
         n, k = env.shape
@@ -397,7 +466,8 @@ def _numba():
 
     return {"fir": fir, "basis": basis, "assemble": assemble, "solve": solve, "matvec": matvec,
             "factor": factor, "substitute": substitute, "spline_w": spline_w,
-            "envelopes": envelopes, "quartiles": quartiles, "smearing": smearing}
+            "envelopes": envelopes, "quartiles": quartiles, "smearing": smearing,
+            "notch": notch}
 
 
 def accelerated() -> bool:
@@ -676,6 +746,20 @@ def lower_quartiles(spec, freq, flat, f_frame, reach: float) -> np.ndarray:
         if near.any():
             level[i] = float(np.percentile(spec[i, near], 25.0))
     return level
+
+
+def notch_depth(f_ord, bw_d, starts, offsets, weights, bins: int, df: float, trend_hz: float,
+                fs_d: float, p: int, reach_per_hz: float):
+    """Compiled form of :func:`analysis.vkf._notch_depth` (its numpy twin, which calls this
+    when :func:`accelerated`): the expected residual power per (frame, bin) relative to the
+    input's, NaN below 1/4. ``offsets``/``weights``: the instants in each frame (samples from
+    its start) and their weights."""
+    return _numba()["notch"](np.ascontiguousarray(f_ord, dtype=float),
+                             np.ascontiguousarray(bw_d, dtype=float),
+                             np.ascontiguousarray(starts, dtype=float),
+                             np.ascontiguousarray(offsets, dtype=float),
+                             np.ascontiguousarray(weights, dtype=float), int(bins), float(df),
+                             float(trend_hz), float(fs_d), int(p), float(reach_per_hz))
 
 
 # ---------------------------------------------------------------------------- smearing

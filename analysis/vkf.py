@@ -634,15 +634,20 @@ def _notch_depth(f_ord, starts, length, win, freq, bw_d, trend_hz, fs_d, p):
     envelope response :func:`vkf_weight` at the order's bandwidth there (``bw_d``, per sample
     and order: an adaptive band widened around a resonance notches wider), averaged over 3
     instants of the frame weighted by the window's energy (in a sweep the notch moves within
-    the frame); NaN below 1/4 (too empty to read). ``H`` < 1e-3 beyond 3 B of its line (2nd
-    order; 1st order: 6 B): only those bins are computed."""
+    the frame); NaN below 1/4 (too empty to read). ``H`` < 1e-3 beyond
+    ``(B/2)((1e3 − 1)/(√2 − 1))^{1/2p}`` of its line (3.50 B for ``p = 2``, 24.5 B for
+    ``p = 1``): only those bins are computed (compiled: :func:`_vkf_kernels.notch_depth`)."""
     nd, k = f_ord.shape
     frames, bins = starts.shape[0], freq.shape[0]
     df = float(freq[1] - freq[0]) if bins > 1 else fs_d
     offsets = (np.arange(3) + 0.5) / 3.0 * length
     weights = np.interp(offsets, np.arange(length), win ** 2)
     weights = weights / weights.sum()
-    reach_per_hz = 3.0 if p == 2 else 6.0
+    # H(ν) = 1/(1 + c (2ν/B)^{2p}) reaches 1e-3 at ν = reach · B
+    reach_per_hz = 0.5 * ((1e3 - 1.0) / (np.sqrt(2.0) - 1.0)) ** (1.0 / (2 * p))
+    if _vkf_kernels.accelerated():
+        return _vkf_kernels.notch_depth(f_ord, bw_d, starts, offsets, weights, bins, df,
+                                        trend_hz, fs_d, p, reach_per_hz)
     # every line at once (each order and its mirror, the trend's positive side) at each of the
     # 3 instants: the product of the (1 - H)² factors of one (instant, frame, bin) as the exp
     # of a sum of logs (one bincount, not a Python loop of small multiply.at scatters)

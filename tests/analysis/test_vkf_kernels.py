@@ -183,6 +183,57 @@ def test_lower_quartiles_match_numpy_percentile(form):
     assert np.isfinite(got).all()
 
 
+def _notch_case(p, trend_hz, sweep=True):
+    nd, fs_d, length = 5000, 500.0, 1024
+    rpm = np.linspace(1000.0, 3000.0, nd) if sweep else np.full(nd, 1500.0)
+    orders = np.array([1.0, 2.0, 4.5])
+    f_ord = orders[None, :] * rpm[:, None] / 60.0
+    bw = np.full((nd, 3), 0.5)
+    if sweep:
+        bw[1500:3500, 2] = np.linspace(0.5, 4.0, 2000)      # an adaptive band widened
+    starts = np.arange(0, nd - length + 1, length // 2)
+    win = np.hanning(length + 1)[:length]
+    freq = np.fft.rfftfreq(length, 1.0 / fs_d)
+    return (f_ord, starts, length, win, freq, bw, trend_hz, fs_d, p)
+
+
+@pytest.mark.parametrize("p", [1, 2])
+def test_notch_depth_is_the_filter_response_on_a_steady_record(form, p):
+    """At constant speed and band every instant of a frame sees the same lines: the depth is
+    ∏ (1 − H(ν − f_m))² over the orders, their mirrors and the trend, H the envelope
+    response 1/(1 + 2 r² (2 sin(πν/fs))^{2p}) of ``vkf_weight`` (NaN below 1/4)."""
+    case = _notch_case(p, 0.3, sweep=False)
+    f_ord, freq, bw, fs_d = case[0], case[4], case[5], case[7]
+    depth = vkf._notch_depth(*case)
+
+    def gain(nu, b):
+        return 1.0 / (1.0 + 2.0 * vkf.vkf_weight(b, fs_d, p) ** 2
+                      * (2.0 * np.sin(np.pi * nu / fs_d)) ** (2 * p))
+
+    expect = np.ones_like(freq)
+    for c, b in [(f, 0.5) for f in f_ord[0]] + [(-f, 0.5) for f in f_ord[0]] + [(0.0, 0.3)]:
+        expect *= (1.0 - gain(freq - c, b)) ** 2          # every bin (the code: H ≥ 1e-3)
+    expect = np.where(expect >= 0.25, expect, np.nan)
+    assert np.isnan(depth).any() and (depth[np.isfinite(depth)] < 0.99).any()
+    for row in depth:
+        np.testing.assert_array_equal(np.isnan(row), np.isnan(expect))
+        ok = np.isfinite(expect)
+        # each line's factor is cut where it is within 2e-3 of 1 (two tails may overlap)
+        np.testing.assert_allclose(row[ok], expect[ok], rtol=0, atol=2e-3 if p == 2 else 4e-3)
+
+
+@pytest.mark.parametrize("p, trend_hz", [(1, 0.0), (2, 0.3)])
+def test_notch_depth_compiled_equals_numpy(monkeypatch, p, trend_hz):
+    """A sweep with a band widened in time (the compiled per-frame form against the numpy
+    scatter of log factors): equal to rounding, NaN at the same bins."""
+    case = _notch_case(p, trend_hz)
+    plain, compiled = _both(monkeypatch, lambda: vkf._notch_depth(*case))
+    np.testing.assert_array_equal(np.isnan(plain), np.isnan(compiled))
+    ok = np.isfinite(plain)
+    assert (plain[ok] < 0.9).sum() > 50
+    np.testing.assert_allclose(compiled[ok], plain[ok], rtol=1e-13, atol=1e-15)
+
+
 def test_compiled_and_numpy_forms_agree_on_a_record(monkeypatch):
     """The whole filter (decimation, assembly, solve, envelopes, noise and smearing) on a
     small run-up with noise: compiled and numpy forms agree to rounding."""
