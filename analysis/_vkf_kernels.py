@@ -35,7 +35,7 @@ import functools
 import numpy as np
 
 __all__ = ["accelerated", "fir_decimate", "order_basis", "assemble", "solve", "envelopes",
-           "lower_quartiles", "notch_depth", "smearing", "NotPositiveDefinite"]
+           "lower_quartiles", "local_levels", "notch_depth", "smearing", "NotPositiveDefinite"]
 
 _DIFF = {1: np.array([-1.0, 1.0]), 2: np.array([1.0, -2.0, 1.0])}
 
@@ -51,7 +51,7 @@ BASIS_MAX_PHASE = 2.0 ** 20
 
 
 #: compiled helpers called by other compiled kernels (set by :func:`_numba`)
-_JIT_SPLINE_W = _JIT_FACTOR = _JIT_SUBSTITUTE = _JIT_MATVEC = None
+_JIT_SPLINE_W = _JIT_FACTOR = _JIT_SUBSTITUTE = _JIT_MATVEC = _JIT_QUARTILES = None
 
 
 class NotPositiveDefinite(ArithmeticError):
@@ -72,7 +72,7 @@ def _numba():
     # kernels that call kernels reach them as module globals, not closure cells: numba keys
     # its on-disk cache on the pickled closure cells, and a pickled dispatcher differs from
     # process to process, so a closure reference recompiled the caller (8 s) in every process
-    global _JIT_SPLINE_W, _JIT_FACTOR, _JIT_SUBSTITUTE, _JIT_MATVEC
+    global _JIT_SPLINE_W, _JIT_FACTOR, _JIT_SUBSTITUTE, _JIT_MATVEC, _JIT_QUARTILES
 
     @njit(cache=True, fastmath=True)
     def fir(x, h, q, first, n_out):          # pragma: no cover - compiled
@@ -348,6 +348,40 @@ def _numba():
             level[i] = v[lo] + (v[hi] - v[lo]) * frac
         return level
 
+    _JIT_QUARTILES = quartiles
+
+    @njit(cache=True)
+    def levels(spec, freq, flat, centre, f_ord, reach):  # pragma: no cover - compiled
+        nd, k = f_ord.shape
+        frames = centre.shape[0]
+        out = np.empty((nd, k))
+        f_frame = np.empty(frames)
+        last = nd - 1.0
+        for j in range(k):
+            for i in range(frames):             # np.interp(centre, arange(nd), f_ord[:, j])
+                c = centre[i]
+                if c <= 0.0:
+                    f_frame[i] = f_ord[0, j]
+                elif c >= last:
+                    f_frame[i] = f_ord[nd - 1, j]
+                else:
+                    g = int(c)
+                    f_frame[i] = (f_ord[g + 1, j] - f_ord[g, j]) * (c - g) + f_ord[g, j]
+            level = _JIT_QUARTILES(spec, freq, flat, f_frame, reach[j]) / np.log(4.0 / 3.0)
+            # np.interp(arange(nd), centre, level)
+            i = 0
+            for t in range(nd):
+                if frames == 1 or t <= centre[0]:
+                    out[t, j] = level[0]
+                elif t >= centre[frames - 1]:
+                    out[t, j] = level[frames - 1]
+                else:
+                    while centre[i + 1] <= t:
+                        i += 1
+                    slope = (level[i + 1] - level[i]) / (centre[i + 1] - centre[i])
+                    out[t, j] = slope * (t - centre[i]) + level[i]
+        return out
+
     @njit(cache=True, error_model="numpy")
     def notch(f_ord, bw_d, starts, offsets, weights, bins, df, trend_hz, fs_d, p,
               reach_per_hz):                   # pragma: no cover - compiled
@@ -467,7 +501,7 @@ def _numba():
     return {"fir": fir, "basis": basis, "assemble": assemble, "solve": solve, "matvec": matvec,
             "factor": factor, "substitute": substitute, "spline_w": spline_w,
             "envelopes": envelopes, "quartiles": quartiles, "smearing": smearing,
-            "notch": notch}
+            "notch": notch, "levels": levels}
 
 
 def accelerated() -> bool:
@@ -760,6 +794,29 @@ def notch_depth(f_ord, bw_d, starts, offsets, weights, bins: int, df: float, tre
                              np.ascontiguousarray(offsets, dtype=float),
                              np.ascontiguousarray(weights, dtype=float), int(bins), float(df),
                              float(trend_hz), float(fs_d), int(p), float(reach_per_hz))
+
+
+def local_levels(spec, freq, flat, centre, f_ord, reach) -> np.ndarray:
+    """Noise density per sample and order (N, K): per frame, :func:`lower_quartiles` of
+    ``spec`` within ``reach[j]`` of order ``j``'s frequency at the frame's centre (``centre``:
+    sample positions, increasing; ``f_ord`` (N, K) in Hz), divided by ln(4/3) (the lower
+    quartile of an exponential variable), then linearly interpolated to every sample."""
+    kernels = _numba()
+    reach = np.broadcast_to(np.asarray(reach, float), (f_ord.shape[1],))
+    if kernels is not None:
+        return kernels["levels"](np.ascontiguousarray(spec), np.ascontiguousarray(freq),
+                                 np.ascontiguousarray(flat), np.ascontiguousarray(centre,
+                                                                                  dtype=float),
+                                 np.ascontiguousarray(f_ord, dtype=float),
+                                 np.ascontiguousarray(reach))
+    nd, k = f_ord.shape
+    grid = np.arange(nd)
+    out = np.empty((nd, k))
+    for j in range(k):
+        f_frame = np.interp(centre, grid, f_ord[:, j])
+        level = lower_quartiles(spec, freq, flat, f_frame, float(reach[j])) / np.log(4.0 / 3.0)
+        out[:, j] = np.interp(grid, centre, level)
+    return out
 
 
 # ---------------------------------------------------------------------------- smearing

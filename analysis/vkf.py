@@ -578,17 +578,14 @@ def _uncertainty(env, residual, fs_d, orders, rpm_d, bw_d, p, f_pass, *, trend_h
     d2nu = (2.0 * np.sin(np.pi * nu / fs_d)) ** 2          # (2 sin(πν/fs))², once for all orders
     gain4 = d2nu * d2nu * fs_d ** 4
     d2p = d2nu if p == 1 else d2nu * d2nu                  # (2 sin(πν/fs))^{2p}
-    per_n0 = np.empty(k)
-    span = np.empty(k, np.int64)
-    for j in range(k):
-        # the integral scales as B^5 for p = 2 (B^3 for p = 1 within the band): evaluate at the
-        # median bandwidth and scale
-        h = 1.0 / (1.0 + 2.0 * vkf_weight(float(b_med[j]), fs_d, p) ** 2 * d2p)
-        per_n0[j] = np.trapezoid(gain4 * h * h, nu)
-        # |A''|² is averaged over the filter's response time, less ten times its expected
-        # noise part (E|A''_noise|² = 2 N0 ∫ D⁴|H|²): only curvature well above the noise
-        # counts (noise alone would otherwise read as smearing that grows with B)
-        span[j] = max(1, int(round(fs_d / (2.0 * b_low[j]))))
+    # the integral scales as B^5 for p = 2 (B^3 for p = 1 within the band): evaluated at each
+    # order's median bandwidth (all orders at once) and scaled
+    h = 1.0 / (1.0 + 2.0 * (vkf_weight(b_med, fs_d, p) ** 2)[:, None] * d2p[None, :])
+    per_n0 = np.trapezoid(gain4 * h * h, nu, axis=1)
+    # |A''|² is averaged over the filter's response time, less ten times its expected noise
+    # part (E|A''_noise|² = 2 N0 ∫ D⁴|H|²): only curvature well above the noise counts (noise
+    # alone would otherwise read as smearing that grows with B)
+    span = np.maximum(1, np.round(fs_d / (2.0 * b_low))).astype(np.int64)
     return noise, _vkf_kernels.smearing(env, n0, bw_d, per_n0, b_med, span, p,
                                         smearing_constant(p), fs_d)
 
@@ -616,16 +613,10 @@ def _local_noise(residual, fs_d, f_ord, b_med, f_pass, p=2, trend_hz=0.0, bw_d=N
         bw_d = np.broadcast_to(np.asarray(b_med, float)[None, :], f_ord.shape)
     spec = spec / _notch_depth(f_ord, starts, frames.shape[1], win, freq, bw_d, trend_hz,
                                fs_d, p)
-    out = np.empty((nd, k))
-    for j in range(k):
-        b = float(b_med[j])
-        reach = max(8.0 * b, 20.0 * df)
-        f_frame = np.interp(centre, np.arange(nd), f_ord[:, j])
-        # lower quartile of an exponential variable: ln(4/3) of its mean (robust to up to
-        # three quarters of the bins holding lines of orders not tracked)
-        level = _vkf_kernels.lower_quartiles(spec, freq, flat, f_frame, reach) / np.log(4.0 / 3.0)
-        out[:, j] = np.interp(np.arange(nd), centre, level)
-    return out
+    # lower quartile of an exponential variable: ln(4/3) of its mean (robust to up to three
+    # quarters of the bins holding lines of orders not tracked), per frame, to every sample
+    reach = np.maximum(8.0 * np.asarray(b_med, float), 20.0 * df)
+    return _vkf_kernels.local_levels(spec, freq, flat, centre, f_ord, reach)
 
 
 def _notch_depth(f_ord, starts, length, win, freq, bw_d, trend_hz, fs_d, p):

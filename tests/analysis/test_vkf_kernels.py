@@ -183,6 +183,29 @@ def test_lower_quartiles_match_numpy_percentile(form):
     assert np.isfinite(got).all()
 
 
+@pytest.mark.parametrize("frames", [1, 7])
+def test_local_levels_compiled_equals_numpy(monkeypatch, frames):
+    """Per-frame quartiles beside each order, interpolated to every sample (np.interp both
+    ways in the numpy form; one frame: constant)."""
+    rng = np.random.default_rng(2)
+    nd, bins = 3000, 257
+    spec = rng.exponential(size=(frames, bins))
+    spec[:, 40:44] = np.nan
+    freq = np.linspace(0.0, 128.0, bins)
+    flat = (freq > 0) & (freq < 110.0)
+    centre = 256.0 + 400.0 * np.arange(frames) + 0.5
+    f_ord = np.stack([np.linspace(10.0, 30.0, nd), np.linspace(45.0, 95.0, nd)], axis=1)
+    reach = np.array([6.0, 12.0])
+    plain, compiled = _both(monkeypatch, lambda: kern.local_levels(spec, freq, flat, centre,
+                                                                   f_ord, reach))
+    assert plain.shape == (nd, 2) and np.isfinite(plain).all()
+    np.testing.assert_allclose(compiled, plain, rtol=1e-14, atol=0)
+    if frames > 1:            # the first and last frames' levels held beyond their centres
+        f0 = np.interp(centre[:1], np.arange(nd), f_ord[:, 0])
+        first = kern.lower_quartiles(spec, freq, flat, f0, 6.0)[0] / np.log(4 / 3)
+        assert plain[0, 0] == pytest.approx(first, rel=1e-14)
+
+
 def _notch_case(p, trend_hz, sweep=True):
     nd, fs_d, length = 5000, 500.0, 1024
     rpm = np.linspace(1000.0, 3000.0, nd) if sweep else np.full(nd, 1500.0)
