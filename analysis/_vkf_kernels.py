@@ -18,7 +18,8 @@ passes and library calls:
   (twin: ``np.percentile`` frame by frame);
 * :func:`notch_depth` — the joint solve's own notches in the residual's short-time spectra
   (twin: :func:`analysis.vkf._notch_depth`, one scatter of all lines' log factors);
-* :func:`smearing` — the envelope-smearing estimate from the envelopes' second differences.
+* :func:`noise_uncertainty` — the noise part and, with the envelope-smearing estimate from
+  the envelopes' second differences, the total uncertainty.
 
 Matrix storage: a symmetric band matrix of half-bandwidth ``u`` is held by columns,
 ``band[j, d] = A[j + d, j]`` for ``0 ≤ d ≤ u`` (the transpose of LAPACK's lower band form), so
@@ -35,7 +36,8 @@ import functools
 import numpy as np
 
 __all__ = ["accelerated", "fir_decimate", "order_basis", "assemble", "solve", "envelopes",
-           "lower_quartiles", "local_levels", "notch_depth", "smearing", "NotPositiveDefinite"]
+           "lower_quartiles", "local_levels", "notch_depth", "noise_uncertainty",
+           "NotPositiveDefinite"]
 
 _DIFF = {1: np.array([-1.0, 1.0]), 2: np.array([1.0, -2.0, 1.0])}
 
@@ -221,13 +223,21 @@ def _numba():
         # returns the first bad pivot or -1
         size, w1 = band.shape
         u = w1 - 1
+        # the envelope: column j of L reaches no lower than the lowest non-zero of A's columns
+        # up to j (a row's first non-zero bounds its fill-in); the block structure leaves the
+        # last (u - j mod cols) entries of each column zero, ~20 % of the band's work
+        last = 0
         for j in range(size):
             d = band[j, 0]
             if not d > 0.0:
                 return j
             d = np.sqrt(d)
             band[j, 0] = d
-            reach = min(u, size - 1 - j)
+            nz = min(u, size - 1 - j)
+            while nz > 0 and band[j, nz] == 0.0:
+                nz -= 1
+            last = max(last, j + nz)
+            reach = last - j
             inv = 1.0 / d
             for t in range(1, reach + 1):
                 band[j, t] *= inv
@@ -450,9 +460,14 @@ def _numba():
         return depth
 
     @njit(cache=True)
-    def smearing(env, n0, bw_d, per_n0, b_med, span, p, kp, fs_d):  # pragma: no cover
+    def smearing(env, n0, bw_d, per_n0, b_med, span, p, kp, fs_d, enbw_per_hz):  # pragma: no cover
         n, k = env.shape
-        out = np.zeros((n, k))
+        noise = np.empty((n, k))
+        out = np.empty((n, k))
+        for i in range(n):
+            for j in range(k):
+                noise[i, j] = np.sqrt(n0[i, j] * (bw_d[i, j] * enbw_per_hz))
+                out[i, j] = noise[i, j]
         a2 = np.empty(n)
         x2 = np.empty(n)
         c = np.empty(n + 1)
@@ -485,7 +500,7 @@ def _numba():
                 rel4 *= rel4
                 val = a2[i] - noise_scale * n0[i, j] * (rel4 * rel if expo == 5 else rel4)
                 if val <= 0.0:
-                    continue
+                    continue                    # (no smearing: the noise alone)
                 e = env[i, j]
                 amp2 = e.real * e.real + e.imag * e.imag
                 amp = np.sqrt(amp2)
@@ -495,8 +510,10 @@ def _numba():
                     loss = kp * val / (64.0 * max(amp2, 1e-300) * pb2 * pb2)
                 else:
                     loss = kp * np.sqrt(val) / (8.0 * max(amp, 1e-300) * pb2)
-                out[i, j] = min(loss, 1.0) * amp
-        return out
+                smear = min(loss, 1.0) * amp
+                nz = noise[i, j]
+                out[i, j] = np.sqrt(nz * nz + smear * smear)
+        return noise, out
 
     return {"fir": fir, "basis": basis, "assemble": assemble, "solve": solve, "matvec": matvec,
             "factor": factor, "substitute": substitute, "spline_w": spline_w,
@@ -822,17 +839,21 @@ def local_levels(spec, freq, flat, centre, f_ord, reach) -> np.ndarray:
 # ---------------------------------------------------------------------------- smearing
 
 
-def smearing(env, n0, bw_d, per_n0, b_med, span, p: int, kp: float, fs_d: float):
-    """Smearing bias (N, K) of each envelope: ``min(K_p (|A''|/(8|A|))^p/(πB)^{2p}, 1)·|A|``
-    with ``|A''|²`` (central differences) averaged over ``span[j]`` samples, less ten times its
-    expected noise part ``2 n0 · per_n0[j] (B/b_med[j])^{5 (p = 2) or 4}``.
-    See :func:`analysis.vkf._uncertainty`."""
+def noise_uncertainty(env, n0, bw_d, per_n0, b_med, span, p: int, kp: float, fs_d: float,
+                      enbw_per_hz: float):
+    """(noise, uncertainty), each (N, K): the noise part ``sqrt(n0 · ENBW)`` with
+    ``ENBW = enbw_per_hz · B``, and its root-sum-square with the smearing bias of each
+    envelope, ``min(K_p (|A''|/(8|A|))^p/(πB)^{2p}, 1)·|A|`` with ``|A''|²`` (central
+    differences) averaged over ``span[j]`` samples, less ten times its expected noise part
+    ``2 n0 · per_n0[j] (B/b_med[j])^{5 (p = 2) or 4}``. See :func:`analysis.vkf._uncertainty`."""
     kernels = _numba()
     if kernels is not None:
         return kernels["smearing"](np.ascontiguousarray(env), np.ascontiguousarray(n0),
                                    np.ascontiguousarray(bw_d, dtype=float),
                                    np.asarray(per_n0, float), np.asarray(b_med, float),
-                                   np.asarray(span, np.int64), int(p), float(kp), float(fs_d))
+                                   np.asarray(span, np.int64), int(p), float(kp), float(fs_d),
+                                   float(enbw_per_hz))
+    noise = np.sqrt(n0 * (bw_d * enbw_per_hz))
     n, k = env.shape
     d2 = np.zeros_like(env)
     d2[1:-1] = (env[2:] - 2.0 * env[1:-1] + env[:-2]) * fs_d ** 2
@@ -846,7 +867,7 @@ def smearing(env, n0, bw_d, per_n0, b_med, span, p: int, kp: float, fs_d: float)
         ratio = np.sqrt(a2) / np.maximum(amp[:, j], 1e-300)
         loss = kp * (ratio / 8.0) ** p / (np.pi * bw) ** (2 * p)
         out[:, j] = np.minimum(loss, 1.0) * amp[:, j]
-    return out
+    return noise, np.hypot(noise, out)
 
 
 def _moving_mean(x, length):

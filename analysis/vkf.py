@@ -272,6 +272,24 @@ def _solve_block(x, cosp, sinp, knot_weights, p, m, trend, iterative, orders):
     return _vkf_kernels.envelopes(z.reshape(n_coef, -1), cosp, sinp, m, trend), iterations
 
 
+def _columns(rows, n=None, *, scale=None):
+    """C-ordered (N, K) array whose column ``j`` is ``rows[j]`` (a (K, N) array, a (K,) vector
+    of constants with ``n``, or one (N,) row for every column) times ``scale[j]``: filled
+    column by column (numpy's broadcasting over a last axis of a few elements, and a
+    transposed copy, both run ~10x slower than these strided passes)."""
+    rows = np.asarray(rows, float)
+    k = rows.shape[0] if scale is None or rows.ndim == 2 else np.size(scale)
+    n = rows.shape[-1] if n is None else n
+    out = np.empty((n, k))
+    for j in range(k):
+        row = rows if rows.ndim == 1 and scale is not None else rows[j]
+        if scale is None:
+            out[:, j] = row
+        else:
+            np.multiply(row, scale[j], out=out[:, j])
+    return out
+
+
 def _bandwidths(bandwidth_hz, bandwidth_orders, orders, speeds, n):
     """Bandwidth in Hz against time: ``(at, top, low, kind)`` with ``at(index)`` the (len,
     K) bandwidths at those samples, ``top``/``low`` the largest/smallest per order, and a
@@ -290,18 +308,18 @@ def _bandwidths(bandwidth_hz, bandwidth_orders, orders, speeds, n):
                                     f"= ({k}, {n}), got {arr.shape}")
             if not np.isfinite(arr).all() or arr.min() <= 0:
                 raise AnalysisError("bandwidth_hz must be finite and > 0")
-            return (lambda idx: arr[:, idx].T, arr.max(axis=1), arr.min(axis=1),
+            return (lambda idx: _columns(arr[:, idx]), arr.max(axis=1), arr.min(axis=1),
                     f"per order against time, {arr.min():.4g}..{arr.max():.4g} Hz")
         bw = np.broadcast_to(arr, (k,)).copy()
         for i, b in enumerate(bw):
             check_positive(b, f"bandwidth_hz[{i}]", error=AnalysisError)
-        return (lambda idx: np.broadcast_to(bw, (np.size(idx), k)).copy(), bw, bw,
+        return (lambda idx: _columns(bw, np.size(idx)), bw, bw,
                 f"{bw.tolist()} Hz (constant)")
     bo = np.broadcast_to(np.asarray(bandwidth_orders, float), (k,)).copy()
     for i, b in enumerate(bo):
         check_positive(b, f"bandwidth_orders[{i}]", error=AnalysisError)
-    return (lambda idx: (bo[:, None] * speeds[:, idx] / 60.0).T if speeds.shape[0] == k
-            else bo[None, :] * speeds[0, idx][:, None] / 60.0,
+    return (lambda idx: _columns(speeds[:, idx] if speeds.shape[0] == k else speeds[0, idx],
+                                 scale=bo / 60.0),
             bo * speeds.max(axis=1) / 60.0, bo * speeds.min(axis=1) / 60.0,
             f"{bo.tolist()} orders (∝ speed)")
 
@@ -476,7 +494,7 @@ def _vold_kalman_arrays(x, *, fs, speed_rpm, orders, bandwidth_hz, bandwidth_ord
         low_speed = float(speeds[:, index].min())
         cosp, sinp = np.cos(phase), np.sin(phase)
     bw_d = bw_at(index)                                        # (Nd, K)
-    if (bw_d >= fs_d).any():
+    if bw_d.max() >= fs_d:
         raise AnalysisError(f"bandwidth up to {bw_d.max():.6g} Hz is too wide for the solve rate "
                             f"{fs_d:.6g} Hz")
     # trend bandwidth: its response at the lowest order frequency is 1e-3 (joint solve: the
@@ -484,16 +502,15 @@ def _vold_kalman_arrays(x, *, fs, speed_rpm, orders, bandwidth_hz, bandwidth_ord
     # (and no wider than the widest order band: the trend need not follow faster than they do)
     b_trend = min(2.0 * float(orders.min()) * low_speed / 60.0 / (
         1e3 / (np.sqrt(2.0) - 1.0)) ** (1.0 / (2 * p)), float(bw_d.max()))
+    bw_top_d, bw_low_d = float(bw_d.max()), float(bw_d.min())
     if trend:
-        bw_all = np.concatenate([bw_d, np.full((nd, 1), b_trend)], axis=1)
-    else:
-        bw_all = bw_d
+        bw_top_d, bw_low_d = max(bw_top_d, b_trend), min(bw_low_d, b_trend)
     # envelope knots every m samples (cubic B-spline) when the band is narrow: keeps the normal
     # equations well conditioned (condition ~ r² m^(-2p)) at no visible cost, the knot
     # spacing being below 1/(knots_per_bandwidth · B)
     m = 1 if knots_per_bandwidth is None else max(1, int(fs_d / (knots_per_bandwidth
-                                                                  * bw_all.max())))
-    overlap = int(math.ceil(6.0 * fs_d / bw_all.min()))
+                                                                  * bw_top_d)))
+    overlap = int(math.ceil(6.0 * fs_d / bw_low_d))
     overlap = m * int(math.ceil(overlap / m))
     block = m * max(1, int(math.ceil(block / m)))
     env = np.empty((nd, k), dtype=complex)
@@ -508,7 +525,10 @@ def _vold_kalman_arrays(x, *, fs, speed_rpm, orders, bandwidth_hz, bandwidth_ord
         n_coef = b - a if m == 1 else (b - a - 1) // m + 4
         at_knots = np.clip(a + (np.arange(n_coef - p) + 0.5 * p - (0 if m == 1 else 1)) * m,
                            a, b - 1).astype(np.int64)
-        r2 = vkf_weight(bw_all[at_knots], fs_d, p) ** 2 * float(m) ** (1 - 2 * p)
+        bw_knots = bw_d[at_knots]
+        if trend:
+            bw_knots = np.concatenate([bw_knots, np.full((at_knots.shape[0], 1), b_trend)], axis=1)
+        r2 = vkf_weight(bw_knots, fs_d, p) ** 2 * float(m) ** (1 - 2 * p)
         (e, mn, mdl), its = _solve_block(xd[a:b], cosp[a:b], sinp[a:b], r2, p, m, trend,
                                          iterative, orders)
         iterations.append(its)
@@ -516,10 +536,10 @@ def _vold_kalman_arrays(x, *, fs, speed_rpm, orders, bandwidth_hz, bandwidth_ord
         mean[start:stop] = mn[start - a: stop - a]
         model[start:stop] = mdl[start - a: stop - a]
     residual = xd - model
-    noise, smear = _uncertainty(env, residual, fs_d, orders, rpm_d if speeds is None
-                                else speeds[:, index].T, bw_d, p, f_max,
-                                trend_hz=b_trend if trend else 0.0)
-    std = np.sqrt(np.einsum("ij,ij->j", noise, noise) / nd)      # rms over time, per order
+    noise, uncertainty = _uncertainty(env, residual, fs_d, orders, rpm_d if speeds is None
+                                      else speeds[:, index].T, bw_d, p, f_max,
+                                      trend_hz=b_trend if trend else 0.0)
+    std = np.sqrt([noise[:, j] @ noise[:, j] / nd for j in range(k)])  # rms over time, per order
     fallback = iterative and min(iterations) < 0
     how = ("conjugate gradients" if iterative and not fallback else "banded Cholesky")
     attrs = {"method": f"Vold-Kalman filter (joint with an order-0 trend, {how})"
@@ -541,13 +561,14 @@ def _vold_kalman_arrays(x, *, fs, speed_rpm, orders, bandwidth_hz, bandwidth_ord
                            f"(K_p/(pi T B)^(2p), K_p = {smearing_constant(p):.4g})"}
     log.debug("vold_kalman %s: %d orders, %d samples at %.6g Hz", label, k, nd, fs_d)
     return {"envelope": env, "mean": mean, "residual": residual, "noise": noise,
-            "uncertainty": np.hypot(noise, smear), "time": index / fs, "rpm": rpm_d,
+            "uncertainty": uncertainty, "time": index / fs, "rpm": rpm_d,
             "orders": orders, "cos": cosp, "sin": sinp, "units": units, "label": label,
             "attrs": attrs}
 
 
 def _uncertainty(env, residual, fs_d, orders, rpm_d, bw_d, p, f_pass, *, trend_hz=0.0):
-    """(noise, smearing) per sample and order, both 1-σ-like amplitudes in signal units.
+    """(noise, uncertainty) per sample and order, 1-σ-like amplitudes in signal units: the noise
+    part, and its root-sum-square with the smearing bias.
 
     Noise: ``sqrt(N0 · ENBW)`` with ``N0`` the residual's one-sided density beside each order,
     local in time and frequency: short-time spectra of the residual (frames of at least 2 s),
@@ -562,7 +583,7 @@ def _uncertainty(env, residual, fs_d, orders, rpm_d, bw_d, p, f_pass, *, trend_h
     from the solved envelope as ``T² = 8|A|/|A''|``, i.e. loss
     ``K_p (|A''|/(8|A|))^p/(πB)^{2p}``, with the noise part of ``|A''|²`` removed first."""
     nd, k = env.shape
-    f_ord = orders[None, :] * (rpm_d if rpm_d.ndim == 2 else rpm_d[:, None]) / 60.0
+    f_ord = _columns(rpm_d.T if rpm_d.ndim == 2 else rpm_d, scale=orders / 60.0)
     by_order = np.ascontiguousarray(bw_d.T)  # (numpy reduces an (N, 3) array over N ~20x slower)
     b_low, b_high = by_order.min(axis=1), by_order.max(axis=1)
     b_med = b_low.copy()                    # (a constant bandwidth needs no sort)
@@ -570,24 +591,35 @@ def _uncertainty(env, residual, fs_d, orders, rpm_d, bw_d, p, f_pass, *, trend_h
     if varies.any():
         b_med[varies] = np.median(by_order[varies], axis=1)
     n0 = _local_noise(residual, fs_d, f_ord, b_med, f_pass, p, trend_hz, bw_d)
-    noise = np.sqrt(n0 * enbw_hz(bw_d, p))
+    enbw_per_hz = float(enbw_hz(1.0, p))
     if nd < 8:
-        return noise, np.zeros_like(noise)
-    # noise part of |A''|²: N0 ∫ (2 sin(πν/fs)·fs)^4 |H(ν)|² dν over the solve band
-    nu = np.linspace(-0.5 * fs_d, 0.5 * fs_d, 4097)
-    d2nu = (2.0 * np.sin(np.pi * nu / fs_d)) ** 2          # (2 sin(πν/fs))², once for all orders
-    gain4 = d2nu * d2nu * fs_d ** 4
-    d2p = d2nu if p == 1 else d2nu * d2nu                  # (2 sin(πν/fs))^{2p}
-    # the integral scales as B^5 for p = 2 (B^3 for p = 1 within the band): evaluated at each
+        noise = np.sqrt(n0 * (bw_d * enbw_per_hz))
+        return noise, noise
+    # noise part of |A''|²: N0 ∫ (2 sin(πν/fs)·fs)^4 |H(ν)|² dν over the solve band; the
+    # integral scales as B^5 for p = 2 (B^3 for p = 1 within the band): evaluated at each
     # order's median bandwidth (all orders at once) and scaled
+    nu, gain4, d2p = _smearing_grid(float(fs_d), p)
     h = 1.0 / (1.0 + 2.0 * (vkf_weight(b_med, fs_d, p) ** 2)[:, None] * d2p[None, :])
     per_n0 = np.trapezoid(gain4 * h * h, nu, axis=1)
     # |A''|² is averaged over the filter's response time, less ten times its expected noise
     # part (E|A''_noise|² = 2 N0 ∫ D⁴|H|²): only curvature well above the noise counts (noise
     # alone would otherwise read as smearing that grows with B)
     span = np.maximum(1, np.round(fs_d / (2.0 * b_low))).astype(np.int64)
-    return noise, _vkf_kernels.smearing(env, n0, bw_d, per_n0, b_med, span, p,
-                                        smearing_constant(p), fs_d)
+    return _vkf_kernels.noise_uncertainty(env, n0, bw_d, per_n0, b_med, span, p,
+                                          smearing_constant(p), fs_d, enbw_per_hz)
+
+
+@functools.lru_cache(maxsize=16)
+def _smearing_grid(fs_d: float, p: int):
+    """``ν`` over the solve band (4097 points), ``(2 sin(πν/fs) fs)^4`` and
+    ``(2 sin(πν/fs))^{2p}`` for the noise part of ``|A''|²`` (read-only arrays)."""
+    nu = np.linspace(-0.5 * fs_d, 0.5 * fs_d, 4097)
+    d2nu = (2.0 * np.sin(np.pi * nu / fs_d)) ** 2          # (2 sin(πν/fs))², once for all orders
+    gain4 = d2nu * d2nu * fs_d ** 4
+    d2p = d2nu if p == 1 else d2nu * d2nu                  # (2 sin(πν/fs))^{2p}
+    for a in (nu, gain4, d2p):
+        a.flags.writeable = False
+    return nu, gain4, d2p
 
 
 def _local_noise(residual, fs_d, f_ord, b_med, f_pass, p=2, trend_hz=0.0, bw_d=None):
