@@ -152,48 +152,56 @@ def _numba():
         nslot = s * (s + 1) // 2
         sums = np.zeros((nslot, npair))
         rsum = np.zeros((s, cols))
-        b = np.empty(cols)
-        prod = np.empty(npair)
+        span = min(m, n)
         # the knots are uniform: every interval has the first one's weight pattern (as the
-        # numpy form)
+        # numpy form), stored (slot pair, position) so that each sum is a contiguous dot
         w = np.ones(4)
-        wpat = np.ones((min(m, n), nslot))
-        wv = np.ones((min(m, n), s))
+        wpat = np.ones((nslot, span))
+        wv = np.ones((s, span))
         if s > 1:
-            for t in range(min(m, n)):
+            for t in range(span):
                 _JIT_SPLINE_W(t, m, w)
                 idx = 0
                 for a in range(s):
-                    wv[t, a] = w[a]
+                    wv[a, t] = w[a]
                     for c in range(a, s):
-                        wpat[t, idx] = w[a] * w[c]
+                        wpat[idx, t] = w[a] * w[c]
                         idx += 1
+        basis = np.empty((cols, span))          # the interval's basis, column by sample
+        prod = np.empty((npair, span))          # and its products, pair by pair
+        basis_x = np.empty((cols, span))
         groups = (n - 1) // m + 1
         for g in range(groups):
-            sums[:, :] = 0.0
-            rsum[:, :] = 0.0
-            for i in range(g * m, min(n, g * m + m)):
-                t = i - g * m
-                for j in range(k):
-                    b[2 * j] = cosp[j, i]
-                    b[2 * j + 1] = -sinp[j, i]
-                if trend:
-                    b[cols - 1] = 1.0
-                idx = 0
+            lo = g * m
+            cnt = min(n, lo + m) - lo
+            for j in range(k):
+                for t in range(cnt):
+                    basis[2 * j, t] = cosp[j, lo + t]
+                    basis[2 * j + 1, t] = -sinp[j, lo + t]
+            if trend:
+                for t in range(cnt):
+                    basis[cols - 1, t] = 1.0
+            idx = 0
+            for j in range(cols):
+                for t in range(cnt):
+                    basis_x[j, t] = basis[j, t] * x[lo + t]
+                for jj in range(j, cols):
+                    for t in range(cnt):
+                        prod[idx, t] = basis[j, t] * basis[jj, t]
+                    idx += 1
+            # (slot pair, product) sums over the interval's samples: dot products
+            for ab in range(nslot):
+                for e in range(npair):
+                    acc = 0.0
+                    for t in range(cnt):
+                        acc += wpat[ab, t] * prod[e, t]
+                    sums[ab, e] = acc
+            for a in range(s):
                 for j in range(cols):
-                    bj = b[j]
-                    for jj in range(j, cols):
-                        prod[idx] = bj * b[jj]
-                        idx += 1
-                for ab in range(nslot):
-                    wab = wpat[t, ab]
-                    for e in range(npair):
-                        sums[ab, e] += wab * prod[e]
-                xi = x[i]
-                for a in range(s):
-                    wa = wv[t, a] * xi
-                    for j in range(cols):
-                        rsum[a, j] += wa * b[j]
+                    acc = 0.0
+                    for t in range(cnt):
+                        acc += wv[a, t] * basis_x[j, t]
+                    rsum[a, j] = acc
             # scatter the interval's sums: A[J, I] (J >= I) at band[I, J - I]
             ab = 0
             for a in range(s):
