@@ -309,30 +309,36 @@ def _numba():
         k, n = cosp.shape
         cols = coef.shape[1]
         s = 1 if m == 1 else 4
-        env = np.zeros((n, k), np.complex128)
+        env = np.empty((n, k), np.complex128)
         mean = np.zeros(n)
-        model = np.zeros(n)
+        model = np.empty(n)
+        # uniform knots: the spline weights of position t in every interval (as assemble)
+        span = min(m, n)
+        wpat = np.ones((span, 4))
         w = np.ones(4)
-        for i in range(n):
-            g = i // m
-            if s > 1:
-                _JIT_SPLINE_W(i, m, w)
-            tot = 0.0
-            for j in range(k):
-                re = 0.0
-                im = 0.0
-                for a in range(s):
-                    re += w[a] * coef[g + a, 2 * j]
-                    im += w[a] * coef[g + a, 2 * j + 1]
-                env[i, j] = re + 1j * im
-                tot += re * cosp[j, i] - im * sinp[j, i]
-            if trend:
-                c0 = 0.0
-                for a in range(s):
-                    c0 += w[a] * coef[g + a, cols - 1]
-                mean[i] = c0
-                tot += c0
-            model[i] = tot
+        if s > 1:
+            for t in range(span):
+                _JIT_SPLINE_W(t, m, w)
+                wpat[t, :] = w
+        for g in range((n - 1) // m + 1):
+            for i in range(g * m, min(n, g * m + m)):
+                w = wpat[i - g * m]
+                tot = 0.0
+                for j in range(k):
+                    re = 0.0
+                    im = 0.0
+                    for a in range(s):
+                        re += w[a] * coef[g + a, 2 * j]
+                        im += w[a] * coef[g + a, 2 * j + 1]
+                    env[i, j] = re + 1j * im
+                    tot += re * cosp[j, i] - im * sinp[j, i]
+                if trend:
+                    c0 = 0.0
+                    for a in range(s):
+                        c0 += w[a] * coef[g + a, cols - 1]
+                    mean[i] = c0
+                    tot += c0
+                model[i] = tot
         return env, mean, model
 
     @njit(cache=True)
