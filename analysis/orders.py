@@ -510,14 +510,17 @@ def _vkf_dataset(res, context, orders):
         rpm, unc = res["rpm"].values, res["amplitude_uncertainty"].values
         noise, attrs = res["amplitude_noise"].values, res.attrs
     factor, units = context["factor"], context["units"]
-    ds = _track_dataset(np.abs(env) * factor, np.angle(env), orders, time + context["t0"], rpm,
+    if factor != 1.0:                   # (peak amplitudes, the default, need no pass)
+        unc, noise = unc * factor, noise * factor
+    ds = _track_dataset(np.abs(env) * factor if factor != 1.0 else np.abs(env), np.angle(env),
+                        orders, time + context["t0"] if context["t0"] else time, rpm,
                         units, context["label"], context["reference"], variables={
                             "mean": ("time", mean, {"units": units, "long_name": "order 0: "
                                                     "the channel's mean (trend envelope)"}),
-                            "amplitude_uncertainty": (("order", "time"), unc * factor, {
+                            "amplitude_uncertainty": (("order", "time"), unc, {
                                 "units": units, "long_name": "1-sigma amplitude uncertainty "
                                 "(noise and envelope smearing)"}),
-                            "amplitude_noise": (("order", "time"), noise * factor, {
+                            "amplitude_noise": (("order", "time"), noise, {
                                 "units": units, "long_name": "1-sigma amplitude noise (its "
                                 "part of the uncertainty)"})})
     ds.attrs.update(attrs)

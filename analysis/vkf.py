@@ -632,11 +632,10 @@ def _local_noise(residual, fs_d, f_ord, b_med, f_pass, p=2, trend_hz=0.0, bw_d=N
     length = min(length, int(2 ** np.floor(np.log2(max(64, nd)))))
     hop = length // 2
     starts = np.arange(0, max(1, nd - length + 1), hop)
-    win = np.hanning(length + 1)[:length]
     frames = residual[starts[:, None] + np.arange(min(length, nd))[None, :]]
-    if frames.shape[1] < length:                       # a record shorter than one frame
-        win = np.hanning(frames.shape[1] + 1)[:frames.shape[1]]
-    spec = np.abs(np.fft.rfft(frames * win, axis=1)) ** 2 * (2.0 / (fs_d * np.sum(win ** 2)))
+    win, power = _periodic_hann(frames.shape[1])      # (shorter: a record under one frame)
+    spec = np.fft.rfft(frames * win, axis=1)
+    spec = (spec.real ** 2 + spec.imag ** 2) * (2.0 / (fs_d * power))
     freq = np.fft.rfftfreq(frames.shape[1], 1.0 / fs_d)
     df = float(freq[1]) if freq.shape[0] > 1 else fs_d
     centre = starts + 0.5 * frames.shape[1]
@@ -649,6 +648,14 @@ def _local_noise(residual, fs_d, f_ord, b_med, f_pass, p=2, trend_hz=0.0, bw_d=N
     # quarters of the bins holding lines of orders not tracked), per frame, to every sample
     reach = np.maximum(8.0 * np.asarray(b_med, float), 20.0 * df)
     return _vkf_kernels.local_levels(spec, freq, flat, centre, f_ord, reach)
+
+
+@functools.lru_cache(maxsize=8)
+def _periodic_hann(length: int):
+    """Periodic Hann window of ``length`` samples (read-only) and its power ``Σ w²``."""
+    win = np.hanning(length + 1)[:length]
+    win.flags.writeable = False
+    return win, float(np.sum(win ** 2))
 
 
 def _notch_depth(f_ord, starts, length, win, freq, bw_d, trend_hz, fs_d, p):
