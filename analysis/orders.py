@@ -756,26 +756,25 @@ def _track_dataset(amp, phase, orders, t, r, units, label, reference=None, varia
     import pandas as pd
     import xarray as xr
 
-    # Variables and the two indexes built once and handed over (public API): the tuple form
-    # had xarray convert each entry and infer both indexes again (~30 % of this call)
+    # Variables and the two indexes built once and handed over: the tuple form had xarray
+    # convert each entry and infer both indexes again; they agree by construction, so no merge
+    from ._dataset import dataset
+
     var = xr.Variable
     t = np.asarray(t, float)
-    coords = xr.Coordinates(
-        {"order": var("order", orders, {"units": "1", "long_name": "shaft order"}),
-         "time": var("time", t, {"units": "s"}),
-         "rpm": var("time", np.asarray(r, float), {"units": "rpm", "long_name": "shaft speed"})},
-        indexes={"order": xr.indexes.PandasIndex(pd.Index(orders, name="order"), "order"),
-                 "time": xr.indexes.PandasIndex(pd.Index(t, name="time"), "time")})
-    return xr.Dataset(
+    return dataset(
         {"amplitude": var(("order", "time"), amp, {"units": units,
                                                    "long_name": f"{label} order amplitude"}),
          "phase": var(("order", "time"), phase, {"units": "rad",
                                                   "long_name": "phase of A cos(o φ + phase)"}),
          **{name: var(*spec) for name, spec in (variables or {}).items()}},
-        coords=coords, attrs={"channel": str(label),
-                              "phase_reference": reference or
-                              "shaft angle 0 at the first sample of the record (speed-reference "
-                              "integration)"})
+        {"order": var("order", orders, {"units": "1", "long_name": "shaft order"}),
+         "time": var("time", t, {"units": "s"}),
+         "rpm": var("time", np.asarray(r, float), {"units": "rpm", "long_name": "shaft speed"})},
+        {"order": xr.indexes.PandasIndex(pd.Index(orders, name="order"), "order"),
+         "time": xr.indexes.PandasIndex(pd.Index(t, name="time"), "time")},
+        {"channel": str(label), "phase_reference": reference or
+         "shaft angle 0 at the first sample of the record (speed-reference integration)"})
 
 
 _MAP_NAMES = ("order_map", "order_spectrum", "band_amplitude", "campbell_map")
