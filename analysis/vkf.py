@@ -513,9 +513,10 @@ def _vold_kalman_arrays(x, *, fs, speed_rpm, orders, bandwidth_hz, bandwidth_ord
     overlap = int(math.ceil(6.0 * fs_d / bw_low_d))
     overlap = m * int(math.ceil(overlap / m))
     block = m * max(1, int(math.ceil(block / m)))
-    env = np.empty((nd, k), dtype=complex)
-    mean = np.zeros(nd)
-    model = np.empty(nd)
+    if nd > block:
+        env = np.empty((nd, k), dtype=complex)
+        mean = np.zeros(nd)
+        model = np.empty(nd)
     iterations = []
     for start in range(0, nd, block):
         stop = min(nd, start + block)
@@ -532,6 +533,9 @@ def _vold_kalman_arrays(x, *, fs, speed_rpm, orders, bandwidth_hz, bandwidth_ord
         (e, mn, mdl), its = _solve_block(xd[a:b], cosp[a:b], sinp[a:b], r2, p, m, trend,
                                          iterative, orders)
         iterations.append(its)
+        if a == 0 and b == nd:               # one block: its arrays are the result
+            env, mean, model = e, mn, mdl
+            break
         env[start:stop] = e[start - a: stop - a]
         mean[start:stop] = mn[start - a: stop - a]
         model[start:stop] = mdl[start - a: stop - a]
@@ -539,7 +543,8 @@ def _vold_kalman_arrays(x, *, fs, speed_rpm, orders, bandwidth_hz, bandwidth_ord
     noise, uncertainty = _uncertainty(env, residual, fs_d, orders, rpm_d if speeds is None
                                       else speeds[:, index].T, bw_d, p, f_max,
                                       trend_hz=b_trend if trend else 0.0)
-    std = np.sqrt([noise[:, j] @ noise[:, j] / nd for j in range(k)])  # rms over time, per order
+    # rms over time, per order (einsum: no BLAS call, whose strided dot ran slow in place)
+    std = np.sqrt(np.einsum("ij,ij->j", noise, noise) / nd)
     fallback = iterative and min(iterations) < 0
     how = ("conjugate gradients" if iterative and not fallback else "banded Cholesky")
     attrs = {"method": f"Vold-Kalman filter (joint with an order-0 trend, {how})"
