@@ -18,8 +18,8 @@ passes and library calls:
   (twin: ``np.percentile`` frame by frame);
 * :func:`notch_depth` — the joint solve's own notches in the residual's short-time spectra
   (twin: :func:`analysis.vkf._notch_depth`, one scatter of all lines' log factors);
-* :func:`noise_uncertainty` — the noise part and, with the envelope-smearing estimate from
-  the envelopes' second differences, the total uncertainty.
+* :func:`noise_smearing` — the noise part and the envelope-smearing estimate from the
+  envelopes' second differences.
 
 Matrix storage: a symmetric band matrix of half-bandwidth ``u`` is held by columns,
 ``band[j, d] = A[j + d, j]`` for ``0 ≤ d ≤ u`` (the transpose of LAPACK's lower band form), so
@@ -36,7 +36,7 @@ import functools
 import numpy as np
 
 __all__ = ["accelerated", "fir_decimate", "order_basis", "assemble", "solve", "envelopes",
-           "lower_quartiles", "local_levels", "notch_depth", "noise_uncertainty",
+           "lower_quartiles", "local_levels", "notch_depth", "noise_smearing",
            "NotPositiveDefinite"]
 
 _DIFF = {1: np.array([-1.0, 1.0]), 2: np.array([1.0, -2.0, 1.0])}
@@ -481,7 +481,7 @@ def _numba():
         for i in range(n):
             for j in range(k):
                 noise[i, j] = np.sqrt(n0[i, j] * (bw_d[i, j] * enbw_per_hz))
-                out[i, j] = noise[i, j]
+                out[i, j] = 0.0
         a2 = np.empty(n)
         x2 = np.empty(n)
         c = np.empty(n + 1)
@@ -514,7 +514,7 @@ def _numba():
                 rel4 *= rel4
                 val = a2[i] - noise_scale * n0[i, j] * (rel4 * rel if expo == 5 else rel4)
                 if val <= 0.0:
-                    continue                    # (no smearing: the noise alone)
+                    continue
                 e = env[i, j]
                 amp2 = e.real * e.real + e.imag * e.imag
                 amp = np.sqrt(amp2)
@@ -524,9 +524,7 @@ def _numba():
                     loss = kp * val / (64.0 * max(amp2, 1e-300) * pb2 * pb2)
                 else:
                     loss = kp * np.sqrt(val) / (8.0 * max(amp, 1e-300) * pb2)
-                smear = min(loss, 1.0) * amp
-                nz = noise[i, j]
-                out[i, j] = np.sqrt(nz * nz + smear * smear)
+                out[i, j] = min(loss, 1.0) * amp
         return noise, out
 
     return {"fir": fir, "basis": basis, "assemble": assemble, "solve": solve, "matvec": matvec,
@@ -853,11 +851,11 @@ def local_levels(spec, freq, flat, centre, f_ord, reach) -> np.ndarray:
 # ---------------------------------------------------------------------------- smearing
 
 
-def noise_uncertainty(env, n0, bw_d, per_n0, b_med, span, p: int, kp: float, fs_d: float,
-                      enbw_per_hz: float):
-    """(noise, uncertainty), each (N, K): the noise part ``sqrt(n0 · ENBW)`` with
-    ``ENBW = enbw_per_hz · B``, and its root-sum-square with the smearing bias of each
-    envelope, ``min(K_p (|A''|/(8|A|))^p/(πB)^{2p}, 1)·|A|`` with ``|A''|²`` (central
+def noise_smearing(env, n0, bw_d, per_n0, b_med, span, p: int, kp: float, fs_d: float,
+                   enbw_per_hz: float):
+    """(noise, smearing), each (N, K): the noise part ``sqrt(n0 · ENBW)`` with
+    ``ENBW = enbw_per_hz · B``, and the smearing bias of each envelope (Lorentzian model),
+    ``min(K_p (|A''|/(8|A|))^p/(πB)^{2p}, 1)·|A|`` with ``|A''|²`` (central
     differences) averaged over ``span[j]`` samples, less ten times its expected noise part
     ``2 n0 · per_n0[j] (B/b_med[j])^{5 (p = 2) or 4}``. See :func:`analysis.vkf._uncertainty`."""
     kernels = _numba()
@@ -881,7 +879,7 @@ def noise_uncertainty(env, n0, bw_d, per_n0, b_med, span, p: int, kp: float, fs_
         ratio = np.sqrt(a2) / np.maximum(amp[:, j], 1e-300)
         loss = kp * (ratio / 8.0) ** p / (np.pi * bw) ** (2 * p)
         out[:, j] = np.minimum(loss, 1.0) * amp[:, j]
-    return noise, np.hypot(noise, out)
+    return noise, out
 
 
 def _moving_mean(x, length):

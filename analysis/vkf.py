@@ -86,7 +86,7 @@ from crankbench.predict._validate import check_int, check_option, check_positive
 from crankbench.predict.errors import AnalysisError
 from crankbench.predict._threads import single_threaded_blas
 
-from . import _vkf_kernels, vkf_iterative
+from . import _vkf_kernels, vkf_iterative, vkf_smear
 from .resample import _as_angle, _as_rpm, _as_signal
 from .resample import shaft_angle as _integrate_speed
 
@@ -172,6 +172,11 @@ def smearing_constant(filter_order: int) -> float:
 #: Kaiser's formula, raised where the cascade's computed pass band is not flat to 1e-5 (short
 #: stages miss the formula)
 _DECIMATION_DB = 112.0
+
+#: relative numerical floor of a solved envelope (stated in ``amplitude_uncertainty``): what a
+#: noise-free steady or slowly swept tone reads off once the decimation gain is divided out
+#: (``tests/analysis/test_vkf_smear.py``)
+NUMERICAL_FLOOR = 1e-6
 
 
 def _kaiser_lowpass(f_pass: float, f_stop: float, fs: float, db: float) -> np.ndarray:
@@ -420,8 +425,11 @@ def vold_kalman(x, *, fs=None, speed_rpm, orders, bandwidth_hz=None, bandwidth_o
          "amplitude_noise": (("order", "time"), res["noise"].T, {"units": units, "long_name":
                                                                  "1-sigma amplitude noise"}),
          "amplitude_uncertainty": (("order", "time"), res["uncertainty"].T,
-                                   {"units": units, "long_name": "1-sigma amplitude noise and "
-                                    "estimated envelope smearing"})},
+                                   {"units": units, "long_name": "1-sigma amplitude noise, "
+                                    "estimated envelope smearing and numerical floor"}),
+         "smearing_model": (("order", "time"), res["smearing_model"].T,
+                            {"units": units, "long_name": "smearing of a Lorentzian envelope "
+                             "of the solved curvature, K_p/(pi T B)^(2p) (to choose bandwidths)"})},
         coords={"order": ("order", res["orders"], {"units": "1"}),
                 "time": ("time", res["time"], {"units": "s"}),
                 "rpm": ("time", res["rpm"], {"units": "rpm"})},
@@ -540,9 +548,18 @@ def _vold_kalman_arrays(x, *, fs, speed_rpm, orders, bandwidth_hz, bandwidth_ord
         mean[start:stop] = mn[start - a: stop - a]
         model[start:stop] = mdl[start - a: stop - a]
     residual = xd - model
-    noise, uncertainty = _uncertainty(env, residual, fs_d, orders, rpm_d if speeds is None
-                                      else speeds[:, index].T, bw_d, p, f_max,
-                                      trend_hz=b_trend if trend else 0.0)
+    rpm_orders = rpm_d if speeds is None else speeds[:, index].T
+    f_ord = _columns(rpm_orders.T if rpm_orders.ndim == 2 else rpm_orders, scale=orders / 60.0)
+    if fs_d != fs:          # the cascade's pass band (flat to 1e-5) divided out: it is known
+        env = env / vkf_smear.decimation_gain(fs, f_max, int(round(fs / fs_d)), f_ord)
+    noise, smear = _uncertainty(env, residual, fs_d, orders, rpm_orders, bw_d, p, f_max,
+                                trend_hz=b_trend if trend else 0.0, f_ord=f_ord)
+    # smearing: the larger of the second-pass estimate (any envelope shape, bandwidth changes,
+    # record ends) and the Lorentzian peak model (the second pass sees an already broadened
+    # peak: at 5 % loss it reads ~0.8 of it)
+    smear_stated = np.maximum(vkf_smear.refilter_bias(env, bw_d, fs_d, p, noise), smear)
+    stated = np.sqrt(noise * noise + smear_stated * smear_stated
+                     + (NUMERICAL_FLOOR * np.abs(env)) ** 2)
     # rms over time, per order (einsum: no BLAS call, whose strided dot ran slow in place)
     std = np.sqrt(np.einsum("ij,ij->j", noise, noise) / nd)
     fallback = iterative and min(iterations) < 0
@@ -561,19 +578,23 @@ def _vold_kalman_arrays(x, *, fs, speed_rpm, orders, bandwidth_hz, bandwidth_ord
              "solve_rate_hz": fs_d, "decimation": int(round(fs / fs_d)),
              "block_samples": block, "overlap_samples": overlap, "knot_spacing_samples": m,
              "amplitude_std_estimate": std.tolist(),
-             "error_note": "amplitude_uncertainty = noise sqrt(N0*ENBW) and the smearing of "
-                           "the envelope estimated from its second derivative "
-                           f"(K_p/(pi T B)^(2p), K_p = {smearing_constant(p):.4g})"}
+             "error_note": "amplitude_uncertainty = noise sqrt(N0*ENBW), the smearing of "
+                           "the envelope by the filter (the larger of: filtering the solved "
+                           "envelope again, largest within 1/(2B); the Lorentzian-peak model "
+                           f"K_p/(pi T B)^(2p), K_p = {smearing_constant(p):.4g}) and a numerical floor "
+                           f"{NUMERICAL_FLOOR:.0e}|A|, in quadrature; envelopes corrected "
+                           "for the decimation filter's gain"}
     log.debug("vold_kalman %s: %d orders, %d samples at %.6g Hz", label, k, nd, fs_d)
     return {"envelope": env, "mean": mean, "residual": residual, "noise": noise,
-            "uncertainty": uncertainty, "time": index / fs, "rpm": rpm_d,
+            "uncertainty": stated, "smearing_model": smear, "time": index / fs, "rpm": rpm_d,
             "orders": orders, "cos": cosp, "sin": sinp, "units": units, "label": label,
             "attrs": attrs}
 
 
-def _uncertainty(env, residual, fs_d, orders, rpm_d, bw_d, p, f_pass, *, trend_hz=0.0):
-    """(noise, uncertainty) per sample and order, 1-σ-like amplitudes in signal units: the noise
-    part, and its root-sum-square with the smearing bias.
+def _uncertainty(env, residual, fs_d, orders, rpm_d, bw_d, p, f_pass, *, trend_hz=0.0,
+                 f_ord=None):
+    """(noise, smearing) per sample and order, both 1-σ-like amplitudes in signal units
+    (``f_ord``: each order's frequency per sample, Hz, when the caller has it).
 
     Noise: ``sqrt(N0 · ENBW)`` with ``N0`` the residual's one-sided density beside each order,
     local in time and frequency: short-time spectra of the residual (frames of at least 2 s),
@@ -588,7 +609,8 @@ def _uncertainty(env, residual, fs_d, orders, rpm_d, bw_d, p, f_pass, *, trend_h
     from the solved envelope as ``T² = 8|A|/|A''|``, i.e. loss
     ``K_p (|A''|/(8|A|))^p/(πB)^{2p}``, with the noise part of ``|A''|²`` removed first."""
     nd, k = env.shape
-    f_ord = _columns(rpm_d.T if rpm_d.ndim == 2 else rpm_d, scale=orders / 60.0)
+    if f_ord is None:
+        f_ord = _columns(rpm_d.T if rpm_d.ndim == 2 else rpm_d, scale=orders / 60.0)
     by_order = np.ascontiguousarray(bw_d.T)  # (numpy reduces an (N, 3) array over N ~20x slower)
     b_low, b_high = by_order.min(axis=1), by_order.max(axis=1)
     b_med = b_low.copy()                    # (a constant bandwidth needs no sort)
@@ -599,7 +621,7 @@ def _uncertainty(env, residual, fs_d, orders, rpm_d, bw_d, p, f_pass, *, trend_h
     enbw_per_hz = float(enbw_hz(1.0, p))
     if nd < 8:
         noise = np.sqrt(n0 * (bw_d * enbw_per_hz))
-        return noise, noise
+        return noise, np.zeros_like(noise)
     # noise part of |A''|²: N0 ∫ (2 sin(πν/fs)·fs)^4 |H(ν)|² dν over the solve band; the
     # integral scales as B^5 for p = 2 (B^3 for p = 1 within the band): evaluated at each
     # order's median bandwidth (all orders at once) and scaled
@@ -610,8 +632,8 @@ def _uncertainty(env, residual, fs_d, orders, rpm_d, bw_d, p, f_pass, *, trend_h
     # part (E|A''_noise|² = 2 N0 ∫ D⁴|H|²): only curvature well above the noise counts (noise
     # alone would otherwise read as smearing that grows with B)
     span = np.maximum(1, np.round(fs_d / (2.0 * b_low))).astype(np.int64)
-    return _vkf_kernels.noise_uncertainty(env, n0, bw_d, per_n0, b_med, span, p,
-                                          smearing_constant(p), fs_d, enbw_per_hz)
+    return _vkf_kernels.noise_smearing(env, n0, bw_d, per_n0, b_med, span, p,
+                                       smearing_constant(p), fs_d, enbw_per_hz)
 
 
 @functools.lru_cache(maxsize=16)
