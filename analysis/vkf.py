@@ -551,15 +551,23 @@ def _vold_kalman_arrays(x, *, fs, speed_rpm, orders, bandwidth_hz, bandwidth_ord
     rpm_orders = rpm_d if speeds is None else speeds[:, index].T
     f_ord = _columns(rpm_orders.T if rpm_orders.ndim == 2 else rpm_orders, scale=orders / 60.0)
     if fs_d != fs:          # the cascade's pass band (flat to 1e-5) divided out: it is known
-        env = env / vkf_smear.decimation_gain(fs, f_max, int(round(fs / fs_d)), f_ord)
+        for j in range(k):  # by order (in place: env is this call's own array): np.interp of
+            # a monotone column, not of the orders interleaved (4x faster)
+            env[:, j] /= vkf_smear.decimation_gain(fs, f_max, int(round(fs / fs_d)),
+                                                   f_ord[:, j])
     noise, smear = _uncertainty(env, residual, fs_d, orders, rpm_orders, bw_d, p, f_max,
                                 trend_hz=b_trend if trend else 0.0, f_ord=f_ord)
     # smearing: the larger of the second-pass estimate (any envelope shape, bandwidth changes,
     # record ends) and the Lorentzian peak model (the second pass sees an already broadened
     # peak: at 5 % loss it reads ~0.8 of it)
-    smear_stated = np.maximum(vkf_smear.refilter_bias(env, bw_d, fs_d, p, noise), smear)
-    stated = np.sqrt(noise * noise + smear_stated * smear_stated
-                     + (NUMERICAL_FLOOR * np.abs(env)) ** 2)
+    stated = np.maximum(vkf_smear.refilter_bias(env, bw_d, fs_d, p, noise), smear)
+    stated *= stated                # noise, smearing and the numerical floor in quadrature
+    floor = np.abs(env)
+    floor *= NUMERICAL_FLOOR
+    floor *= floor
+    stated += floor
+    stated += noise * noise
+    np.sqrt(stated, out=stated)
     # rms over time, per order (einsum: no BLAS call, whose strided dot ran slow in place)
     std = np.sqrt(np.einsum("ij,ij->j", noise, noise) / nd)
     fallback = iterative and min(iterations) < 0
