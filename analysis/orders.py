@@ -501,8 +501,10 @@ def _vkf_track(context, orders, *, bandwidth_hz, bandwidth_orders, filter_order)
 
 def _vkf_dataset(res, context, orders):
     """Order-track Dataset of a VKF result: the ``vold_kalman`` Dataset or its arrays (dict)."""
+    amp = None
     if isinstance(res, dict):
         env, mean, time = res["envelope"].T, res["mean"], res["time"]
+        amp = res["amplitude"].T if "amplitude" in res else None
         rpm, unc, noise = res["rpm"], res["uncertainty"].T, res["noise"].T
         attrs = res["attrs"]
     else:
@@ -512,7 +514,8 @@ def _vkf_dataset(res, context, orders):
     factor, units = context["factor"], context["units"]
     if factor != 1.0:                   # (peak amplitudes, the default, need no pass)
         unc, noise = unc * factor, noise * factor
-    ds = _track_dataset(np.abs(env) * factor if factor != 1.0 else np.abs(env), np.angle(env),
+    amp = np.abs(env) if amp is None else amp
+    ds = _track_dataset(amp * factor if factor != 1.0 else amp, np.angle(env),
                         orders, time + context["t0"] if context["t0"] else time, rpm,
                         units, context["label"], context["reference"], variables={
                             "mean": ("time", mean, {"units": units, "long_name": "order 0: "

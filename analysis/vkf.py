@@ -86,7 +86,7 @@ from crankbench.predict._validate import check_int, check_option, check_positive
 from crankbench.predict.errors import AnalysisError
 from crankbench.predict._threads import single_threaded_blas
 
-from . import _vkf_kernels, vkf_iterative, vkf_smear
+from . import _vkf_kernels, _vkf_noise, vkf_iterative, vkf_smear
 from .resample import _as_angle, _as_rpm, _as_signal
 from .resample import shaft_angle as _integrate_speed
 
@@ -441,7 +441,8 @@ def vold_kalman(x, *, fs=None, speed_rpm, orders, bandwidth_hz=None, bandwidth_o
 def _vold_kalman_arrays(x, *, fs, speed_rpm, orders, bandwidth_hz, bandwidth_orders,
                         filter_order, decimate=True, block=1 << 15, knots_per_bandwidth=40.0,
                         shaft_angle=None, trend=True, checked=False, solver="auto"):
-    """:func:`vold_kalman` as plain arrays (dict): ``envelope`` (N, K) complex, ``mean``,
+    """:func:`vold_kalman` as plain arrays (dict): ``envelope`` (N, K) complex, its
+    ``amplitude`` ``|A|``, ``mean``,
     ``residual``, ``noise`` and ``uncertainty`` (N, K), ``time``, ``rpm``, ``orders``, the
     basis ``cos``/``sin`` (N, K) of ``o_k φ``, ``units``, ``label`` and the Dataset's
     ``attrs``. ``checked``: the caller has validated ``x`` (float array), ``fs``, a 1-D
@@ -562,8 +563,8 @@ def _vold_kalman_arrays(x, *, fs, speed_rpm, orders, bandwidth_hz, bandwidth_ord
     # peak: at 5 % loss it reads ~0.8 of it)
     stated = np.maximum(vkf_smear.refilter_bias(env, bw_d, fs_d, p, noise), smear)
     stated *= stated                # noise, smearing and the numerical floor in quadrature
-    floor = np.abs(env)
-    floor *= NUMERICAL_FLOOR
+    amplitude = np.abs(env)
+    floor = amplitude * NUMERICAL_FLOOR
     floor *= floor
     stated += floor
     stated += noise * noise
@@ -594,7 +595,8 @@ def _vold_kalman_arrays(x, *, fs, speed_rpm, orders, bandwidth_hz, bandwidth_ord
                            "for the decimation filter's gain"}
     log.debug("vold_kalman %s: %d orders, %d samples at %.6g Hz", label, k, nd, fs_d)
     return {"envelope": env, "mean": mean, "residual": residual, "noise": noise,
-            "uncertainty": stated, "smearing_model": smear, "time": index / fs, "rpm": rpm_d,
+            "uncertainty": stated, "smearing_model": smear, "amplitude": amplitude,
+            "time": index / fs, "rpm": rpm_d,
             "orders": orders, "cos": cosp, "sin": sinp, "units": units, "label": label,
             "attrs": attrs}
 
@@ -640,7 +642,7 @@ def _uncertainty(env, residual, fs_d, orders, rpm_d, bw_d, p, f_pass, *, trend_h
     # part (E|A''_noise|² = 2 N0 ∫ D⁴|H|²): only curvature well above the noise counts (noise
     # alone would otherwise read as smearing that grows with B)
     span = np.maximum(1, np.round(fs_d / (2.0 * b_low))).astype(np.int64)
-    return _vkf_kernels.noise_smearing(env, n0, bw_d, per_n0, b_med, span, p,
+    return _vkf_noise.noise_smearing(env, n0, bw_d, per_n0, b_med, span, p,
                                        smearing_constant(p), fs_d, enbw_per_hz)
 
 
@@ -682,7 +684,7 @@ def _local_noise(residual, fs_d, f_ord, b_med, f_pass, p=2, trend_hz=0.0, bw_d=N
     # lower quartile of an exponential variable: ln(4/3) of its mean (robust to up to three
     # quarters of the bins holding lines of orders not tracked), per frame, to every sample
     reach = np.maximum(8.0 * np.asarray(b_med, float), 20.0 * df)
-    return _vkf_kernels.local_levels(spec, freq, flat, centre, f_ord, reach)
+    return _vkf_noise.local_levels(spec, freq, flat, centre, f_ord, reach)
 
 
 @functools.lru_cache(maxsize=8)
@@ -701,7 +703,7 @@ def _notch_depth(f_ord, starts, length, win, freq, bw_d, trend_hz, fs_d, p):
     instants of the frame weighted by the window's energy (in a sweep the notch moves within
     the frame); NaN below 1/4 (too empty to read). ``H`` < 1e-3 beyond
     ``(B/2)((1e3 − 1)/(√2 − 1))^{1/2p}`` of its line (3.50 B for ``p = 2``, 24.5 B for
-    ``p = 1``): only those bins are computed (compiled: :func:`_vkf_kernels.notch_depth`)."""
+    ``p = 1``): only those bins are computed (compiled: :func:`_vkf_noise.notch_depth`)."""
     nd, k = f_ord.shape
     frames, bins = starts.shape[0], freq.shape[0]
     df = float(freq[1] - freq[0]) if bins > 1 else fs_d
@@ -710,8 +712,8 @@ def _notch_depth(f_ord, starts, length, win, freq, bw_d, trend_hz, fs_d, p):
     weights = weights / weights.sum()
     # H(ν) = 1/(1 + c (2ν/B)^{2p}) reaches 1e-3 at ν = reach · B
     reach_per_hz = 0.5 * ((1e3 - 1.0) / (np.sqrt(2.0) - 1.0)) ** (1.0 / (2 * p))
-    if _vkf_kernels.accelerated():
-        return _vkf_kernels.notch_depth(f_ord, bw_d, starts, offsets, weights, bins, df,
+    if _vkf_noise.accelerated():
+        return _vkf_noise.notch_depth(f_ord, bw_d, starts, offsets, weights, bins, df,
                                         trend_hz, fs_d, p, reach_per_hz)
     # every line at once (each order and its mirror, the trend's positive side) at each of the
     # 3 instants: the product of the (1 - H)² factors of one (instant, frame, bin) as the exp

@@ -11,15 +11,21 @@ import numpy as np
 import pytest
 
 from crankbench.analysis import _vkf_kernels as kern
+from crankbench.analysis import _vkf_noise as noise_kern
 from crankbench.analysis import vkf
 from crankbench.analysis.resample import shaft_angle
 from crankbench.predict.errors import AnalysisError
 
 
+def _clear():
+    kern._numba.cache_clear()
+    noise_kern._numba.cache_clear()
+
+
 def _numpy_forms(monkeypatch):
     monkeypatch.setenv("CRANKBENCH_NO_NUMBA", "1")
-    kern._numba.cache_clear()
-    assert not kern.accelerated()
+    _clear()
+    assert not kern.accelerated() and not noise_kern.accelerated()
 
 
 def _both(monkeypatch, call):
@@ -28,10 +34,10 @@ def _both(monkeypatch, call):
     _numpy_forms(monkeypatch)
     plain = call()
     monkeypatch.delenv("CRANKBENCH_NO_NUMBA")
-    kern._numba.cache_clear()
-    assert kern.accelerated()
+    _clear()
+    assert kern.accelerated() and noise_kern.accelerated()
     compiled = call()
-    kern._numba.cache_clear()
+    _clear()
     return plain, compiled
 
 
@@ -43,10 +49,10 @@ def form(request, monkeypatch):
     else:
         pytest.importorskip("numba")
         monkeypatch.delenv("CRANKBENCH_NO_NUMBA", raising=False)
-        kern._numba.cache_clear()
-        assert kern.accelerated()
+        _clear()
+        assert kern.accelerated() and noise_kern.accelerated()
     yield request.param
-    kern._numba.cache_clear()
+    _clear()
 
 
 def _small_system(n=203, k=2, m=5, p=2, trend=True, seed=4):
@@ -174,7 +180,7 @@ def test_lower_quartiles_match_numpy_percentile(form):
     f_frame = np.array([10.0, 50.0, 119.0, 300.0, 60.0, 0.5])
     spec[4, np.abs(freq - 64.0) < 5.0] = np.nan       # another order's notch beside frame 4's
     spec[:, freq < 3.0] = np.nan                      # order 0's
-    got = kern.lower_quartiles(spec, freq, flat, f_frame, 20.0)
+    got = noise_kern.lower_quartiles(spec, freq, flat, f_frame, 20.0)
     for i, f0 in enumerate(f_frame):
         ok = flat & ~np.isnan(spec[i])
         near = ok & (np.abs(freq - f0) <= 20.0)
@@ -196,13 +202,13 @@ def test_local_levels_compiled_equals_numpy(monkeypatch, frames):
     centre = 256.0 + 400.0 * np.arange(frames) + 0.5
     f_ord = np.stack([np.linspace(10.0, 30.0, nd), np.linspace(45.0, 95.0, nd)], axis=1)
     reach = np.array([6.0, 12.0])
-    plain, compiled = _both(monkeypatch, lambda: kern.local_levels(spec, freq, flat, centre,
+    plain, compiled = _both(monkeypatch, lambda: noise_kern.local_levels(spec, freq, flat, centre,
                                                                    f_ord, reach))
     assert plain.shape == (nd, 2) and np.isfinite(plain).all()
     np.testing.assert_allclose(compiled, plain, rtol=1e-14, atol=0)
     if frames > 1:            # the first and last frames' levels held beyond their centres
         f0 = np.interp(centre[:1], np.arange(nd), f_ord[:, 0])
-        first = kern.lower_quartiles(spec, freq, flat, f0, 6.0)[0] / np.log(4 / 3)
+        first = noise_kern.lower_quartiles(spec, freq, flat, f0, 6.0)[0] / np.log(4 / 3)
         assert plain[0, 0] == pytest.approx(first, rel=1e-14)
 
 
