@@ -48,16 +48,15 @@ BASIS_MAX_PHASE = 2.0 ** 20
 
 
 #: compiled helpers called by other compiled kernels (set by :func:`_numba`)
-_JIT_SPLINE_W = _JIT_FACTOR = _JIT_SUBSTITUTE = _JIT_MATVEC = None
+_JIT_SPLINE_W = _JIT_FACTOR = _JIT_SUBSTITUTE = _JIT_MATVEC = _JIT_DOTS = None
 
 
 class NotPositiveDefinite(ArithmeticError):
     """The banded matrix has a non-positive pivot (raised by :func:`solve`)."""
 
 
-@functools.lru_cache(maxsize=1)
-def _numba():
-    """The compiled kernels, or None (numba missing, or ``CRANKBENCH_NO_NUMBA`` set)."""
+def njit_or_none():
+    """numba's ``njit``, or None (numba missing, or ``CRANKBENCH_NO_NUMBA`` set)."""
     import os
 
     if os.environ.get("CRANKBENCH_NO_NUMBA"):
@@ -66,10 +65,19 @@ def _numba():
         from numba import njit
     except ImportError:
         return None
+    return njit
+
+
+@functools.lru_cache(maxsize=1)
+def _numba():
+    """The compiled kernels, or None (numba missing, or ``CRANKBENCH_NO_NUMBA`` set)."""
+    njit = njit_or_none()
+    if njit is None:
+        return None
     # kernels that call kernels reach them as module globals, not closure cells: numba keys
     # its on-disk cache on the pickled closure cells, and a pickled dispatcher differs from
     # process to process, so a closure reference recompiled the caller (8 s) in every process
-    global _JIT_SPLINE_W, _JIT_FACTOR, _JIT_SUBSTITUTE, _JIT_MATVEC
+    global _JIT_SPLINE_W, _JIT_FACTOR, _JIT_SUBSTITUTE, _JIT_MATVEC, _JIT_DOTS
 
     @njit(cache=True, fastmath=True)
     def fir(x, h, q, first, n_out):          # pragma: no cover - compiled
@@ -128,6 +136,18 @@ def _numba():
     _JIT_SPLINE_W = spline_w
 
     @njit(cache=True, fastmath=True)
+    def dots(a, b, cnt, out):                  # pragma: no cover - compiled
+        # out[i, e] = Σ_{t < cnt} a[i, t] b[e, t]: contiguous dot products
+        for i in range(out.shape[0]):
+            for e in range(out.shape[1]):
+                acc = 0.0
+                for t in range(cnt):
+                    acc += a[i, t] * b[e, t]
+                out[i, e] = acc
+
+    _JIT_DOTS = dots
+
+    @njit(cache=True, fastmath=True)
     def assemble(x, cosp, sinp, trend, m, n_coef, p, weights, diff, u):  # pragma: no cover
         k = cosp.shape[0]                      # (K, N): one order's samples contiguous
         n = x.shape[0]                         # (K may be 0: the trend alone)
@@ -184,19 +204,9 @@ def _numba():
                     for t in range(cnt):
                         prod[idx, t] = basis[j, t] * basis[jj, t]
                     idx += 1
-            # (slot pair, product) sums over the interval's samples: dot products
-            for ab in range(nslot):
-                for e in range(npair):
-                    acc = 0.0
-                    for t in range(cnt):
-                        acc += wpat[ab, t] * prod[e, t]
-                    sums[ab, e] = acc
-            for a in range(s):
-                for j in range(cols):
-                    acc = 0.0
-                    for t in range(cnt):
-                        acc += wv[a, t] * basis_x[j, t]
-                    rsum[a, j] = acc
+            # (slot pair, product) and (slot, column) sums over the interval's samples
+            _JIT_DOTS(wpat, prod, cnt, sums)
+            _JIT_DOTS(wv, basis_x, cnt, rsum)
             # scatter the interval's sums: A[J, I] (J >= I) at band[I, J - I]
             ab = 0
             for a in range(s):

@@ -32,13 +32,10 @@ _JIT_QUARTILES = None
 @functools.lru_cache(maxsize=1)
 def _numba():
     """The compiled kernels, or None (numba missing, or ``CRANKBENCH_NO_NUMBA`` set)."""
-    import os
+    from ._vkf_kernels import njit_or_none
 
-    if os.environ.get("CRANKBENCH_NO_NUMBA"):
-        return None
-    try:
-        from numba import njit
-    except ImportError:
+    njit = njit_or_none()
+    if njit is None:
         return None
     # kernels that call kernels reach them as module globals, not closure cells (numba keys its
     # on-disk cache on the pickled closure cells, which differ from process to process)
