@@ -13,10 +13,9 @@ passes and library calls:
   products and ``np.bincount`` scatters);
 * :func:`solve` — banded Cholesky ``LLᵀ`` for the small bandwidth of this problem with one step
   of iterative refinement (twin: LAPACK ``dpbtrf``/``dpbtrs`` through SciPy, one BLAS thread);
-* :func:`envelopes` — the complex envelopes, the trend and the model at every sample;
-* :func:`lower_quartiles` — the lower quartile of the residual's spectrum beside each order
-  (twin: ``np.percentile`` frame by frame);
-* :func:`smearing` — the envelope-smearing estimate from the envelopes' second differences.
+* :func:`envelopes` — the complex envelopes, the trend and the model at every sample.
+
+The noise and smearing estimates are in :mod:`analysis._vkf_noise`.
 
 Matrix storage: a symmetric band matrix of half-bandwidth ``u`` is held by columns,
 ``band[j, d] = A[j + d, j]`` for ``0 ≤ d ≤ u`` (the transpose of LAPACK's lower band form), so
@@ -33,7 +32,7 @@ import functools
 import numpy as np
 
 __all__ = ["accelerated", "fir_decimate", "order_basis", "assemble", "solve", "envelopes",
-           "lower_quartiles", "smearing", "NotPositiveDefinite"]
+           "NotPositiveDefinite"]
 
 _DIFF = {1: np.array([-1.0, 1.0]), 2: np.array([1.0, -2.0, 1.0])}
 
@@ -49,16 +48,15 @@ BASIS_MAX_PHASE = 2.0 ** 20
 
 
 #: compiled helpers called by other compiled kernels (set by :func:`_numba`)
-_JIT_SPLINE_W = _JIT_FACTOR = _JIT_SUBSTITUTE = _JIT_MATVEC = None
+_JIT_SPLINE_W = _JIT_FACTOR = _JIT_SUBSTITUTE = _JIT_MATVEC = _JIT_DOTS = None
 
 
 class NotPositiveDefinite(ArithmeticError):
     """The banded matrix has a non-positive pivot (raised by :func:`solve`)."""
 
 
-@functools.lru_cache(maxsize=1)
-def _numba():
-    """The compiled kernels, or None (numba missing, or ``CRANKBENCH_NO_NUMBA`` set)."""
+def njit_or_none():
+    """numba's ``njit``, or None (numba missing, or ``CRANKBENCH_NO_NUMBA`` set)."""
     import os
 
     if os.environ.get("CRANKBENCH_NO_NUMBA"):
@@ -67,10 +65,19 @@ def _numba():
         from numba import njit
     except ImportError:
         return None
+    return njit
+
+
+@functools.lru_cache(maxsize=1)
+def _numba():
+    """The compiled kernels, or None (numba missing, or ``CRANKBENCH_NO_NUMBA`` set)."""
+    njit = njit_or_none()
+    if njit is None:
+        return None
     # kernels that call kernels reach them as module globals, not closure cells: numba keys
     # its on-disk cache on the pickled closure cells, and a pickled dispatcher differs from
     # process to process, so a closure reference recompiled the caller (8 s) in every process
-    global _JIT_SPLINE_W, _JIT_FACTOR, _JIT_SUBSTITUTE, _JIT_MATVEC
+    global _JIT_SPLINE_W, _JIT_FACTOR, _JIT_SUBSTITUTE, _JIT_MATVEC, _JIT_DOTS
 
     @njit(cache=True, fastmath=True)
     def fir(x, h, q, first, n_out):          # pragma: no cover - compiled
@@ -129,6 +136,18 @@ def _numba():
     _JIT_SPLINE_W = spline_w
 
     @njit(cache=True, fastmath=True)
+    def dots(a, b, cnt, out):                  # pragma: no cover - compiled
+        # out[i, e] = Σ_{t < cnt} a[i, t] b[e, t]: contiguous dot products
+        for i in range(out.shape[0]):
+            for e in range(out.shape[1]):
+                acc = 0.0
+                for t in range(cnt):
+                    acc += a[i, t] * b[e, t]
+                out[i, e] = acc
+
+    _JIT_DOTS = dots
+
+    @njit(cache=True, fastmath=True)
     def assemble(x, cosp, sinp, trend, m, n_coef, p, weights, diff, u):  # pragma: no cover
         k = cosp.shape[0]                      # (K, N): one order's samples contiguous
         n = x.shape[0]                         # (K may be 0: the trend alone)
@@ -148,48 +167,46 @@ def _numba():
         nslot = s * (s + 1) // 2
         sums = np.zeros((nslot, npair))
         rsum = np.zeros((s, cols))
-        b = np.empty(cols)
-        prod = np.empty(npair)
+        span = min(m, n)
         # the knots are uniform: every interval has the first one's weight pattern (as the
-        # numpy form)
+        # numpy form), stored (slot pair, position) so that each sum is a contiguous dot
         w = np.ones(4)
-        wpat = np.ones((min(m, n), nslot))
-        wv = np.ones((min(m, n), s))
+        wpat = np.ones((nslot, span))
+        wv = np.ones((s, span))
         if s > 1:
-            for t in range(min(m, n)):
+            for t in range(span):
                 _JIT_SPLINE_W(t, m, w)
                 idx = 0
                 for a in range(s):
-                    wv[t, a] = w[a]
+                    wv[a, t] = w[a]
                     for c in range(a, s):
-                        wpat[t, idx] = w[a] * w[c]
+                        wpat[idx, t] = w[a] * w[c]
                         idx += 1
+        basis = np.empty((cols, span))          # the interval's basis, column by sample
+        prod = np.empty((npair, span))          # and its products, pair by pair
+        basis_x = np.empty((cols, span))
         groups = (n - 1) // m + 1
         for g in range(groups):
-            sums[:, :] = 0.0
-            rsum[:, :] = 0.0
-            for i in range(g * m, min(n, g * m + m)):
-                t = i - g * m
-                for j in range(k):
-                    b[2 * j] = cosp[j, i]
-                    b[2 * j + 1] = -sinp[j, i]
-                if trend:
-                    b[cols - 1] = 1.0
-                idx = 0
-                for j in range(cols):
-                    bj = b[j]
-                    for jj in range(j, cols):
-                        prod[idx] = bj * b[jj]
-                        idx += 1
-                for ab in range(nslot):
-                    wab = wpat[t, ab]
-                    for e in range(npair):
-                        sums[ab, e] += wab * prod[e]
-                xi = x[i]
-                for a in range(s):
-                    wa = wv[t, a] * xi
-                    for j in range(cols):
-                        rsum[a, j] += wa * b[j]
+            lo = g * m
+            cnt = min(n, lo + m) - lo
+            for j in range(k):
+                for t in range(cnt):
+                    basis[2 * j, t] = cosp[j, lo + t]
+                    basis[2 * j + 1, t] = -sinp[j, lo + t]
+            if trend:
+                for t in range(cnt):
+                    basis[cols - 1, t] = 1.0
+            idx = 0
+            for j in range(cols):
+                for t in range(cnt):
+                    basis_x[j, t] = basis[j, t] * x[lo + t]
+                for jj in range(j, cols):
+                    for t in range(cnt):
+                        prod[idx, t] = basis[j, t] * basis[jj, t]
+                    idx += 1
+            # (slot pair, product) and (slot, column) sums over the interval's samples
+            _JIT_DOTS(wpat, prod, cnt, sums)
+            _JIT_DOTS(wv, basis_x, cnt, rsum)
             # scatter the interval's sums: A[J, I] (J >= I) at band[I, J - I]
             ab = 0
             for a in range(s):
@@ -219,13 +236,21 @@ def _numba():
         # returns the first bad pivot or -1
         size, w1 = band.shape
         u = w1 - 1
+        # the envelope: column j of L reaches no lower than the lowest non-zero of A's columns
+        # up to j (a row's first non-zero bounds its fill-in); the block structure leaves the
+        # last (u - j mod cols) entries of each column zero, ~20 % of the band's work
+        last = 0
         for j in range(size):
             d = band[j, 0]
             if not d > 0.0:
                 return j
             d = np.sqrt(d)
             band[j, 0] = d
-            reach = min(u, size - 1 - j)
+            nz = min(u, size - 1 - j)
+            while nz > 0 and band[j, nz] == 0.0:
+                nz -= 1
+            last = max(last, j + nz)
+            reach = last - j
             inv = 1.0 / d
             for t in range(1, reach + 1):
                 band[j, t] *= inv
@@ -289,115 +314,41 @@ def _numba():
         k, n = cosp.shape
         cols = coef.shape[1]
         s = 1 if m == 1 else 4
-        env = np.zeros((n, k), np.complex128)
+        env = np.empty((n, k), np.complex128)
         mean = np.zeros(n)
-        model = np.zeros(n)
+        model = np.empty(n)
+        # uniform knots: the spline weights of position t in every interval (as assemble)
+        span = min(m, n)
+        wpat = np.ones((span, 4))
         w = np.ones(4)
-        for i in range(n):
-            g = i // m
-            if s > 1:
-                _JIT_SPLINE_W(i, m, w)
-            tot = 0.0
-            for j in range(k):
-                re = 0.0
-                im = 0.0
-                for a in range(s):
-                    re += w[a] * coef[g + a, 2 * j]
-                    im += w[a] * coef[g + a, 2 * j + 1]
-                env[i, j] = re + 1j * im
-                tot += re * cosp[j, i] - im * sinp[j, i]
-            if trend:
-                c0 = 0.0
-                for a in range(s):
-                    c0 += w[a] * coef[g + a, cols - 1]
-                mean[i] = c0
-                tot += c0
-            model[i] = tot
+        if s > 1:
+            for t in range(span):
+                _JIT_SPLINE_W(t, m, w)
+                wpat[t, :] = w
+        for g in range((n - 1) // m + 1):
+            for i in range(g * m, min(n, g * m + m)):
+                w = wpat[i - g * m]
+                tot = 0.0
+                for j in range(k):
+                    re = 0.0
+                    im = 0.0
+                    for a in range(s):
+                        re += w[a] * coef[g + a, 2 * j]
+                        im += w[a] * coef[g + a, 2 * j + 1]
+                    env[i, j] = re + 1j * im
+                    tot += re * cosp[j, i] - im * sinp[j, i]
+                if trend:
+                    c0 = 0.0
+                    for a in range(s):
+                        c0 += w[a] * coef[g + a, cols - 1]
+                    mean[i] = c0
+                    tot += c0
+                model[i] = tot
         return env, mean, model
-
-    @njit(cache=True)
-    def quartiles(spec, freq, flat, f_frame, reach):  # pragma: no cover - compiled
-        frames, bins = spec.shape
-        level = np.zeros(frames)
-        buf = np.empty(bins)
-        for i in range(frames):
-            f0 = f_frame[i]
-            cnt = 0
-            for b in range(bins):
-                v = spec[i, b]
-                if flat[b] and v == v and abs(freq[b] - f0) <= reach:
-                    buf[cnt] = v
-                    cnt += 1
-            if cnt < 5:
-                cnt = 0
-                for b in range(bins):
-                    v = spec[i, b]
-                    if flat[b] and v == v:
-                        buf[cnt] = v
-                        cnt += 1
-            if cnt == 0:
-                continue
-            v = np.sort(buf[:cnt])
-            # numpy's default ('linear') percentile
-            pos = 0.25 * (cnt - 1)
-            lo = int(np.floor(pos))
-            hi = min(lo + 1, cnt - 1)
-            frac = pos - lo
-            level[i] = v[lo] + (v[hi] - v[lo]) * frac
-        return level
-
-    @njit(cache=True)
-    def smearing(env, n0, bw_d, per_n0, b_med, span, p, kp, fs_d):  # pragma: no cover
-        n, k = env.shape
-        out = np.zeros((n, k))
-        a2 = np.empty(n)
-        x2 = np.empty(n)
-        c = np.empty(n + 1)
-        expo = 5 if p == 2 else 4
-        fs2 = fs_d * fs_d
-        for j in range(k):
-            # |A''|² by central differences (ends: their neighbours'), cumulated
-            c[0] = 0.0
-            for i in range(n):
-                ii = min(max(i, 1), n - 2)
-                d = (env[ii + 1, j] - 2.0 * env[ii, j] + env[ii - 1, j]) * fs2
-                x2[i] = d.real * d.real + d.imag * d.imag
-                c[i + 1] = c[i] + x2[i]
-            length = span[j]
-            if length <= 1 or n <= length:
-                a2[:] = x2
-            else:
-                pad = (length - 1) // 2
-                n_mid = n - length + 1
-                for i in range(n):
-                    t = min(max(i - pad, 0), n_mid - 1)
-                    a2[i] = (c[t + length] - c[t]) / length
-            inv_med = 1.0 / b_med[j]
-            noise_scale = 20.0 * per_n0[j]
-            for i in range(n):
-                # (products, not ** with a run-time exponent: a pow call per sample)
-                bw = bw_d[i, j]
-                rel = bw * inv_med
-                rel4 = rel * rel
-                rel4 *= rel4
-                val = a2[i] - noise_scale * n0[i, j] * (rel4 * rel if expo == 5 else rel4)
-                if val <= 0.0:
-                    continue
-                e = env[i, j]
-                amp2 = e.real * e.real + e.imag * e.imag
-                amp = np.sqrt(amp2)
-                pb2 = np.pi * bw
-                pb2 *= pb2
-                if p == 2:                      # K_p (|A''|/(8|A|))² / (πB)⁴
-                    loss = kp * val / (64.0 * max(amp2, 1e-300) * pb2 * pb2)
-                else:
-                    loss = kp * np.sqrt(val) / (8.0 * max(amp, 1e-300) * pb2)
-                out[i, j] = min(loss, 1.0) * amp
-        return out
 
     return {"fir": fir, "basis": basis, "assemble": assemble, "solve": solve, "matvec": matvec,
             "factor": factor, "substitute": substitute, "spline_w": spline_w,
-            "envelopes": envelopes, "quartiles": quartiles, "smearing": smearing}
+            "envelopes": envelopes}
 
 
 def accelerated() -> bool:
@@ -653,67 +604,3 @@ def envelopes(coef, cosp, sinp, m: int, trend: bool):
     model = (env.real * cosp - env.imag * sinp).sum(axis=1) + mean
     return env, mean, model
 
-
-# ---------------------------------------------------------------------------- noise level
-
-
-def lower_quartiles(spec, freq, flat, f_frame, reach: float) -> np.ndarray:
-    """Per frame ``i``: the 25th percentile (numpy's linear rule) of ``spec[i]`` over the bins
-    of ``flat`` within ``reach`` of ``f_frame[i]``, NaN bins left out (all non-NaN ``flat``
-    bins when fewer than 5 qualify; 0 when none)."""
-    kernels = _numba()
-    if kernels is not None:
-        return kernels["quartiles"](np.ascontiguousarray(spec), np.ascontiguousarray(freq),
-                                    np.ascontiguousarray(flat), np.ascontiguousarray(f_frame,
-                                                                                     dtype=float),
-                                    float(reach))
-    level = np.zeros(spec.shape[0])
-    for i, f0 in enumerate(f_frame):
-        ok = flat & ~np.isnan(spec[i])
-        near = ok & (np.abs(freq - f0) <= reach)
-        if near.sum() < 5:
-            near = ok
-        if near.any():
-            level[i] = float(np.percentile(spec[i, near], 25.0))
-    return level
-
-
-# ---------------------------------------------------------------------------- smearing
-
-
-def smearing(env, n0, bw_d, per_n0, b_med, span, p: int, kp: float, fs_d: float):
-    """Smearing bias (N, K) of each envelope: ``min(K_p (|A''|/(8|A|))^p/(πB)^{2p}, 1)·|A|``
-    with ``|A''|²`` (central differences) averaged over ``span[j]`` samples, less ten times its
-    expected noise part ``2 n0 · per_n0[j] (B/b_med[j])^{5 (p = 2) or 4}``.
-    See :func:`analysis.vkf._uncertainty`."""
-    kernels = _numba()
-    if kernels is not None:
-        return kernels["smearing"](np.ascontiguousarray(env), np.ascontiguousarray(n0),
-                                   np.ascontiguousarray(bw_d, dtype=float),
-                                   np.asarray(per_n0, float), np.asarray(b_med, float),
-                                   np.asarray(span, np.int64), int(p), float(kp), float(fs_d))
-    n, k = env.shape
-    d2 = np.zeros_like(env)
-    d2[1:-1] = (env[2:] - 2.0 * env[1:-1] + env[:-2]) * fs_d ** 2
-    d2[0], d2[-1] = d2[1], d2[-2]
-    out = np.zeros((n, k))
-    amp = np.abs(env)
-    for j in range(k):
-        bw = bw_d[:, j]
-        noise2 = 20.0 * n0[:, j] * per_n0[j] * (bw / b_med[j]) ** (5 if p == 2 else 4)
-        a2 = np.maximum(_moving_mean(np.abs(d2[:, j]) ** 2, int(span[j])) - noise2, 0.0)
-        ratio = np.sqrt(a2) / np.maximum(amp[:, j], 1e-300)
-        loss = kp * (ratio / 8.0) ** p / (np.pi * bw) ** (2 * p)
-        out[:, j] = np.minimum(loss, 1.0) * amp[:, j]
-    return out
-
-
-def _moving_mean(x, length):
-    """Centred moving mean over ``length`` samples (the ends hold the first/last full mean)."""
-    if length <= 1 or x.shape[0] <= length:
-        return x
-    c = np.concatenate([[0.0], np.cumsum(x)])
-    out = (c[length:] - c[:-length]) / length
-    pad_a = (length - 1) // 2
-    return np.concatenate([np.full(pad_a, out[0]), out,
-                           np.full(x.shape[0] - out.shape[0] - pad_a, out[-1])])

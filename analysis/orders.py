@@ -487,8 +487,10 @@ def _vkf_track(context, orders, *, bandwidth_hz, bandwidth_orders, filter_order)
 
 def _vkf_dataset(res, context, orders):
     """Order-track Dataset of a VKF result: the ``vold_kalman`` Dataset or its arrays (dict)."""
+    amp = None
     if isinstance(res, dict):
         env, mean, time = res["envelope"].T, res["mean"], res["time"]
+        amp = res["amplitude"].T if "amplitude" in res else None
         rpm, unc, noise = res["rpm"], res["uncertainty"].T, res["noise"].T
         attrs = res["attrs"]
     else:
@@ -496,14 +498,18 @@ def _vkf_dataset(res, context, orders):
         rpm, unc = res["rpm"].values, res["amplitude_uncertainty"].values
         noise, attrs = res["amplitude_noise"].values, res.attrs
     factor, units = context["factor"], context["units"]
-    ds = _track_dataset(np.abs(env) * factor, np.angle(env), orders, time + context["t0"], rpm,
+    if factor != 1.0:                   # (peak amplitudes, the default, need no pass)
+        unc, noise = unc * factor, noise * factor
+    amp = np.abs(env) if amp is None else amp
+    ds = _track_dataset(amp * factor if factor != 1.0 else amp, np.angle(env),
+                        orders, time + context["t0"] if context["t0"] else time, rpm,
                         units, context["label"], context["reference"], variables={
                             "mean": ("time", mean, {"units": units, "long_name": "order 0: "
                                                     "the channel's mean (trend envelope)"}),
-                            "amplitude_uncertainty": (("order", "time"), unc * factor, {
+                            "amplitude_uncertainty": (("order", "time"), unc, {
                                 "units": units, "long_name": "1-sigma amplitude uncertainty "
                                 "(noise and envelope smearing)"}),
-                            "amplitude_noise": (("order", "time"), noise * factor, {
+                            "amplitude_noise": (("order", "time"), noise, {
                                 "units": units, "long_name": "1-sigma amplitude noise (its "
                                 "part of the uncertainty)"})})
     ds.attrs.update(attrs)
@@ -741,26 +747,25 @@ def _track_dataset(amp, phase, orders, t, r, units, label, reference=None, varia
     import pandas as pd
     import xarray as xr
 
-    # Variables and the two indexes built once and handed over (public API): the tuple form
-    # had xarray convert each entry and infer both indexes again (~30 % of this call)
+    # Variables and the two indexes built once and handed over: the tuple form had xarray
+    # convert each entry and infer both indexes again; they agree by construction, so no merge
+    from ._dataset import dataset
+
     var = xr.Variable
     t = np.asarray(t, float)
-    coords = xr.Coordinates(
-        {"order": var("order", orders, {"units": "1", "long_name": "shaft order"}),
-         "time": var("time", t, {"units": "s"}),
-         "rpm": var("time", np.asarray(r, float), {"units": "rpm", "long_name": "shaft speed"})},
-        indexes={"order": xr.indexes.PandasIndex(pd.Index(orders, name="order"), "order"),
-                 "time": xr.indexes.PandasIndex(pd.Index(t, name="time"), "time")})
-    return xr.Dataset(
+    return dataset(
         {"amplitude": var(("order", "time"), amp, {"units": units,
                                                    "long_name": f"{label} order amplitude"}),
          "phase": var(("order", "time"), phase, {"units": "rad",
                                                   "long_name": "phase of A cos(o φ + phase)"}),
          **{name: var(*spec) for name, spec in (variables or {}).items()}},
-        coords=coords, attrs={"channel": str(label),
-                              "phase_reference": reference or
-                              "shaft angle 0 at the first sample of the record (speed-reference "
-                              "integration)"})
+        {"order": var("order", orders, {"units": "1", "long_name": "shaft order"}),
+         "time": var("time", t, {"units": "s"}),
+         "rpm": var("time", np.asarray(r, float), {"units": "rpm", "long_name": "shaft speed"})},
+        {"order": xr.indexes.PandasIndex(pd.Index(orders, name="order"), "order"),
+         "time": xr.indexes.PandasIndex(pd.Index(t, name="time"), "time")},
+        {"channel": str(label), "phase_reference": reference or
+         "shaft angle 0 at the first sample of the record (speed-reference integration)"})
 
 
 _MAP_NAMES = ("order_map", "order_spectrum", "band_amplitude", "campbell_map")

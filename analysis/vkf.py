@@ -86,7 +86,7 @@ from crankbench.predict._validate import check_int, check_option, check_positive
 from crankbench.predict.errors import AnalysisError
 from crankbench.predict._threads import single_threaded_blas
 
-from . import _vkf_kernels, vkf_iterative, vkf_smear
+from . import _vkf_kernels, _vkf_noise, vkf_iterative, vkf_smear
 from .resample import _as_angle, _as_rpm, _as_signal
 from .resample import shaft_angle as _integrate_speed
 
@@ -277,6 +277,24 @@ def _solve_block(x, cosp, sinp, knot_weights, p, m, trend, iterative, orders):
     return _vkf_kernels.envelopes(z.reshape(n_coef, -1), cosp, sinp, m, trend), iterations
 
 
+def _columns(rows, n=None, *, scale=None):
+    """C-ordered (N, K) array whose column ``j`` is ``rows[j]`` (a (K, N) array, a (K,) vector
+    of constants with ``n``, or one (N,) row for every column) times ``scale[j]``: filled
+    column by column (numpy's broadcasting over a last axis of a few elements, and a
+    transposed copy, both run ~10x slower than these strided passes)."""
+    rows = np.asarray(rows, float)
+    k = rows.shape[0] if scale is None or rows.ndim == 2 else np.size(scale)
+    n = rows.shape[-1] if n is None else n
+    out = np.empty((n, k))
+    for j in range(k):
+        row = rows if rows.ndim == 1 and scale is not None else rows[j]
+        if scale is None:
+            out[:, j] = row
+        else:
+            np.multiply(row, scale[j], out=out[:, j])
+    return out
+
+
 def _bandwidths(bandwidth_hz, bandwidth_orders, orders, speeds, n):
     """Bandwidth in Hz against time: ``(at, top, low, kind)`` with ``at(index)`` the (len,
     K) bandwidths at those samples, ``top``/``low`` the largest/smallest per order, and a
@@ -295,18 +313,18 @@ def _bandwidths(bandwidth_hz, bandwidth_orders, orders, speeds, n):
                                     f"= ({k}, {n}), got {arr.shape}")
             if not np.isfinite(arr).all() or arr.min() <= 0:
                 raise AnalysisError("bandwidth_hz must be finite and > 0")
-            return (lambda idx: arr[:, idx].T, arr.max(axis=1), arr.min(axis=1),
+            return (lambda idx: _columns(arr[:, idx]), arr.max(axis=1), arr.min(axis=1),
                     f"per order against time, {arr.min():.4g}..{arr.max():.4g} Hz")
         bw = np.broadcast_to(arr, (k,)).copy()
         for i, b in enumerate(bw):
             check_positive(b, f"bandwidth_hz[{i}]", error=AnalysisError)
-        return (lambda idx: np.broadcast_to(bw, (np.size(idx), k)).copy(), bw, bw,
+        return (lambda idx: _columns(bw, np.size(idx)), bw, bw,
                 f"{bw.tolist()} Hz (constant)")
     bo = np.broadcast_to(np.asarray(bandwidth_orders, float), (k,)).copy()
     for i, b in enumerate(bo):
         check_positive(b, f"bandwidth_orders[{i}]", error=AnalysisError)
-    return (lambda idx: (bo[:, None] * speeds[:, idx] / 60.0).T if speeds.shape[0] == k
-            else bo[None, :] * speeds[0, idx][:, None] / 60.0,
+    return (lambda idx: _columns(speeds[:, idx] if speeds.shape[0] == k else speeds[0, idx],
+                                 scale=bo / 60.0),
             bo * speeds.max(axis=1) / 60.0, bo * speeds.min(axis=1) / 60.0,
             f"{bo.tolist()} orders (∝ speed)")
 
@@ -423,7 +441,8 @@ def vold_kalman(x, *, fs=None, speed_rpm, orders, bandwidth_hz=None, bandwidth_o
 def _vold_kalman_arrays(x, *, fs, speed_rpm, orders, bandwidth_hz, bandwidth_orders,
                         filter_order, decimate=True, block=1 << 15, knots_per_bandwidth=40.0,
                         shaft_angle=None, trend=True, checked=False, solver="auto"):
-    """:func:`vold_kalman` as plain arrays (dict): ``envelope`` (N, K) complex, ``mean``,
+    """:func:`vold_kalman` as plain arrays (dict): ``envelope`` (N, K) complex, its
+    ``amplitude`` ``|A|``, ``mean``,
     ``residual``, ``noise`` and ``uncertainty`` (N, K), ``time``, ``rpm``, ``orders``, the
     basis ``cos``/``sin`` (N, K) of ``o_k φ``, ``units``, ``label`` and the Dataset's
     ``attrs``. ``checked``: the caller has validated ``x`` (float array), ``fs``, a 1-D
@@ -484,7 +503,7 @@ def _vold_kalman_arrays(x, *, fs, speed_rpm, orders, bandwidth_hz, bandwidth_ord
         low_speed = float(speeds[:, index].min())
         cosp, sinp = np.cos(phase), np.sin(phase)
     bw_d = bw_at(index)                                        # (Nd, K)
-    if (bw_d >= fs_d).any():
+    if bw_d.max() >= fs_d:
         raise AnalysisError(f"bandwidth up to {bw_d.max():.6g} Hz is too wide for the solve rate "
                             f"{fs_d:.6g} Hz")
     # trend bandwidth: its response at the lowest order frequency is 1e-3 (joint solve: the
@@ -492,21 +511,21 @@ def _vold_kalman_arrays(x, *, fs, speed_rpm, orders, bandwidth_hz, bandwidth_ord
     # (and no wider than the widest order band: the trend need not follow faster than they do)
     b_trend = min(2.0 * float(orders.min()) * low_speed / 60.0 / (
         1e3 / (np.sqrt(2.0) - 1.0)) ** (1.0 / (2 * p)), float(bw_d.max()))
+    bw_top_d, bw_low_d = float(bw_d.max()), float(bw_d.min())
     if trend:
-        bw_all = np.concatenate([bw_d, np.full((nd, 1), b_trend)], axis=1)
-    else:
-        bw_all = bw_d
+        bw_top_d, bw_low_d = max(bw_top_d, b_trend), min(bw_low_d, b_trend)
     # envelope knots every m samples (cubic B-spline) when the band is narrow: keeps the normal
     # equations well conditioned (condition ~ r² m^(-2p)) at no visible cost, the knot
     # spacing being below 1/(knots_per_bandwidth · B)
     m = 1 if knots_per_bandwidth is None else max(1, int(fs_d / (knots_per_bandwidth
-                                                                  * bw_all.max())))
-    overlap = int(math.ceil(6.0 * fs_d / bw_all.min()))
+                                                                  * bw_top_d)))
+    overlap = int(math.ceil(6.0 * fs_d / bw_low_d))
     overlap = m * int(math.ceil(overlap / m))
     block = m * max(1, int(math.ceil(block / m)))
-    env = np.empty((nd, k), dtype=complex)
-    mean = np.zeros(nd)
-    model = np.empty(nd)
+    if nd > block:
+        env = np.empty((nd, k), dtype=complex)
+        mean = np.zeros(nd)
+        model = np.empty(nd)
     iterations = []
     for start in range(0, nd, block):
         stop = min(nd, start + block)
@@ -516,28 +535,42 @@ def _vold_kalman_arrays(x, *, fs, speed_rpm, orders, bandwidth_hz, bandwidth_ord
         n_coef = b - a if m == 1 else (b - a - 1) // m + 4
         at_knots = np.clip(a + (np.arange(n_coef - p) + 0.5 * p - (0 if m == 1 else 1)) * m,
                            a, b - 1).astype(np.int64)
-        r2 = vkf_weight(bw_all[at_knots], fs_d, p) ** 2 * float(m) ** (1 - 2 * p)
+        bw_knots = bw_d[at_knots]
+        if trend:
+            bw_knots = np.concatenate([bw_knots, np.full((at_knots.shape[0], 1), b_trend)], axis=1)
+        r2 = vkf_weight(bw_knots, fs_d, p) ** 2 * float(m) ** (1 - 2 * p)
         (e, mn, mdl), its = _solve_block(xd[a:b], cosp[a:b], sinp[a:b], r2, p, m, trend,
                                          iterative, orders)
         iterations.append(its)
+        if a == 0 and b == nd:               # one block: its arrays are the result
+            env, mean, model = e, mn, mdl
+            break
         env[start:stop] = e[start - a: stop - a]
         mean[start:stop] = mn[start - a: stop - a]
         model[start:stop] = mdl[start - a: stop - a]
     residual = xd - model
     rpm_orders = rpm_d if speeds is None else speeds[:, index].T
+    f_ord = _columns(rpm_orders.T if rpm_orders.ndim == 2 else rpm_orders, scale=orders / 60.0)
     if fs_d != fs:          # the cascade's pass band (flat to 1e-5) divided out: it is known
-        env = env / vkf_smear.decimation_gain(fs, f_max, int(round(fs / fs_d)),
-                                              orders[None, :] * (rpm_orders if rpm_orders.ndim == 2
-                                                                   else rpm_orders[:, None]) / 60.0)
+        for j in range(k):  # by order (in place: env is this call's own array): np.interp of
+            # a monotone column, not of the orders interleaved (4x faster)
+            env[:, j] /= vkf_smear.decimation_gain(fs, f_max, int(round(fs / fs_d)),
+                                                   f_ord[:, j])
     noise, smear = _uncertainty(env, residual, fs_d, orders, rpm_orders, bw_d, p, f_max,
-                                trend_hz=b_trend if trend else 0.0)
+                                trend_hz=b_trend if trend else 0.0, f_ord=f_ord)
     # smearing: the larger of the second-pass estimate (any envelope shape, bandwidth changes,
     # record ends) and the Lorentzian peak model (the second pass sees an already broadened
     # peak: at 5 % loss it reads ~0.8 of it)
-    smear_stated = np.maximum(vkf_smear.refilter_bias(env, bw_d, fs_d, p, noise), smear)
-    stated = np.sqrt(noise * noise + smear_stated * smear_stated
-                     + (NUMERICAL_FLOOR * np.abs(env)) ** 2)
-    std = np.sqrt(np.einsum("ij,ij->j", noise, noise) / nd)      # rms over time, per order
+    stated = np.maximum(vkf_smear.refilter_bias(env, bw_d, fs_d, p, noise), smear)
+    stated *= stated                # noise, smearing and the numerical floor in quadrature
+    amplitude = np.abs(env)
+    floor = amplitude * NUMERICAL_FLOOR
+    floor *= floor
+    stated += floor
+    stated += noise * noise
+    np.sqrt(stated, out=stated)
+    # rms over time, per order (einsum: no BLAS call, whose strided dot ran slow in place)
+    std = np.sqrt(np.einsum("ij,ij->j", noise, noise) / nd)
     fallback = iterative and min(iterations) < 0
     how = ("conjugate gradients" if iterative and not fallback else "banded Cholesky")
     attrs = {"method": f"Vold-Kalman filter (joint with an order-0 trend, {how})"
@@ -562,13 +595,16 @@ def _vold_kalman_arrays(x, *, fs, speed_rpm, orders, bandwidth_hz, bandwidth_ord
                            "for the decimation filter's gain"}
     log.debug("vold_kalman %s: %d orders, %d samples at %.6g Hz", label, k, nd, fs_d)
     return {"envelope": env, "mean": mean, "residual": residual, "noise": noise,
-            "uncertainty": stated, "smearing_model": smear, "time": index / fs, "rpm": rpm_d,
+            "uncertainty": stated, "smearing_model": smear, "amplitude": amplitude,
+            "time": index / fs, "rpm": rpm_d,
             "orders": orders, "cos": cosp, "sin": sinp, "units": units, "label": label,
             "attrs": attrs}
 
 
-def _uncertainty(env, residual, fs_d, orders, rpm_d, bw_d, p, f_pass, *, trend_hz=0.0):
-    """(noise, smearing) per sample and order, both 1-σ-like amplitudes in signal units.
+def _uncertainty(env, residual, fs_d, orders, rpm_d, bw_d, p, f_pass, *, trend_hz=0.0,
+                 f_ord=None):
+    """(noise, smearing) per sample and order, both 1-σ-like amplitudes in signal units
+    (``f_ord``: each order's frequency per sample, Hz, when the caller has it).
 
     Noise: ``sqrt(N0 · ENBW)`` with ``N0`` the residual's one-sided density beside each order,
     local in time and frequency: short-time spectra of the residual (frames of at least 2 s),
@@ -583,7 +619,8 @@ def _uncertainty(env, residual, fs_d, orders, rpm_d, bw_d, p, f_pass, *, trend_h
     from the solved envelope as ``T² = 8|A|/|A''|``, i.e. loss
     ``K_p (|A''|/(8|A|))^p/(πB)^{2p}``, with the noise part of ``|A''|²`` removed first."""
     nd, k = env.shape
-    f_ord = orders[None, :] * (rpm_d if rpm_d.ndim == 2 else rpm_d[:, None]) / 60.0
+    if f_ord is None:
+        f_ord = _columns(rpm_d.T if rpm_d.ndim == 2 else rpm_d, scale=orders / 60.0)
     by_order = np.ascontiguousarray(bw_d.T)  # (numpy reduces an (N, 3) array over N ~20x slower)
     b_low, b_high = by_order.min(axis=1), by_order.max(axis=1)
     b_med = b_low.copy()                    # (a constant bandwidth needs no sort)
@@ -591,27 +628,35 @@ def _uncertainty(env, residual, fs_d, orders, rpm_d, bw_d, p, f_pass, *, trend_h
     if varies.any():
         b_med[varies] = np.median(by_order[varies], axis=1)
     n0 = _local_noise(residual, fs_d, f_ord, b_med, f_pass, p, trend_hz, bw_d)
-    noise = np.sqrt(n0 * enbw_hz(bw_d, p))
+    enbw_per_hz = float(enbw_hz(1.0, p))
     if nd < 8:
+        noise = np.sqrt(n0 * (bw_d * enbw_per_hz))
         return noise, np.zeros_like(noise)
-    # noise part of |A''|²: N0 ∫ (2 sin(πν/fs)·fs)^4 |H(ν)|² dν over the solve band
+    # noise part of |A''|²: N0 ∫ (2 sin(πν/fs)·fs)^4 |H(ν)|² dν over the solve band; the
+    # integral scales as B^5 for p = 2 (B^3 for p = 1 within the band): evaluated at each
+    # order's median bandwidth (all orders at once) and scaled
+    nu, gain4, d2p = _smearing_grid(float(fs_d), p)
+    h = 1.0 / (1.0 + 2.0 * (vkf_weight(b_med, fs_d, p) ** 2)[:, None] * d2p[None, :])
+    per_n0 = np.trapezoid(gain4 * h * h, nu, axis=1)
+    # |A''|² is averaged over the filter's response time, less ten times its expected noise
+    # part (E|A''_noise|² = 2 N0 ∫ D⁴|H|²): only curvature well above the noise counts (noise
+    # alone would otherwise read as smearing that grows with B)
+    span = np.maximum(1, np.round(fs_d / (2.0 * b_low))).astype(np.int64)
+    return _vkf_noise.noise_smearing(env, n0, bw_d, per_n0, b_med, span, p,
+                                       smearing_constant(p), fs_d, enbw_per_hz)
+
+
+@functools.lru_cache(maxsize=16)
+def _smearing_grid(fs_d: float, p: int):
+    """``ν`` over the solve band (4097 points), ``(2 sin(πν/fs) fs)^4`` and
+    ``(2 sin(πν/fs))^{2p}`` for the noise part of ``|A''|²`` (read-only arrays)."""
     nu = np.linspace(-0.5 * fs_d, 0.5 * fs_d, 4097)
     d2nu = (2.0 * np.sin(np.pi * nu / fs_d)) ** 2          # (2 sin(πν/fs))², once for all orders
     gain4 = d2nu * d2nu * fs_d ** 4
     d2p = d2nu if p == 1 else d2nu * d2nu                  # (2 sin(πν/fs))^{2p}
-    per_n0 = np.empty(k)
-    span = np.empty(k, np.int64)
-    for j in range(k):
-        # the integral scales as B^5 for p = 2 (B^3 for p = 1 within the band): evaluate at the
-        # median bandwidth and scale
-        h = 1.0 / (1.0 + 2.0 * vkf_weight(float(b_med[j]), fs_d, p) ** 2 * d2p)
-        per_n0[j] = np.trapezoid(gain4 * h * h, nu)
-        # |A''|² is averaged over the filter's response time, less ten times its expected
-        # noise part (E|A''_noise|² = 2 N0 ∫ D⁴|H|²): only curvature well above the noise
-        # counts (noise alone would otherwise read as smearing that grows with B)
-        span[j] = max(1, int(round(fs_d / (2.0 * b_low[j]))))
-    return noise, _vkf_kernels.smearing(env, n0, bw_d, per_n0, b_med, span, p,
-                                        smearing_constant(p), fs_d)
+    for a in (nu, gain4, d2p):
+        a.flags.writeable = False
+    return nu, gain4, d2p
 
 
 def _local_noise(residual, fs_d, f_ord, b_med, f_pass, p=2, trend_hz=0.0, bw_d=None):
@@ -624,11 +669,10 @@ def _local_noise(residual, fs_d, f_ord, b_med, f_pass, p=2, trend_hz=0.0, bw_d=N
     length = min(length, int(2 ** np.floor(np.log2(max(64, nd)))))
     hop = length // 2
     starts = np.arange(0, max(1, nd - length + 1), hop)
-    win = np.hanning(length + 1)[:length]
     frames = residual[starts[:, None] + np.arange(min(length, nd))[None, :]]
-    if frames.shape[1] < length:                       # a record shorter than one frame
-        win = np.hanning(frames.shape[1] + 1)[:frames.shape[1]]
-    spec = np.abs(np.fft.rfft(frames * win, axis=1)) ** 2 * (2.0 / (fs_d * np.sum(win ** 2)))
+    win, power = _periodic_hann(frames.shape[1])      # (shorter: a record under one frame)
+    spec = np.fft.rfft(frames * win, axis=1)
+    spec = (spec.real ** 2 + spec.imag ** 2) * (2.0 / (fs_d * power))
     freq = np.fft.rfftfreq(frames.shape[1], 1.0 / fs_d)
     df = float(freq[1]) if freq.shape[0] > 1 else fs_d
     centre = starts + 0.5 * frames.shape[1]
@@ -637,16 +681,18 @@ def _local_noise(residual, fs_d, f_ord, b_med, f_pass, p=2, trend_hz=0.0, bw_d=N
         bw_d = np.broadcast_to(np.asarray(b_med, float)[None, :], f_ord.shape)
     spec = spec / _notch_depth(f_ord, starts, frames.shape[1], win, freq, bw_d, trend_hz,
                                fs_d, p)
-    out = np.empty((nd, k))
-    for j in range(k):
-        b = float(b_med[j])
-        reach = max(8.0 * b, 20.0 * df)
-        f_frame = np.interp(centre, np.arange(nd), f_ord[:, j])
-        # lower quartile of an exponential variable: ln(4/3) of its mean (robust to up to
-        # three quarters of the bins holding lines of orders not tracked)
-        level = _vkf_kernels.lower_quartiles(spec, freq, flat, f_frame, reach) / np.log(4.0 / 3.0)
-        out[:, j] = np.interp(np.arange(nd), centre, level)
-    return out
+    # lower quartile of an exponential variable: ln(4/3) of its mean (robust to up to three
+    # quarters of the bins holding lines of orders not tracked), per frame, to every sample
+    reach = np.maximum(8.0 * np.asarray(b_med, float), 20.0 * df)
+    return _vkf_noise.local_levels(spec, freq, flat, centre, f_ord, reach)
+
+
+@functools.lru_cache(maxsize=8)
+def _periodic_hann(length: int):
+    """Periodic Hann window of ``length`` samples (read-only) and its power ``Σ w²``."""
+    win = np.hanning(length + 1)[:length]
+    win.flags.writeable = False
+    return win, float(np.sum(win ** 2))
 
 
 def _notch_depth(f_ord, starts, length, win, freq, bw_d, trend_hz, fs_d, p):
@@ -655,15 +701,20 @@ def _notch_depth(f_ord, starts, length, win, freq, bw_d, trend_hz, fs_d, p):
     envelope response :func:`vkf_weight` at the order's bandwidth there (``bw_d``, per sample
     and order: an adaptive band widened around a resonance notches wider), averaged over 3
     instants of the frame weighted by the window's energy (in a sweep the notch moves within
-    the frame); NaN below 1/4 (too empty to read). ``H`` < 1e-3 beyond 3 B of its line (2nd
-    order; 1st order: 6 B): only those bins are computed."""
+    the frame); NaN below 1/4 (too empty to read). ``H`` < 1e-3 beyond
+    ``(B/2)((1e3 − 1)/(√2 − 1))^{1/2p}`` of its line (3.50 B for ``p = 2``, 24.5 B for
+    ``p = 1``): only those bins are computed (compiled: :func:`_vkf_noise.notch_depth`)."""
     nd, k = f_ord.shape
     frames, bins = starts.shape[0], freq.shape[0]
     df = float(freq[1] - freq[0]) if bins > 1 else fs_d
     offsets = (np.arange(3) + 0.5) / 3.0 * length
     weights = np.interp(offsets, np.arange(length), win ** 2)
     weights = weights / weights.sum()
-    reach_per_hz = 3.0 if p == 2 else 6.0
+    # H(ν) = 1/(1 + c (2ν/B)^{2p}) reaches 1e-3 at ν = reach · B
+    reach_per_hz = 0.5 * ((1e3 - 1.0) / (np.sqrt(2.0) - 1.0)) ** (1.0 / (2 * p))
+    if _vkf_noise.accelerated():
+        return _vkf_noise.notch_depth(f_ord, bw_d, starts, offsets, weights, bins, df,
+                                        trend_hz, fs_d, p, reach_per_hz)
     # every line at once (each order and its mirror, the trend's positive side) at each of the
     # 3 instants: the product of the (1 - H)² factors of one (instant, frame, bin) as the exp
     # of a sum of logs (one bincount, not a Python loop of small multiply.at scatters)

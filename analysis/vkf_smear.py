@@ -310,7 +310,10 @@ def refilter_bias(env, bw_d, fs_d: float, p: int, noise=None) -> np.ndarray:
         coarse = refilter_bias(env[at], bw_d[at], fs_d / step, p,
                                None if noise is None else noise[at])
         grid = np.arange(n)
-        return np.stack([np.interp(grid, at, coarse[:, j]) for j in range(k)], axis=1)
+        out = np.empty((n, k))              # column by column (np.stack on axis 1: a slow copy)
+        for j in range(k):
+            out[:, j] = np.interp(grid, at, coarse[:, j])
+        return out
     if n <= p + 1:
         return np.zeros((n, k))
     # weight of the difference row starting at sample i sits at its centre i + p/2

@@ -11,15 +11,21 @@ import numpy as np
 import pytest
 
 from crankbench.analysis import _vkf_kernels as kern
+from crankbench.analysis import _vkf_noise as noise_kern
 from crankbench.analysis import vkf
 from crankbench.analysis.resample import shaft_angle
 from crankbench.predict.errors import AnalysisError
 
 
+def _clear():
+    kern._numba.cache_clear()
+    noise_kern._numba.cache_clear()
+
+
 def _numpy_forms(monkeypatch):
     monkeypatch.setenv("CRANKBENCH_NO_NUMBA", "1")
-    kern._numba.cache_clear()
-    assert not kern.accelerated()
+    _clear()
+    assert not kern.accelerated() and not noise_kern.accelerated()
 
 
 def _both(monkeypatch, call):
@@ -28,10 +34,10 @@ def _both(monkeypatch, call):
     _numpy_forms(monkeypatch)
     plain = call()
     monkeypatch.delenv("CRANKBENCH_NO_NUMBA")
-    kern._numba.cache_clear()
-    assert kern.accelerated()
+    _clear()
+    assert kern.accelerated() and noise_kern.accelerated()
     compiled = call()
-    kern._numba.cache_clear()
+    _clear()
     return plain, compiled
 
 
@@ -43,10 +49,10 @@ def form(request, monkeypatch):
     else:
         pytest.importorskip("numba")
         monkeypatch.delenv("CRANKBENCH_NO_NUMBA", raising=False)
-        kern._numba.cache_clear()
-        assert kern.accelerated()
+        _clear()
+        assert kern.accelerated() and noise_kern.accelerated()
     yield request.param
-    kern._numba.cache_clear()
+    _clear()
 
 
 def _small_system(n=203, k=2, m=5, p=2, trend=True, seed=4):
@@ -174,13 +180,87 @@ def test_lower_quartiles_match_numpy_percentile(form):
     f_frame = np.array([10.0, 50.0, 119.0, 300.0, 60.0, 0.5])
     spec[4, np.abs(freq - 64.0) < 5.0] = np.nan       # another order's notch beside frame 4's
     spec[:, freq < 3.0] = np.nan                      # order 0's
-    got = kern.lower_quartiles(spec, freq, flat, f_frame, 20.0)
+    got = noise_kern.lower_quartiles(spec, freq, flat, f_frame, 20.0)
     for i, f0 in enumerate(f_frame):
         ok = flat & ~np.isnan(spec[i])
         near = ok & (np.abs(freq - f0) <= 20.0)
         near = near if near.sum() >= 5 else ok
         assert got[i] == pytest.approx(np.percentile(spec[i, near], 25), rel=1e-14)
     assert np.isfinite(got).all()
+
+
+@pytest.mark.parametrize("frames", [1, 7])
+def test_local_levels_compiled_equals_numpy(monkeypatch, frames):
+    """Per-frame quartiles beside each order, interpolated to every sample (np.interp both
+    ways in the numpy form; one frame: constant)."""
+    rng = np.random.default_rng(2)
+    nd, bins = 3000, 257
+    spec = rng.exponential(size=(frames, bins))
+    spec[:, 40:44] = np.nan
+    freq = np.linspace(0.0, 128.0, bins)
+    flat = (freq > 0) & (freq < 110.0)
+    centre = 256.0 + 400.0 * np.arange(frames) + 0.5
+    f_ord = np.stack([np.linspace(10.0, 30.0, nd), np.linspace(45.0, 95.0, nd)], axis=1)
+    reach = np.array([6.0, 12.0])
+    plain, compiled = _both(monkeypatch, lambda: noise_kern.local_levels(spec, freq, flat, centre,
+                                                                   f_ord, reach))
+    assert plain.shape == (nd, 2) and np.isfinite(plain).all()
+    np.testing.assert_allclose(compiled, plain, rtol=1e-14, atol=0)
+    if frames > 1:            # the first and last frames' levels held beyond their centres
+        f0 = np.interp(centre[:1], np.arange(nd), f_ord[:, 0])
+        first = noise_kern.lower_quartiles(spec, freq, flat, f0, 6.0)[0] / np.log(4 / 3)
+        assert plain[0, 0] == pytest.approx(first, rel=1e-14)
+
+
+def _notch_case(p, trend_hz, sweep=True):
+    nd, fs_d, length = 5000, 500.0, 1024
+    rpm = np.linspace(1000.0, 3000.0, nd) if sweep else np.full(nd, 1500.0)
+    orders = np.array([1.0, 2.0, 4.5])
+    f_ord = orders[None, :] * rpm[:, None] / 60.0
+    bw = np.full((nd, 3), 0.5)
+    if sweep:
+        bw[1500:3500, 2] = np.linspace(0.5, 4.0, 2000)      # an adaptive band widened
+    starts = np.arange(0, nd - length + 1, length // 2)
+    win = np.hanning(length + 1)[:length]
+    freq = np.fft.rfftfreq(length, 1.0 / fs_d)
+    return (f_ord, starts, length, win, freq, bw, trend_hz, fs_d, p)
+
+
+@pytest.mark.parametrize("p", [1, 2])
+def test_notch_depth_is_the_filter_response_on_a_steady_record(form, p):
+    """At constant speed and band every instant of a frame sees the same lines: the depth is
+    ∏ (1 − H(ν − f_m))² over the orders, their mirrors and the trend, H the envelope
+    response 1/(1 + 2 r² (2 sin(πν/fs))^{2p}) of ``vkf_weight`` (NaN below 1/4)."""
+    case = _notch_case(p, 0.3, sweep=False)
+    f_ord, freq, bw, fs_d = case[0], case[4], case[5], case[7]
+    depth = vkf._notch_depth(*case)
+
+    def gain(nu, b):
+        return 1.0 / (1.0 + 2.0 * vkf.vkf_weight(b, fs_d, p) ** 2
+                      * (2.0 * np.sin(np.pi * nu / fs_d)) ** (2 * p))
+
+    expect = np.ones_like(freq)
+    for c, b in [(f, 0.5) for f in f_ord[0]] + [(-f, 0.5) for f in f_ord[0]] + [(0.0, 0.3)]:
+        expect *= (1.0 - gain(freq - c, b)) ** 2          # every bin (the code: H ≥ 1e-3)
+    expect = np.where(expect >= 0.25, expect, np.nan)
+    assert np.isnan(depth).any() and (depth[np.isfinite(depth)] < 0.99).any()
+    for row in depth:
+        np.testing.assert_array_equal(np.isnan(row), np.isnan(expect))
+        ok = np.isfinite(expect)
+        # each line's factor is cut where it is within 2e-3 of 1 (two tails may overlap)
+        np.testing.assert_allclose(row[ok], expect[ok], rtol=0, atol=2e-3 if p == 2 else 4e-3)
+
+
+@pytest.mark.parametrize("p, trend_hz", [(1, 0.0), (2, 0.3)])
+def test_notch_depth_compiled_equals_numpy(monkeypatch, p, trend_hz):
+    """A sweep with a band widened in time (the compiled per-frame form against the numpy
+    scatter of log factors): equal to rounding, NaN at the same bins."""
+    case = _notch_case(p, trend_hz)
+    plain, compiled = _both(monkeypatch, lambda: vkf._notch_depth(*case))
+    np.testing.assert_array_equal(np.isnan(plain), np.isnan(compiled))
+    ok = np.isfinite(plain)
+    assert (plain[ok] < 0.9).sum() > 50
+    np.testing.assert_allclose(compiled[ok], plain[ok], rtol=1e-13, atol=1e-15)
 
 
 def test_compiled_and_numpy_forms_agree_on_a_record(monkeypatch):
