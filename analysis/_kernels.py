@@ -115,33 +115,27 @@ def _numba():
 
     @njit(cache=True, fastmath={"reassoc", "contract"})
     def halfband(x, taps):   # pragma: no cover - compiled
-        # y[j] = x[2j]/2 + sum_k taps[k] (x[2j-2k-1] + x[2j+2k+1]), zeros outside x; the
-        # interior with the 8 taps written out (a loop over k is not vectorised: 6x slower)
+        # y[j] = x[2j]/2 + sum_k taps[k] (x[2j-2k-1] + x[2j+2k+1]), zeros outside x. The odd
+        # samples are copied out first, zero padded (o[8 + i] = x[2i + 1]), so the sum reads
+        # o[j+7-k] + o[j+8+k]: unit stride, the 8 taps written out (vectorised: a loop over
+        # the taps on x itself ran 4x slower)
         n = x.shape[0]
         m = (n + 1) // 2
+        n_odd = n // 2
+        o = np.empty(n_odd + 16)
+        o[:8] = 0.0
+        o[n_odd + 8:] = 0.0
+        for i in range(n_odd):
+            o[8 + i] = x[2 * i + 1]
         out = np.empty(m)
         t0, t1, t2, t3 = taps[0], taps[1], taps[2], taps[3]
         t4, t5, t6, t7 = taps[4], taps[5], taps[6], taps[7]
-        lo = 8                                   # 2j - 15 >= 0
-        hi = max(lo, (n - 16) // 2 + 1)          # 2j + 15 <= n - 1
-        for j in range(lo, hi):
-            c = 2 * j
-            out[j] = (0.5 * x[c] + t0 * (x[c - 1] + x[c + 1]) + t1 * (x[c - 3] + x[c + 3])
-                      + t2 * (x[c - 5] + x[c + 5]) + t3 * (x[c - 7] + x[c + 7])
-                      + t4 * (x[c - 9] + x[c + 9]) + t5 * (x[c - 11] + x[c + 11])
-                      + t6 * (x[c - 13] + x[c + 13]) + t7 * (x[c - 15] + x[c + 15]))
         for j in range(m):
-            if lo <= j < hi:
-                continue
-            c = 2 * j
-            acc = 0.5 * x[c]
-            for k in range(8):
-                d = 2 * k + 1
-                if c - d >= 0:
-                    acc += taps[k] * x[c - d]
-                if c + d < n:
-                    acc += taps[k] * x[c + d]
-            out[j] = acc
+            b = j + 8
+            out[j] = (0.5 * x[2 * j] + t0 * (o[b - 1] + o[b]) + t1 * (o[b - 2] + o[b + 1])
+                      + t2 * (o[b - 3] + o[b + 2]) + t3 * (o[b - 4] + o[b + 3])
+                      + t4 * (o[b - 5] + o[b + 4]) + t5 * (o[b - 6] + o[b + 5])
+                      + t6 * (o[b - 7] + o[b + 6]) + t7 * (o[b - 8] + o[b + 7]))
         return out
 
     return {"integrate": integrate, "interp_at": interp_at, "sinc": sinc,
