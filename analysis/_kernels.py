@@ -16,7 +16,7 @@ import functools
 import numpy as np
 
 __all__ = ["accelerated", "integrate_speed", "positions", "lerp", "positions_and_values",
-           "sinc_interp", "halfband_decimate"]
+           "sinc_interp", "halfband_decimate", "angle_grid"]
 
 
 @functools.lru_cache(maxsize=1)
@@ -138,8 +138,39 @@ def _numba():
                       + t6 * (o[b - 7] + o[b + 6]) + t7 * (o[b - 8] + o[b + 7]))
         return out
 
+    @njit(cache=True)
+    def grid(speed, scale, dphi, first, last, bound):   # pragma: no cover - compiled
+        # integrate's running sum, and in the same pass the positions (invert_lerp's
+        # formula) where it reaches j·dphi, j from ceil(phi[first]/dphi) to
+        # floor(phi[last]/dphi), with the speed interpolated there
+        n = speed.shape[0]
+        phi = np.empty(n)
+        pos = np.empty(bound)
+        at = np.empty(bound)
+        phi[0] = 0.0
+        acc = 0.0
+        j = 0
+        x = 0.0
+        m = 0
+        for i in range(n - 1):
+            nxt = acc + (speed[i + 1] + speed[i]) * scale
+            phi[i + 1] = nxt
+            if i == first:
+                j = int(np.ceil(acc / dphi))
+                x = j * dphi
+            if first <= i <= last:
+                while x < nxt and (i < last or x <= acc) and m < bound:
+                    frac = (1.0 / (nxt - acc)) * (x - acc)
+                    pos[m] = frac + i
+                    at[m] = (speed[i + 1] - speed[i]) * frac + speed[i]
+                    m += 1
+                    j += 1
+                    x = j * dphi
+            acc = nxt
+        return phi, pos[:m], at[:m], j - m
+
     return {"integrate": integrate, "interp_at": interp_at, "sinc": sinc,
-            "invert_lerp": invert_lerp, "halfband": halfband}
+            "invert_lerp": invert_lerp, "halfband": halfband, "grid": grid}
 
 
 def accelerated() -> bool:
@@ -232,3 +263,29 @@ def halfband_decimate(x: np.ndarray, taps: np.ndarray) -> np.ndarray:
         out += taps[k] * (padded[reach - d:reach - d + 2 * m:2] +
                           padded[reach + d:reach + d + 2 * m:2])
     return out
+
+
+def angle_grid(speed_rpm: np.ndarray, fs: float, dphi: float, first: int, last: int, *,
+               speed_max: float | None = None):
+    """The trapezoidal shaft angle (rad, 0 at the first sample; :func:`integrate_speed`) and
+    the angle samples ``j·dphi`` from ``ceil(φ[first]/dphi)`` to ``floor(φ[last]/dphi)``:
+    ``(phi, j0, positions, speed there)`` — :func:`positions_and_values` of that grid, in the
+    same pass as the integration when compiled (0 < first < last < len - 1; ``speed_max``,
+    when known, saves a pass)."""
+    speed = np.ascontiguousarray(speed_rpm, dtype=float)
+    scale = np.pi / (60.0 * fs)
+    kernels = _numba()
+    if kernels is not None:
+        # at most (phi[last] - phi[first]) / dphi + 1 samples; phi[last] <= the sum bound
+        top = (float(np.max(speed)) if speed_max is None else speed_max) * 2.0 * scale * (
+            last - first + 1)
+        bound = int(top / dphi) + 2
+        phi, pos, at, j0 = kernels["grid"](speed, scale, float(dphi), int(first), int(last),
+                                           bound)
+        return phi, int(j0), pos, at
+    phi = integrate_speed(speed, fs, 0.0)
+    j0 = int(np.ceil(phi[first] / dphi))
+    j1 = int(np.floor(phi[last] / dphi))
+    grid = np.arange(j0, j1 + 1) * dphi
+    pos, at = positions_and_values(phi, grid, 0, speed)
+    return phi, j0, pos, at

@@ -622,7 +622,8 @@ def angle_range(plan: ChunkPlan, phi_first: float, phi_last: float) -> tuple[int
 
 
 def resample_span(plan: ChunkPlan, ks, values: np.ndarray, start: int, phi: np.ndarray,
-                  speed_rpm: np.ndarray, j_first: int, j_last: int, *, last: bool):
+                  speed_rpm: np.ndarray, j_first: int, j_last: int, *, last: bool,
+                  positions=None):
     """Angle samples produced by chunks ``ks`` from one span of input samples.
 
     Parameters
@@ -639,6 +640,9 @@ def resample_span(plan: ChunkPlan, ks, values: np.ndarray, start: int, phi: np.n
         Angle-sample index range still to produce (the caller carries ``j_first``).
     last : bool
         The span holds the final chunk (all remaining angle samples up to ``j_last``).
+    positions : (ndarray, ndarray), optional
+        With ``last``: the input positions of the angle samples ``j_first … j_last`` and the
+        speed there, when already known (:func:`angle_grid`).
 
     Returns
     -------
@@ -651,9 +655,12 @@ def resample_span(plan: ChunkPlan, ks, values: np.ndarray, start: int, phi: np.n
     stop = int(plan.bounds[ks[-1] + 1])
     top = j_last if last else min(j_last, int(np.floor(phi[-1] / dphi)))
     grid = np.arange(j_first, top + 1) * dphi
-    from ._kernels import positions_and_values
+    if positions is not None and last:
+        u_out, rpm_out = positions
+    else:
+        from ._kernels import positions_and_values
 
-    u_out, rpm_out = positions_and_values(phi, grid, start, speed_rpm)
+        u_out, rpm_out = positions_and_values(phi, grid, start, speed_rpm)
     if not last:
         keep = int(np.searchsorted(u_out, stop, side="left"))
         grid, u_out, rpm_out = grid[:keep], u_out[:keep], rpm_out[:keep]
@@ -681,24 +688,43 @@ def resample_arrays(values: np.ndarray, fs: float, speed_rpm: np.ndarray, *,
                     samples_per_rev: int = 64, interpolation: str = "auto",
                     antialias: bool = True, chunk: int = 1 << 18, angle=None, label="x"):
     """:func:`angle_resample` on plain arrays: ``(values, time, rpm, angle, plan)``."""
-    n = values.shape[0]
-    speed = speed_rpm
-    plan = plan_chunks(speed, n=n, fs=fs, samples_per_rev=samples_per_rev,
+    plan = plan_chunks(speed_rpm, n=values.shape[0], fs=fs, samples_per_rev=samples_per_rev,
                        interpolation=interpolation, antialias=antialias, chunk=chunk)
-    phi = shaft_angle(speed, fs) if angle is None else angle
+    phi, j0, j1, positions = angle_samples(plan, speed_rpm, angle=angle, label=label)
+    out, t_out, rpm_out, grid = resample_span(plan, range(plan.chunks), values, 0, phi,
+                                              speed_rpm, j0, j1, last=True, positions=positions)
+    return out, t_out, rpm_out, grid, plan
+
+
+def angle_samples(plan: ChunkPlan, speed_rpm: np.ndarray, *, angle=None, label="x",
+                  speed_max=None):
+    """The shaft angle of a whole record and the angle samples its plan can produce:
+    ``(phi, j0, j1, positions)`` — ``phi`` the given ``angle`` or the integrated speed (rad),
+    samples ``j0 … j1`` (``j · 2π/samples_per_rev``) complete after the filter and the
+    interpolation, ``positions`` their input positions and speed for :func:`resample_span`
+    (found in the integration's own pass; None for a given angle)."""
+    n = plan.n
     first, last = plan.usable()
     if last <= first:
         raise AnalysisError(f"{label}: record of {n} samples is shorter than the anti-alias "
                             f"filter ({2 * max(plan.filter_half) + 1} samples); pass "
                             "antialias=False or a longer record")
-    j0, j1 = angle_range(plan, phi[first], phi[last])
+    positions = None
+    if angle is None:
+        from ._kernels import angle_grid
+
+        phi, j0, u_out, rpm_out = angle_grid(speed_rpm, plan.fs, _TWO_PI / plan.samples_per_rev,
+                                             first, last, speed_max=speed_max)
+        j1 = j0 + u_out.shape[0] - 1
+        positions = (u_out, rpm_out)
+    else:
+        phi = angle
+        j0, j1 = angle_range(plan, phi[first], phi[last])
     if j1 - j0 < 3:
         raise AnalysisError(f"{label}: the record covers only "
                             f"{(phi[-1] - phi[0]) / _TWO_PI:.3g} revolutions; need at least a "
                             "few angle samples")
-    out, t_out, rpm_out, grid = resample_span(plan, range(plan.chunks), values, 0, phi, speed,
-                                              j0, j1, last=True)
-    return out, t_out, rpm_out, grid, plan
+    return phi, j0, j1, positions
 
 
 # ---------------------------------------------------------------------------- public

@@ -60,3 +60,35 @@ def test_plan_uses_stages_only_where_the_output_rate_allows():
         assert nfft % (1 << s) == 0 and n_out <= nfft >> s
         assert f_stop <= fs / (1 << (s + 2))
     assert plan_chunks(rpm, n=rpm.size, fs=fs, interpolation="cubic").halfband_stages == (0, 0)
+
+
+@pytest.mark.parametrize("speed", ["runup", "steady", "wobbly"])
+@pytest.mark.parametrize("compiled", [True, False])
+def test_angle_grid_matches_integration_and_inverse_interpolation(speed, compiled, monkeypatch):
+    """The fused pass (integration + positions of the angle samples + speed there) against
+    the separate steps it replaces: the trapezoidal angle, and numpy.interp inverting it."""
+    from crankbench.analysis._kernels import angle_grid
+
+    fs, n = 5000.0, 20_000
+    t = np.arange(n) / fs
+    rpm = {"runup": 600.0 + 300.0 * t, "steady": np.full(n, 1500.0),
+           "wobbly": 1200.0 + 40.0 * np.sin(2 * np.pi * 3.0 * t)}[speed]
+    dphi = 2 * np.pi / 32
+    first, last = 37, n - 41
+    if not compiled:
+        monkeypatch.setenv("CRANKBENCH_NO_NUMBA", "1")
+    _kernels._numba.cache_clear()
+    try:
+        phi, j0, pos, at = angle_grid(rpm, fs, dphi, first, last)
+    finally:
+        monkeypatch.delenv("CRANKBENCH_NO_NUMBA", raising=False)
+        _kernels._numba.cache_clear()
+    inc = (rpm[1:] + rpm[:-1]) * (np.pi / (60.0 * fs))
+    want_phi = np.concatenate([[0.0], np.cumsum(inc)])
+    np.testing.assert_allclose(phi, want_phi, rtol=1e-12, atol=1e-9)
+    j1 = int(np.floor(phi[last] / dphi))
+    assert j0 == int(np.ceil(phi[first] / dphi)) and pos.shape[0] == j1 - j0 + 1
+    grid = np.arange(j0, j1 + 1) * dphi
+    want_pos = np.interp(grid, phi, np.arange(n, dtype=float))
+    np.testing.assert_allclose(pos, want_pos, rtol=0, atol=1e-9)
+    np.testing.assert_allclose(at, np.interp(grid, phi, rpm), rtol=1e-12)
