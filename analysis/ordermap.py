@@ -142,7 +142,7 @@ def order_map(x, *, fs=None, speed_rpm, samples_per_rev: int = 64, revolutions: 
                                                              error=AnalysisError)
     from .orders import _stopped_spans, _track_running_spans
 
-    speed_max, running = _running_throughout(x, speed_rpm)
+    limits, running = _running_throughout(x, speed_rpm)
     stops = None if running or np.isscalar(speed_rpm) else _stopped_spans(x, fs, speed_rpm)
     if stops is not None:   # a record that stops: the map of each running span, as tracks
         m = _track_running_spans(
@@ -167,9 +167,10 @@ def order_map(x, *, fs=None, speed_rpm, samples_per_rev: int = 64, revolutions: 
 
     # the plan from the speed alone; the shaft angle and the angle samples' positions in one
     # pass; the channel's trend (by that angle) removed before the anti-alias filter
-    plan = plan_chunks(speed, n=n, fs=fs_, samples_per_rev=spr, interpolation=interpolation)
+    plan = plan_chunks(speed, n=n, fs=fs_, samples_per_rev=spr, interpolation=interpolation,
+                       speed_limits=limits)
     phi, j0, j1, positions = angle_samples(plan, speed, angle=angle, label=label,
-                                           speed_max=speed_max)
+                                           speed_max=None if limits is None else limits[1])
     attrs_in = getattr(x, "attrs", {}) or {}
     values, trend_info = remove_trend(values, fs_, phi=phi, speed_rpm=speed, kind=trend,
                                       quantity=attrs_in.get("quantity"), units=units)
@@ -211,7 +212,7 @@ def order_map(x, *, fs=None, speed_rpm, samples_per_rev: int = 64, revolutions: 
 
 
 def _running_throughout(x, speed_rpm):
-    """``(max speed, True)`` when ``speed_rpm`` is a finite float64 array, one value per
+    """``((min, max) speed, True)`` when ``speed_rpm`` is a finite float64 array, one value per
     sample of ``x``, above 0.5 % of its maximum everywhere (no stop, nothing for
     :func:`_as_rpm` to refuse), found from its minimum and maximum alone (NaN and inf show in
     one of them: two vectorised passes); else ``(None, False)`` (the full checks then run)."""
@@ -221,7 +222,7 @@ def _running_throughout(x, speed_rpm):
         return None, False
     lo, hi = float(speed.min()), float(speed.max())
     if np.isfinite(lo) and np.isfinite(hi) and hi > 0 and lo > 5e-3 * hi:
-        return hi, True
+        return (lo, hi), True
     return None, False
 
 

@@ -480,9 +480,10 @@ class ChunkPlan:
         return first, last
 
 
-def _split_chunks(speed, n: int, chunk: int):
+def _split_chunks(speed, n: int, chunk: int, limits=None):
     """Chunk limits of at most ``chunk`` samples, split until speed varies < 2:1 in each, and
-    the (min, max) speed of each. ``speed(a, b)`` returns the speed (rpm) of samples a..b-1."""
+    the (min, max) speed of each. ``speed(a, b)`` returns the speed (rpm) of samples a..b-1;
+    ``limits``, the whole record's (min, max) when already known."""
     n_chunks = max(1, int(math.ceil(n / chunk)))
     pending = [int(v) for v in np.round(np.linspace(0, n, n_chunks + 1))]
     out = [pending[0]]
@@ -490,7 +491,8 @@ def _split_chunks(speed, n: int, chunk: int):
     for b0 in pending[1:]:
         a0 = out[-1]
         sp = speed(a0, b0)
-        low = float(sp.min())
+        whole = limits is not None and (a0, b0) == (0, n)
+        low = float(limits[0]) if whole else float(sp.min())
         if low <= 0:
             raise AnalysisError(f"rpm must be > 0 throughout; found {low:.6g} rpm "
                                 f"between samples {a0} and {b0}")
@@ -501,7 +503,7 @@ def _split_chunks(speed, n: int, chunk: int):
             b = stack[-1]
             seg = sp[a - a0:b - a0]
             lo = known[2] if (a, b) == known[:2] else float(seg.min())
-            hi = float(seg.max())
+            hi = float(limits[1]) if whole and (a, b) == (0, n) else float(seg.max())
             if hi <= 2.0 * lo or b - a <= 256:
                 out.append(b)
                 ranges.append((lo, hi))
@@ -514,7 +516,7 @@ def _split_chunks(speed, n: int, chunk: int):
 
 def plan_chunks(speed_rpm, *, n: int, fs: float, samples_per_rev: int = 64,
                 interpolation: str = "auto", antialias: bool = True,
-                chunk: int = 1 << 18) -> ChunkPlan:
+                chunk: int = 1 << 18, speed_limits=None) -> ChunkPlan:
     """Decide chunks, anti-alias filters and decimation of a resampling from the speed.
 
     Parameters
@@ -528,6 +530,8 @@ def plan_chunks(speed_rpm, *, n: int, fs: float, samples_per_rev: int = 64,
         Input sample rate, Hz.
     samples_per_rev, interpolation, antialias, chunk
         As in :func:`angle_resample`.
+    speed_limits : (float, float), optional
+        The record's lowest and highest speed (rpm), when the caller knows them already.
 
     Returns
     -------
@@ -550,7 +554,7 @@ def plan_chunks(speed_rpm, *, n: int, fs: float, samples_per_rev: int = 64,
                                  error=AnalysisError)
     method = "bandlimited" if interpolation == "auto" else interpolation
     chunk = check_int(chunk, "chunk", minimum=1024, error=AnalysisError)
-    bounds, ranges = _split_chunks(speed, n, chunk)
+    bounds, ranges = _split_chunks(speed, n, chunk, speed_limits)
     top = max(r[1] for r in ranges)
     per_rev = 60.0 * fs / top
     if per_rev < 2.0:
