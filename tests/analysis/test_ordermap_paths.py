@@ -90,3 +90,19 @@ def test_an_angle_channel_loses_its_ramp_before_the_filter():
     m = order_map(x, speed_rpm=rpm, revolutions=8)
     assert "ramp" in m.attrs["trend"]
     assert np.abs(_mid(m, 1.5) / 2e-3 - 1).max() <= 1e-3
+
+
+def test_the_map_is_the_dataarray_xarray_itself_would_build():
+    """The directly built result (indexes handed over) against xarray's own inference from
+    the same values and coordinates: identical, indexes and all; selection works."""
+    _, rpm, phi = _runup(3.0)
+    m = order_map(np.cos(2 * phi), fs=FS, speed_rpm=rpm, revolutions=8)
+    ref = xr.DataArray(m.values, dims=("time", "order"), name=m.name, attrs=dict(m.attrs),
+                       coords={"time": ("time", m["time"].values, {"units": "s"}),
+                               "rpm": ("time", m["rpm"].values, {"units": "rpm"}),
+                               "order": ("order", m["order"].values,
+                                         {"units": "1", "long_name": "shaft order"})})
+    xr.testing.assert_identical(m, ref)
+    assert set(m.xindexes) == {"time", "order"}
+    assert m.sel(order=2.0).shape == (m.sizes["time"],)
+    assert float(m.sel(time=m["time"].values[1]).sel(order=2.0)) == pytest.approx(1.0, abs=1e-4)
