@@ -258,8 +258,7 @@ def _next_bandwidth(res, current, floor, cap, p):
 
     amp = np.abs(res["envelope"].values).T                  # (Nd, K)
     noise = res["amplitude_noise"].values.T
-    total = res["amplitude_uncertainty"].values.T
-    smear = np.sqrt(np.maximum(total ** 2 - noise ** 2, 0.0))
+    smear = res["smearing_model"].values.T       # the Lorentzian model: scales as B^(-2p)
     t = res["time"].values
     enbw_per_hz = float(enbw_hz(1.0, p))
     n0 = noise ** 2 / np.maximum(enbw_per_hz * current, 1e-300)
@@ -286,8 +285,7 @@ def _expected(res, current, new, p):
     ``current``, relative to the order's local level."""
     amp = np.abs(res["envelope"].values).T
     noise = res["amplitude_noise"].values.T
-    total = res["amplitude_uncertainty"].values.T
-    smear = np.sqrt(np.maximum(total ** 2 - noise ** 2, 0.0))
+    smear = res["smearing_model"].values.T       # the Lorentzian model: scales as B^(-2p)
     with np.errstate(divide="ignore", invalid="ignore"):
         smear_new = smear * np.minimum(current / new, 1e3) ** (2 * p)
         noise_new = noise * np.sqrt(new / current)

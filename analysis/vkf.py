@@ -86,7 +86,7 @@ from crankbench.predict._validate import check_int, check_option, check_positive
 from crankbench.predict.errors import AnalysisError
 from crankbench.predict._threads import single_threaded_blas
 
-from . import _vkf_kernels, vkf_iterative
+from . import _vkf_kernels, vkf_iterative, vkf_smear
 from .resample import _as_angle, _as_rpm, _as_signal
 from .resample import shaft_angle as _integrate_speed
 
@@ -172,6 +172,11 @@ def smearing_constant(filter_order: int) -> float:
 #: Kaiser's formula, raised where the cascade's computed pass band is not flat to 1e-5 (short
 #: stages miss the formula)
 _DECIMATION_DB = 112.0
+
+#: relative numerical floor of a solved envelope (stated in ``amplitude_uncertainty``): what a
+#: noise-free steady or slowly swept tone reads off once the decimation gain is divided out
+#: (``tests/analysis/test_vkf_smear.py``)
+NUMERICAL_FLOOR = 1e-6
 
 
 def _kaiser_lowpass(f_pass: float, f_stop: float, fs: float, db: float) -> np.ndarray:
@@ -402,8 +407,11 @@ def vold_kalman(x, *, fs=None, speed_rpm, orders, bandwidth_hz=None, bandwidth_o
          "amplitude_noise": (("order", "time"), res["noise"].T, {"units": units, "long_name":
                                                                  "1-sigma amplitude noise"}),
          "amplitude_uncertainty": (("order", "time"), res["uncertainty"].T,
-                                   {"units": units, "long_name": "1-sigma amplitude noise and "
-                                    "estimated envelope smearing"})},
+                                   {"units": units, "long_name": "1-sigma amplitude noise, "
+                                    "estimated envelope smearing and numerical floor"}),
+         "smearing_model": (("order", "time"), res["smearing_model"].T,
+                            {"units": units, "long_name": "smearing of a Lorentzian envelope "
+                             "of the solved curvature, K_p/(pi T B)^(2p) (to choose bandwidths)"})},
         coords={"order": ("order", res["orders"], {"units": "1"}),
                 "time": ("time", res["time"], {"units": "s"}),
                 "rpm": ("time", res["rpm"], {"units": "rpm"})},
@@ -516,9 +524,19 @@ def _vold_kalman_arrays(x, *, fs, speed_rpm, orders, bandwidth_hz, bandwidth_ord
         mean[start:stop] = mn[start - a: stop - a]
         model[start:stop] = mdl[start - a: stop - a]
     residual = xd - model
-    noise, smear = _uncertainty(env, residual, fs_d, orders, rpm_d if speeds is None
-                                else speeds[:, index].T, bw_d, p, f_max,
+    rpm_orders = rpm_d if speeds is None else speeds[:, index].T
+    if fs_d != fs:          # the cascade's pass band (flat to 1e-5) divided out: it is known
+        env = env / vkf_smear.decimation_gain(fs, f_max, int(round(fs / fs_d)),
+                                              orders[None, :] * (rpm_orders if rpm_orders.ndim == 2
+                                                                   else rpm_orders[:, None]) / 60.0)
+    noise, smear = _uncertainty(env, residual, fs_d, orders, rpm_orders, bw_d, p, f_max,
                                 trend_hz=b_trend if trend else 0.0)
+    # smearing: the larger of the second-pass estimate (any envelope shape, bandwidth changes,
+    # record ends) and the Lorentzian peak model (the second pass sees an already broadened
+    # peak: at 5 % loss it reads ~0.8 of it)
+    smear_stated = np.maximum(vkf_smear.refilter_bias(env, bw_d, fs_d, p, noise), smear)
+    stated = np.sqrt(noise * noise + smear_stated * smear_stated
+                     + (NUMERICAL_FLOOR * np.abs(env)) ** 2)
     std = np.sqrt(np.einsum("ij,ij->j", noise, noise) / nd)      # rms over time, per order
     fallback = iterative and min(iterations) < 0
     how = ("conjugate gradients" if iterative and not fallback else "banded Cholesky")
@@ -536,12 +554,15 @@ def _vold_kalman_arrays(x, *, fs, speed_rpm, orders, bandwidth_hz, bandwidth_ord
              "solve_rate_hz": fs_d, "decimation": int(round(fs / fs_d)),
              "block_samples": block, "overlap_samples": overlap, "knot_spacing_samples": m,
              "amplitude_std_estimate": std.tolist(),
-             "error_note": "amplitude_uncertainty = noise sqrt(N0*ENBW) and the smearing of "
-                           "the envelope estimated from its second derivative "
-                           f"(K_p/(pi T B)^(2p), K_p = {smearing_constant(p):.4g})"}
+             "error_note": "amplitude_uncertainty = noise sqrt(N0*ENBW), the smearing of "
+                           "the envelope by the filter (the larger of: filtering the solved "
+                           "envelope again, largest within 1/(2B); the Lorentzian-peak model "
+                           f"K_p/(pi T B)^(2p), K_p = {smearing_constant(p):.4g}) and a numerical floor "
+                           f"{NUMERICAL_FLOOR:.0e}|A|, in quadrature; envelopes corrected "
+                           "for the decimation filter's gain"}
     log.debug("vold_kalman %s: %d orders, %d samples at %.6g Hz", label, k, nd, fs_d)
     return {"envelope": env, "mean": mean, "residual": residual, "noise": noise,
-            "uncertainty": np.hypot(noise, smear), "time": index / fs, "rpm": rpm_d,
+            "uncertainty": stated, "smearing_model": smear, "time": index / fs, "rpm": rpm_d,
             "orders": orders, "cos": cosp, "sin": sinp, "units": units, "label": label,
             "attrs": attrs}
 
