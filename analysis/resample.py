@@ -17,7 +17,8 @@ frequency of ``o`` cycles per revolution whatever the speed does. Steps:
    rate is at most half the input rate, half-band decimations by 2 come first (31-tap
    equiripple, pass band to 1/8 and stop band from 3/8 of their input rate, both within
    1.7e-7: 135 dB; one compiled pass each), as many as keep the stop edge below 1/8 of a
-   stage's input rate, and the FFT runs on 1/2 or 1/4 of the samples (lengths
+   stage's input rate (on records at least 1000× the 15·(2^stages − 1) samples they leave
+   incomplete at either end), and the FFT runs on 1/2 or 1/4 of the samples (lengths
    ``2^a 5^b 3^c``, the chunk read with real samples up to that length rather than zero
    padded — after the chunk, or before it at the record's end; the anti-alias stop band
    measured on a 1000→3000 rpm run-up: a unit tone at orders 48–63 leaves ≤ 7.7e-6 at its
@@ -586,10 +587,14 @@ def plan_chunks(speed_rpm, *, n: int, fs: float, samples_per_rev: int = 64,
         ratio = max(1.0, fs / (4.0 * f_stop)) if method == "bandlimited" else 1.0
         # half-band stages first (each halves the rate while the stop edge stays below an
         # eighth of its input rate, i.e. while the output rate allows): the FFT then runs on
-        # 1/2^stages of the samples; their ends are incomplete over HB_REACH·(2^s − 1) samples
+        # 1/2^stages of the samples; their ends are incomplete over HB_REACH·(2^s − 1) more
+        # samples, so a record shorter than 1000× that margin goes without them
         stages = min(_HB_MAX_STAGES, int(math.floor(math.log2(ratio) + 1e-12)))
-        half = (int(math.ceil(_aa_half_length(f_pass, f_stop) * fs)) + 1
-                + _HB_REACH * ((1 << stages) - 1))
+        half = int(math.ceil(_aa_half_length(f_pass, f_stop) * fs)) + 1
+        if 2 * _HB_REACH * ((1 << stages) - 1) > n // 1000:
+            stages = 0      # their margin may cost 0.1 % of the record at most (a short
+            #                 record keeps every angle sample it had, and its cost is small)
+        half += _HB_REACH * ((1 << stages) - 1)
         if 2 * half + 1 > n:
             raise AnalysisError(
                 f"the anti-alias filter for {lo:.6g}..{hi:.6g} rpm at fs = {fs:.6g} Hz "
