@@ -517,7 +517,7 @@ def _split_chunks(speed, n: int, chunk: int, limits=None):
 
 def plan_chunks(speed_rpm, *, n: int, fs: float, samples_per_rev: int = 64,
                 interpolation: str = "auto", antialias: bool = True,
-                chunk: int = 1 << 18, speed_limits=None) -> ChunkPlan:
+                chunk: int = 1 << 18, speed_limits_rpm=None) -> ChunkPlan:
     """Decide chunks, anti-alias filters and decimation of a resampling from the speed.
 
     Parameters
@@ -531,7 +531,7 @@ def plan_chunks(speed_rpm, *, n: int, fs: float, samples_per_rev: int = 64,
         Input sample rate, Hz.
     samples_per_rev, interpolation, antialias, chunk
         As in :func:`angle_resample`.
-    speed_limits : (float, float), optional
+    speed_limits_rpm : (float, float), optional
         The record's lowest and highest speed (rpm), when the caller knows them already.
 
     Returns
@@ -555,7 +555,7 @@ def plan_chunks(speed_rpm, *, n: int, fs: float, samples_per_rev: int = 64,
                                  error=AnalysisError)
     method = "bandlimited" if interpolation == "auto" else interpolation
     chunk = check_int(chunk, "chunk", minimum=1024, error=AnalysisError)
-    bounds, ranges = _split_chunks(speed, n, chunk, speed_limits)
+    bounds, ranges = _split_chunks(speed, n, chunk, speed_limits_rpm)
     top = max(r[1] for r in ranges)
     per_rev = 60.0 * fs / top
     if per_rev < 2.0:
