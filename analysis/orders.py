@@ -63,6 +63,7 @@ from crankbench.predict._validate import (check_finite_array, check_int, check_o
 from crankbench.predict.errors import AnalysisError
 
 from .resample import INTERPOLATIONS, _angle_input, _as_rpm, _as_signal, resample_arrays
+from .block_smearing import smearing_bias, warn_block_smearing as _warn_block_smearing
 from .spans import stopped_spans as _stopped_spans
 
 __all__ = ["order_track", "order_map", "order_spectrum", "band_amplitude", "campbell_map",
@@ -284,6 +285,10 @@ class BlockFit:
         # time second moment of the window (in blocks², scaled by the block duration later)
         x = (np.arange(length) + 0.5) / length - 0.5
         self.mu2 = float(np.sum(w * x ** 2) / np.sum(w))
+        # the estimate's time is the window's centroid (samples from the block's first): a
+        # periodic Hann's is L/2, half a sample later than the block's middle (L - 1)/2 (a
+        # steady ramp envelope read 7e-5 high with the middle)
+        self.centroid = float(np.sum(np.arange(length) * w) / np.sum(w))
 
     def _too_close(self, gain):
         o = np.sort(np.concatenate([[0.0], self.orders]))
@@ -331,25 +336,6 @@ class BlockFit:
     def noise(self, floor: np.ndarray) -> np.ndarray:
         """1-σ amplitude error per (block, order) from the noise floor (mean square per bin)."""
         return np.sqrt(floor * self.enbw)[:, None] * self.noise_gain[None, :]
-
-
-def smearing_bias(coef: np.ndarray, t: np.ndarray, span_s: np.ndarray, mu2: float):
-    """Estimated envelope-smearing error of block (or filter) estimates: ``(μ₂/2)|A''|``.
-
-    ``coef`` (blocks, orders) complex amplitudes at times ``t`` (s), ``span_s`` the averaging
-    span (s) of each estimate and ``mu2`` its second moment in units of the span². The second
-    derivative is taken by finite differences of neighbouring estimates (exact for a quadratic
-    envelope; it under-reads a peak much narrower than the span, which the automatic settings
-    avoid)."""
-    n = coef.shape[0]
-    out = np.zeros(coef.shape)
-    if n < 3:
-        return out
-    dt = np.gradient(t)
-    d1 = np.gradient(coef, t, axis=0)
-    d2 = np.abs(np.gradient(d1, t, axis=0))
-    del dt
-    return 0.5 * mu2 * (span_s ** 2)[:, None] * d2
 
 
 # ---------------------------------------------------------------------------- order track
@@ -594,7 +580,7 @@ def _cot_track(context, orders, *, samples_per_rev, revolutions, overlap, window
     from .leakage import check_grid_leakage
 
     check_grid_leakage(fitter, y, starts, angle, coef, context["label"])
-    t, r, span = _block_coords(t_rel, rpm, starts, length)
+    t, r, span = _block_coords(t_rel, rpm, starts, length, fitter.centroid)
     return _cot_dataset(coef, mean, floor, fitter, t + context["t0"], r, span, context,
                         overlap=overlap, interpolation=plan.interpolation, plan=plan)
 
@@ -606,7 +592,8 @@ def _cot_dataset(coef, mean, floor, fitter, t, r, span, context, *, overlap, int
     orders = fitter.orders
     units, label = context["units"], context["label"]
     noise = fitter.noise(floor)
-    bias = smearing_bias(coef, t, span, fitter.mu2)
+    bias = smearing_bias(coef, t, span, fitter.mu2, r)
+    _warn_block_smearing(coef, bias, r, fitter, label)
     ds = _track_dataset(np.abs(coef).T * factor, np.angle(coef).T, orders, t, r, units, label,
                         context["reference"])
     ds["mean"] = ("time", mean, {"units": units, "long_name":
@@ -629,9 +616,10 @@ def _cot_dataset(coef, mean, floor, fitter, t, r, span, context, *, overlap, int
     return ds
 
 
-def _block_coords(t_rel, rpm, starts, length):
-    """Time (s, from the first sample), speed and duration of each block."""
-    centre = starts + length / 2.0 - 0.5
+def _block_coords(t_rel, rpm, starts, length, centroid=None):
+    """Time (s, from the first sample), speed and duration of each block; ``centroid``: the
+    window's centroid in samples from the block's first (default its middle)."""
+    centre = starts + (length / 2.0 - 0.5 if centroid is None else centroid)
     idx = np.arange(t_rel.shape[0])
     t = np.interp(centre, idx, t_rel)
     r = np.interp(centre, idx, rpm)

@@ -321,8 +321,9 @@ def _detrending_reader(var, speed, chunk, trend, segment):
 
 
 def _blocks(speed, reader, *, label, samples_per_rev, revolutions, overlap, interpolation,
-            chunk, segment, per_frames):
-    """Run the streamed angle resampling and call ``per_frames(frames, phi0, t, r, span)``."""
+            chunk, segment, per_frames, centroid=None):
+    """Run the streamed angle resampling and call ``per_frames(frames, phi0, t, r, span)``
+    (``t``, ``r`` at ``centroid`` samples from each block's first, default its middle)."""
     samples_per_rev = check_int(samples_per_rev, "samples_per_rev", minimum=4,
                                 error=AnalysisError)
     revolutions = check_int(revolutions, "revolutions", minimum=1, error=AnalysisError)
@@ -343,8 +344,9 @@ def _blocks(speed, reader, *, label, samples_per_rev, revolutions, overlap, inte
             continue
         _, local, (y, t, r, ang) = got
         idx = np.arange(y.shape[0])
-        tc = np.interp(local + length / 2.0 - 0.5, idx, t) + speed.t0
-        rc = np.interp(local + length / 2.0 - 0.5, idx, r)
+        at = local + (length / 2.0 - 0.5 if centroid is None else centroid)
+        tc = np.interp(at, idx, t) + speed.t0
+        rc = np.interp(at, idx, r)
         dur = np.interp(local + length - 1.0, idx, t) - t[local]
         for i in range(0, local.shape[0], 256):
             sl = local[i:i + 256]
@@ -472,7 +474,7 @@ def order_track_stream(record, channel: str, *, orders, speed_rpm=None, speed_ch
 
     _blocks(speed, reader, label=label, samples_per_rev=spr, revolutions=revolutions,
             overlap=overlap, interpolation=interpolation, chunk=chunk, segment=segment,
-            per_frames=per_frames)
+            per_frames=per_frames, centroid=fitter.centroid)
     cat = {k: np.concatenate(v) for k, v in parts.items()}
     context = {"factor": factor, "units": str(var.attrs.get("units", "")), "label": label,
                "reference": speed.angle_reference}
