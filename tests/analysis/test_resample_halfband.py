@@ -60,6 +60,10 @@ def test_plan_uses_stages_only_where_the_output_rate_allows():
         assert nfft % (1 << s) == 0 and n_out <= nfft >> s
         assert f_stop <= fs / (1 << (s + 2))
     assert plan_chunks(rpm, n=rpm.size, fs=fs, interpolation="cubic").halfband_stages == (0, 0)
+    # a 2.5 s record: the stages' margin (15·(2^s − 1) samples at either end) may take 0.1 %
+    # of it at most (50 samples): one stage for the second chunk, none for the first
+    short = 1000.0 + 2000.0 * np.arange(50_000) / 50_000
+    assert plan_chunks(short, n=short.size, fs=fs).halfband_stages == (0, 1)
 
 
 @pytest.mark.parametrize("speed", ["runup", "steady", "wobbly"])
