@@ -17,8 +17,8 @@ extension      format                      streams with :func:`open`
 
 Text and spreadsheet exports whose headers do not say what a column is are read through a
 channel map (``read(path, map=...)``, :mod:`measure.channelmap`), which also decodes raw wheel
-and TDC signals into pulse trains. HDF5/netCDF files holding external links or virtual
-datasets are refused (a record holds its own data).
+and TDC signals into pulse trains. HDF5/netCDF records whose channels, clocks or groups are
+external links or virtual datasets are refused (a record holds its own data).
 
 Input files are opened read-only and never modified. :func:`write` is atomic (temporary file
 in the target folder, then rename) and refuses to replace an existing file unless
@@ -224,25 +224,13 @@ def _read_checked(path, module, st, cmap, channels, allow_nonfinite) -> xr.Datas
     """Body of :func:`read`: parse (through the channel map ``cmap`` if any), mask, validate,
     flag clipping, stamp the source's identity ``st`` (its SHA-256 is computed on demand by
     :func:`measure.provenance.source_sha256`; a channel map's raw export is hashed now)."""
-    try:
-        if cmap is None:
-            ds = module.read(path, channels=channels)
-        else:
-            ds = _read_mapped(path, module, cmap, channels, allow_nonfinite)
-    except ConfigError as exc:  # the map's fault: name the map and the data file
-        if cmap is None:
-            raise
-        raise ConfigError(f"{cmap.origin} (for {path.name}): {exc}") from None
-    except CrankbenchError as exc:
-        raise _named(path, exc) from None
-    except (MemoryError, KeyboardInterrupt):
-        raise
-    except Exception as exc:  # libraries raise anything on a corrupt file
-        raise _wrap(path, module, exc) from exc
-    if allow_nonfinite:
-        ds = _mask_nonfinite(ds, path)
-    regular = frozenset(ds.encoding.pop(REGULAR_KEY, ()))
-    with shared_scans():  # the NaN/inf check and the clipping check: one scan
+    # the NaN/inf check and the clipping check share one scan of each channel, or none where
+    # the reader scanned the samples while reading them (measure.record.note_block_extremes)
+    with shared_scans():
+        ds = _parse(path, module, cmap, channels, allow_nonfinite)
+        if allow_nonfinite:
+            ds = _mask_nonfinite(ds, path)
+        regular = frozenset(ds.encoding.pop(REGULAR_KEY, ()))
         try:
             validate(ds, allow_nonfinite=allow_nonfinite, _regular_dims=regular)
         except RecordError as exc:
@@ -254,6 +242,24 @@ def _read_checked(path, module, st, cmap, channels, allow_nonfinite) -> xr.Datas
                         channel_map=cmap.text, channel_map_source=Path(cmap.origin).name,
                         channel_map_sha256=cmap.sha256)
     return ds
+
+
+def _parse(path, module, cmap, channels, allow_nonfinite) -> xr.Dataset:
+    """The format module's (or the channel map's) read, its errors named after ``path``."""
+    try:
+        if cmap is None:
+            return module.read(path, channels=channels)
+        return _read_mapped(path, module, cmap, channels, allow_nonfinite)
+    except ConfigError as exc:  # the map's fault: name the map and the data file
+        if cmap is None:
+            raise
+        raise ConfigError(f"{cmap.origin} (for {path.name}): {exc}") from None
+    except CrankbenchError as exc:
+        raise _named(path, exc) from None
+    except (MemoryError, KeyboardInterrupt):
+        raise
+    except Exception as exc:  # libraries raise anything on a corrupt file
+        raise _wrap(path, module, exc) from exc
 
 
 def _read_mapped(path, module, cmap, channels, allow_nonfinite):

@@ -110,12 +110,30 @@ def shared_scans():
             _SCAN_CACHE.table = None
 
 
+def _scan_key(x: np.ndarray) -> tuple:
+    return x.__array_interface__["data"][0], x.shape, x.strides, x.dtype.str
+
+
+def note_block_extremes(x: np.ndarray, lows: np.ndarray, highs: np.ndarray) -> None:
+    """Inside :func:`shared_scans`, give the scans the per-block extremes of ``x`` computed by
+    whoever filled it (a reader that scanned each block while it was in cache): ``lows[b]`` and
+    ``highs[b]`` the minimum and maximum of ``x[b * _SCAN_BLOCK:(b + 1) * _SCAN_BLOCK]``, NaN
+    propagated. ``x`` must not change afterwards within the block; it is kept alive until the
+    block ends (so its address is not reused by another array). Outside the block: no-op."""
+    table = getattr(_SCAN_CACHE, "table", None)
+    blocks = (-(-x.size // _SCAN_BLOCK),)
+    if table is None or x.ndim != 1 or lows.shape != blocks or highs.shape != blocks:
+        return
+    table[_scan_key(x)] = (lows, highs)
+    table.setdefault("_alive", []).append(x)
+
+
 def _block_extremes(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Minimum and maximum of each block of :data:`_SCAN_BLOCK` samples (NaN propagates): one
     pass over memory where ``x.min()`` then ``x.max()`` are two."""
     table = getattr(_SCAN_CACHE, "table", None)
     if table is not None:
-        key = (x.__array_interface__["data"][0], x.shape, x.strides, x.dtype.str)
+        key = _scan_key(x)
         if key not in table:
             table[key] = _block_extremes_uncached(x)
         return table[key]

@@ -10,8 +10,8 @@ written (all formats store float32 or wider, so the bound is 0: exact).
 
 Rows per format: the format reader (parse, SI conversion, time coordinate) and, for the native
 HDF5 layout, also h5py alone -- the floor of this format through its library: ``h5py
-open + attributes`` (open the file, read every attribute of the root, the clock and the
-channel as h5py gives them, close; no sample), ``h5py open + read_direct`` (the samples only,
+open + attributes`` (open the file, read the root's attributes, among them the record's
+metadata as one JSON text (layout version 2), parse it, close; no sample), ``h5py open + read_direct`` (the samples only,
 read by HDF5 into a preallocated array) and both together (all a record needs from the file,
 with a paired ``speed`` row: the part of ``measure.read``'s time that is HDF5's) --, ``measure.read`` of a file read before
 (validation, NaN/inf and clipping scan), ``measure.read`` of a file seen for the first time (a
@@ -29,6 +29,7 @@ page-cache copy of ``numpy.fromfile`` alike).
 
 from __future__ import annotations
 
+import json
 import shutil
 import tempfile
 from pathlib import Path
@@ -98,15 +99,14 @@ def run(quick: bool) -> list[Row]:
 
                 def metadata(p=path):
                     with h5py.File(p, "r") as f:
-                        attrs = [dict(f.attrs), dict(f["dims/time"].attrs),
-                                 dict(f["channels/acc"].attrs)]
-                    return attrs
+                        root = dict(f.attrs)
+                        meta = json.loads(root["crankbench_meta"])  # layout version 2
+                    return [root, meta["dims"]["time"], meta["channels"]["acc"]]
 
                 def floor(p=path):  # what a record needs from the file, through h5py
                     with h5py.File(p, "r") as f:
-                        attrs = [dict(f.attrs), dict(f["dims/time"].attrs)]
+                        json.loads(f.attrs["crankbench_meta"])
                         d = f["channels/acc"]
-                        attrs.append(dict(d.attrs))
                         out = np.empty(d.shape, d.dtype)
                         d.read_direct(out)
                         return out

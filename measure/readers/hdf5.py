@@ -1,17 +1,28 @@
 """HDF5 in crankbench's native layout (h5py): read, write, stream.
 
-Layout (``crankbench_format = "record"``, ``crankbench_format_version = 1`` on the root)::
+Layout (``crankbench_format = "record"`` and ``crankbench_format_version`` on the root)::
 
-    /                      attrs: record attrs (start_time, engine_id, ...), channel_order
-    /dims/<dim>            group, attrs kind = "regular" | "explicit" | "index", length
-                             regular:  start (s), sample_rate (Hz) -> t = start + i/sample_rate
-                             explicit: dataset "values" (s, float64)
-                             index:    pulse dims, no coordinate
+    /                      attrs: crankbench_format, crankbench_format_version = 2 and
+                           crankbench_meta: the record's metadata as one JSON text (below)
+    /dims/<dim>            group per time or pulse dim (dataset "values": explicit times, s)
     /channels/<name>       dataset (float32/float64; contiguous, starting on a 4 KiB boundary
                            when >= 64 KiB; files written before 2026-11 are chunked: both
-                           read the same), attrs: the channel's Record attrs plus "dim"
+                           read the same)
     /truth                 optional netCDF4 group (h5netcdf) holding the synthetic bench's
                            ground truth (order amplitudes along a run, critical speeds)
+
+``crankbench_meta`` (version 2) is ``{"attrs": {record attrs}, "channel_order": [names],
+"dims": {dim: {"kind": "regular" | "explicit" | "index", "length": n, "start": s,
+"sample_rate": Hz}}, "channels": {name: {Record attrs..., "dim": dim}}}`` (numeric arrays as
+``{"__ndarray__": [...], "dtype": "<f8"}``): one attribute read instead of one per attribute
+and object (a read of a small record spends more on those than on its samples). The groups
+and datasets carry no attribute of ours; any attribute found on them (or on the root besides
+the three above) -- set with h5py after writing, say -- overrides the JSON's value of that
+name, so a file edited by hand reads as edited. Version 1 files (every value an attribute of
+its object: root record attrs and ``channel_order``, ``/dims/<dim>`` kind, length, start,
+sample_rate, ``/channels/<name>`` its Record attrs and ``dim``), as written before 2026-11
+or by other tools, read the same. Shapes, types, storage and byte offsets always come from
+HDF5 itself, never from the JSON.
 
 Regular clocks are stored as three numbers, not as a time array, and read back as an implicit
 time coordinate (:class:`measure.timeindex.SampledTimeIndex`: values generated on access,
@@ -30,8 +41,8 @@ import xarray as xr
 
 from crankbench.predict.errors import RecordError
 
-from ..record import is_pulse_dim
-from ..timeindex import regular_clock, sampled_time
+from ..record import is_pulse_dim, note_block_extremes
+from ..timeindex import regular_clock, sampled_dataset, sampled_time
 from ._common import (
     build_dataset,
     clean_attr,
@@ -46,7 +57,11 @@ __all__ = ["FORMAT", "check_magic", "read", "write", "open", "read_truth", "writ
 
 FORMAT = "HDF5 (crankbench layout)"
 MAGIC = b"\x89HDF\r\n\x1a\n"
-FORMAT_VERSION = 1
+#: layout written (2: metadata in one JSON attribute); versions 1 and 2 are read
+FORMAT_VERSION = 2
+#: root attribute holding the version-2 metadata
+META_ATTR = "crankbench_meta"
+_OWN_ROOT = ("crankbench_format", "crankbench_format_version", "channel_order", META_ATTR)
 #: Datasets of at least this many bytes start at a multiple of :data:`ALIGN_BYTES` in the
 #: file (HDF5's alignment property): a full read then copies whole pages from the page cache
 #: into a page-aligned array, the cheapest copy the kernel makes.
@@ -98,28 +113,59 @@ def _from_attr(value):
     return value
 
 
-def write(record: xr.Dataset, path, *, truth: xr.Dataset | None = None) -> dict:
+def _to_json(value):
+    """An attribute value as JSON-ready data (numeric arrays tagged with their dtype)."""
+    value = clean_attr(value)
+    if isinstance(value, np.ndarray):
+        return {"__ndarray__": value.tolist(), "dtype": value.dtype.str}
+    return value
+
+
+def _json_default(value):  # numpy scalars and arrays nested in lists or dicts
+    value = clean_attr(value)
+    return value.tolist() if isinstance(value, np.ndarray) else value
+
+
+def _from_json(value):
+    if isinstance(value, dict) and value.keys() == {"__ndarray__", "dtype"}:
+        return np.asarray(value["__ndarray__"], dtype=np.dtype(value["dtype"]))
+    return value
+
+
+def write(record: xr.Dataset, path, *, truth: xr.Dataset | None = None,
+          _version: int = FORMAT_VERSION) -> dict:
     """Write ``record`` (numpy- or dask-backed) to ``path`` in the layout above.
 
     Dask-backed channels are written block by block (bounded memory) into contiguous
-    datasets.
+    datasets. ``_version=1`` writes the older layout (one attribute per value; tests).
     """
     h5py = _h5()
+    if _version not in (1, 2):
+        raise ValueError(f"_version={_version!r}; expected 1 or 2")
+    meta = {"attrs": {}, "channel_order": [str(n) for n in record.data_vars], "dims": {},
+            "channels": {}}
     with h5py.File(path, "w", alignment_threshold=ALIGN_THRESHOLD,
                    alignment_interval=ALIGN_BYTES) as f:
         f.attrs["crankbench_format"] = "record"
-        f.attrs["crankbench_format_version"] = FORMAT_VERSION
+        f.attrs["crankbench_format_version"] = _version
         for k, v in record.attrs.items():
-            f.attrs[str(k)] = _attr_value(v)
-        f.attrs["channel_order"] = json.dumps([str(n) for n in record.data_vars])
+            if _version == 1:
+                f.attrs[str(k)] = _attr_value(v)
+            else:
+                meta["attrs"][str(k)] = _to_json(v)
+        if _version == 1:
+            f.attrs["channel_order"] = json.dumps(meta["channel_order"])
         gdims = f.create_group("dims")
         gch = f.create_group("channels")
         for dim, names in dims_of(record).items():
             info = _dim_info(record, dim, record[names[0]])
             g = gdims.create_group(dim)
             values = info.pop("values", None)
-            for k, v in info.items():
-                g.attrs[k] = v
+            if _version == 1:
+                for k, v in info.items():
+                    g.attrs[k] = v
+            else:
+                meta["dims"][dim] = info
             if values is not None:
                 g.create_dataset("values", data=values)
         for name, var in record.data_vars.items():
@@ -139,9 +185,16 @@ def write(record: xr.Dataset, path, *, truth: xr.Dataset | None = None) -> dict:
                     start += arr.size
             elif n:
                 ds[...] = np.asarray(var.values, dtype=dtype)
-            for k, v in var.attrs.items():
-                ds.attrs[str(k)] = _attr_value(v)
-            ds.attrs["dim"] = str(var.dims[0])
+            if _version == 1:
+                for k, v in var.attrs.items():
+                    ds.attrs[str(k)] = _attr_value(v)
+                ds.attrs["dim"] = str(var.dims[0])
+            else:
+                meta["channels"][name] = {**{str(k): _to_json(v) for k, v in var.attrs.items()},
+                                          "dim": str(var.dims[0])}
+        if _version == 2:
+            f.attrs[META_ATTR] = json.dumps(meta, default=_json_default, allow_nan=True,
+                                            separators=(",", ":"))
     if truth is not None:
         write_truth(truth, path)
     return {}
@@ -221,21 +274,113 @@ def _has(gid, name: str) -> bool:
         return False
 
 
+def _open_member(parent, name: str):
+    """Low-level object ``name`` of ``parent`` (a FileID or GroupID), opened only when it is
+    this file's own: a link other than a hard link (external, soft) or a virtual dataset makes
+    the whole file checked by :func:`refuse_external_links`, which refuses external links and
+    virtual datasets anywhere in it (naming them) and lets soft links within it pass. The
+    objects a read opens are thus checked one by one (a few microseconds each) instead of by a
+    walk over the whole file at every read."""
+    h5py = _h5()
+    bname = name.encode("utf-8", "surrogateescape")
+    if parent.links.get_info(bname).type != h5py.h5l.TYPE_HARD:
+        _refuse_outside(parent)
+    obj = h5py.h5o.open(parent, bname)
+    if (isinstance(obj, h5py.h5d.DatasetID)
+            and obj.get_create_plist().get_layout() == h5py.h5d.VIRTUAL):
+        _refuse_outside(parent)
+    return obj
+
+
+def _refuse_outside(oid) -> None:
+    """:func:`refuse_external_links` on the open file holding low-level object ``oid``."""
+    h5py = _h5()
+    fid = h5py.h5i.get_file_id(oid)
+    name = h5py.h5f.get_name(fid).decode("utf-8", "surrogateescape")
+    refuse_external_links(name, file=name, h5file=fid)
+
+
 def _group(parent, name: str):
     """Low-level group ``name`` of ``parent`` (a FileID or GroupID), None if not a group."""
     h5py = _h5()
-    if not _has(parent, name):
+    try:
+        obj = _open_member(parent, name)
+    except (KeyError, RuntimeError):  # h5py's "name doesn't exist" -- or damage
+        if _has(parent, name):
+            raise
         return None
-    obj = h5py.h5o.open(parent, name.encode("utf-8", "surrogateescape"))
     return obj if isinstance(obj, h5py.h5g.GroupID) else None
 
 
-def _layout(fid, file: str, root=None) -> tuple[list[str], dict, object]:
-    """Channel order, dims and the ``/channels`` group (low-level GroupID) of an open file
-    (``h5py.h5f.FileID``: h5py's low-level API, several times cheaper per call than its
-    high-level objects); ``root`` = its cleaned root attrs if read."""
+def _scalar_attr(oid, name: str):
+    """Value of the scalar attribute ``name`` of a low-level object, None if it has none (by
+    name: the attributes of our layout, without listing the others)."""
     h5py = _h5()
-    root = _attrs(fid) if root is None else root
+    try:
+        a = h5py.h5a.open(oid, name.encode())
+    except KeyError:
+        return None
+    dtype = a.dtype
+    if a.get_space().get_simple_extent_type() == h5py.h5s.SCALAR:
+        if dtype.kind in "biuf":
+            buf = np.empty((), dtype)
+            a.read(buf)
+            return clean_attr(buf[()])
+        info = h5py.check_string_dtype(dtype)
+        if dtype.kind == "O" and info is not None and info.length is None:
+            buf = np.empty((), dtype)
+            a.read(buf, mtype=h5py.h5t.py_create(dtype))
+            raw = buf[()]
+            return raw.decode(info.encoding, "surrogateescape") if isinstance(raw, bytes) else raw
+    return clean_attr(h5py.AttributeManager(_Bound(oid))[name])
+
+
+def _root(fid, file: str) -> tuple[dict, dict | None]:
+    """The root's attributes of ours -- and the record attrs set on it -- and the version-2
+    metadata (None for version 1, whose record attrs are all in the first dict)."""
+    h5py = _h5()
+    text = _scalar_attr(fid, META_ATTR)
+    if text is None:  # version 1 (or not ours): every attribute of the root
+        return _attrs(fid), None
+    try:
+        meta = json.loads(text)
+        if not (isinstance(meta, dict) and all(isinstance(meta.get(k), dict)
+                                               for k in ("attrs", "dims", "channels"))):
+            raise ValueError("attrs, dims or channels missing")
+    except (TypeError, ValueError) as exc:
+        raise RecordError(f"{file}: root attribute {META_ATTR!r} is not the JSON object of "
+                          f"crankbench's layout ({exc}); damaged or edited file?") from None
+    if h5py.h5a.get_num_attrs(fid) == 3:  # as written: format, version, meta -- the JSON of
+        # our layout says the format; the version is read (one typed read, no type query)
+        root = {"crankbench_format": "record",
+                "crankbench_format_version": _int_attr(fid, "crankbench_format_version")}
+    else:  # attributes set on the root after writing override the JSON's
+        root = _attrs(fid)
+    return root, meta
+
+
+def _int_attr(oid, name: str):
+    """Attribute ``name`` read as an integer by HDF5's conversion (anything else -- a string,
+    an array, a float -- through :func:`_scalar_attr`)."""
+    h5py = _h5()
+    try:
+        a = h5py.h5a.open(oid, name.encode())
+        buf = np.empty((), np.int64)
+        if a.get_type().get_class() == h5py.h5t.INTEGER:
+            a.read(buf)
+            return int(buf)
+    except (KeyError, TypeError, ValueError, OSError):
+        pass
+    return _scalar_attr(oid, name)
+
+
+def _layout(fid, file: str) -> tuple[dict, list[str], dict, object, dict]:
+    """Record attrs, channel order, dims, the ``/channels`` group (low-level GroupID) and the
+    channels' attrs as far as known without opening them (version 2's JSON) of an open file
+    (``h5py.h5f.FileID``: h5py's low-level API, several times cheaper per call than its
+    high-level objects)."""
+    h5py = _h5()
+    root, meta = _root(fid, file)
     fmt = root.get("crankbench_format")
     if isinstance(fmt, bytes):
         fmt = fmt.decode()
@@ -246,40 +391,58 @@ def _layout(fid, file: str, root=None) -> tuple[list[str], dict, object]:
             f"{file}: HDF5 file is not in crankbench's record layout (expected root attr "
             "crankbench_format='record' and groups /channels, /dims); netCDF files should be "
             "named .nc")
-    version = int(root.get("crankbench_format_version", 0))
-    if version > FORMAT_VERSION:
-        raise RecordError(f"{file}: layout version {version} is newer than this crankbench "
-                          f"reads ({FORMAT_VERSION}); upgrade crankbench")
     try:
-        order = json.loads(root["channel_order"])
+        version = int(root.get("crankbench_format_version", 0))
+    except (TypeError, ValueError):
+        version = -1
+    if version > FORMAT_VERSION or version < 0:
+        raise RecordError(f"{file}: layout version {root.get('crankbench_format_version')!r} "
+                          f"is not one this crankbench reads (1..{FORMAT_VERSION}); upgrade "
+                          "crankbench")
+    if meta is not None and version < 2:
+        meta = None  # a version-1 file holding an attribute of that name: not ours
+    meta = meta or {}
+    record_attrs = {k: _from_json(v) for k, v in meta.get("attrs", {}).items()}
+    record_attrs.update({k: _from_attr(v) for k, v in root.items() if k not in _OWN_ROOT})
+    try:
+        order = json.loads(root["channel_order"]) if "channel_order" in root else list(
+            meta["channel_order"])
     except (KeyError, TypeError, ValueError):
         order = sorted(_members(gch))
     missing = [n for n in order if not _has(gch, str(n))]
     if missing:
         raise RecordError(f"{file}: header lists channel(s) {missing} that have no data "
                           "(header/body mismatch; file truncated?)")
-    dims = {}
+    dims = {dim: dict(info) for dim, info in meta.get("dims", {}).items()}
     for dim in _members(gdims):
-        g = h5py.h5o.open(gdims, dim.encode("utf-8", "surrogateescape"))
-        info = _attrs(g)
+        g = _open_member(gdims, dim)
+        info = dims.setdefault(dim, {})
+        if h5py.h5a.get_num_attrs(g):
+            info.update(_attrs(g))
         if isinstance(g, h5py.h5g.GroupID) and _has(g, "values"):
-            info["values_ds"] = h5py.Dataset(h5py.h5d.open(g, b"values"))
-        dims[dim] = info
-    return order, dims, gch
+            info["values_ds"] = h5py.Dataset(_open_member(g, "values"))
+    channels = {name: {k: _from_json(v) for k, v in attrs.items()}
+                for name, attrs in meta.get("channels", {}).items()}
+    return record_attrs, order, dims, gch, channels
 
 
 def _dataset(gch, name: str):
     """Channel ``name`` of the low-level ``/channels`` group as an ``h5py.Dataset``."""
     h5py = _h5()
-    obj = h5py.h5o.open(gch, name.encode("utf-8", "surrogateescape"))
+    obj = _open_member(gch, name)
     if not isinstance(obj, h5py.h5d.DatasetID):
         raise RecordError(f"channel {name!r} is an HDF5 {type(obj).__name__[:-2].lower()}, "
                           "not a dataset; expected one dataset per channel under /channels")
     return h5py.Dataset(obj)
 
 
-def _channel_attrs(ds, name: str, dims: dict, file: str) -> tuple[str, dict]:
-    attrs = {k: _from_attr(v) for k, v in _attrs(ds).items()}
+def _channel_attrs(ds, name: str, dims: dict, file: str, known: dict | None = None
+                   ) -> tuple[str, dict]:
+    """Dim and attrs of channel dataset ``ds``: ``known`` (version 2's JSON) updated with the
+    dataset's own attributes, if it has any."""
+    attrs = dict(known or {})
+    if _h5().h5a.get_num_attrs(ds.id):
+        attrs.update({k: _from_attr(v) for k, v in _attrs(ds).items()})
     dim = attrs.pop("dim", None)
     if dim not in dims:
         raise RecordError(f"{file}: channel {name!r} refers to dim {dim!r} which is not in "
@@ -292,6 +455,15 @@ def _channel_attrs(ds, name: str, dims: dict, file: str) -> tuple[str, dict]:
     return dim, attrs
 
 
+def _regular(dim: str, info: dict, file: str) -> tuple[int, float, float]:
+    """``(length, sample_rate Hz, start s)`` of a regular clock, checked."""
+    fs = float(info["sample_rate"])
+    if not np.isfinite(fs) or fs <= 0:
+        raise RecordError(f"{file}: dim {dim!r} declares sample_rate={fs!r} Hz; expected a "
+                          "finite value > 0")
+    return int(info.get("length", 0)), fs, float(info.get("start", 0.0))
+
+
 def _coordinate(dim: str, info: dict, file: str):
     """The dim's time coordinate: ``xarray.Coordinates`` (implicit, regular clocks), a float64
     array (explicit times) or None (pulse dims)."""
@@ -300,11 +472,7 @@ def _coordinate(dim: str, info: dict, file: str):
     if kind == "index":
         return None
     if kind == "regular":
-        fs = float(info["sample_rate"])
-        start = float(info.get("start", 0.0))
-        if not np.isfinite(fs) or fs <= 0:
-            raise RecordError(f"{file}: dim {dim!r} declares sample_rate={fs!r} Hz; expected a "
-                              "finite value > 0")
+        n, fs, start = _regular(dim, info, file)
         return sampled_time(n, fs, start=start, dim=dim)
     if kind == "explicit":
         values = np.asarray(info["values_ds"][...], dtype=np.float64)
@@ -327,22 +495,28 @@ def _raw_runs(ds, userblock: int | None = None):
     (filters, foreign byte order, external or virtual storage, a user block, unallocated
     chunks). ``userblock``: the file's user-block size if known (else asked here)."""
     h5py = _h5()
-    if ds.ndim != 1 or not ds.dtype.isnative or ds.dtype.kind not in "fiu":
+    did = ds.id  # h5py's low-level calls: each high-level property costs several
+    dtype = did.dtype
+    shape = did.shape
+    if len(shape) != 1 or not dtype.isnative or dtype.kind not in "fiu":
         return None
-    plist = ds.id.get_create_plist()
-    if (plist.get_layout() not in (h5py.h5d.CONTIGUOUS, h5py.h5d.CHUNKED)
+    if did.get_type() != h5py.h5t.py_create(dtype):  # bytes not numpy's (bit offset,
+        return None                                  # precision, custom float): HDF5 converts
+    plist = did.get_create_plist()
+    layout = plist.get_layout()
+    if (layout not in (h5py.h5d.CONTIGUOUS, h5py.h5d.CHUNKED)
             or plist.get_nfilters() or plist.get_external_count()):
         return None
-    if (_userblock(ds.file.id) if userblock is None else userblock) != 0:
+    if (_userblock(h5py.h5i.get_file_id(did)) if userblock is None else userblock) != 0:
         return None
-    item = ds.dtype.itemsize
-    n = ds.shape[0]
-    if ds.chunks is None:
-        offset = ds.id.get_offset()
+    item = dtype.itemsize
+    n = shape[0]
+    if layout == h5py.h5d.CONTIGUOUS:
+        offset = did.get_offset()
         return None if offset is None else [(int(offset), 0, n)]
-    chunk = ds.chunks[0]
+    chunk = plist.get_chunk()[0]
     info = []
-    ds.id.chunk_iter(lambda si: info.append((si.chunk_offset[0], si.byte_offset, si.size,
+    did.chunk_iter(lambda si: info.append((si.chunk_offset[0], si.byte_offset, si.size,
                                              si.filter_mask)))
     if len(info) != -(-n // chunk):
         return None
@@ -374,12 +548,33 @@ def _congruent_empty(n: int, dtype, file_offset: int) -> np.ndarray:
     return buf[shift:shift + n * dtype.itemsize].view(dtype)
 
 
-def _read_all(ds, userblock: int | None = None) -> np.ndarray:
-    """All samples of a 1-D dataset. Unfiltered chunked or contiguous data (what :func:`write`
-    produces) is read straight from the file's byte ranges into the result -- one system read
-    per run of adjacent chunks, as ``numpy.fromfile`` does -- instead of chunk by chunk
-    through HDF5 (about twice the time for 20 MB); three samples are then checked against
-    HDF5's own read. Anything else goes through ``read_direct``."""
+#: bytes read per system call: each piece is scanned (minimum, maximum, NaN/inf) right after
+#: the kernel copied it, while it is still in cache, instead of once more from memory by the
+#: record checks
+_PIECE_BYTES = 1 << 21
+
+
+def _read_all(ds, userblock: int | None = None):
+    """All samples of a 1-D dataset, and their per-block extremes when scanned while read.
+
+    Unfiltered chunked or contiguous data (what :func:`write` produces) is read straight from
+    the file's byte ranges -- given by HDF5 itself (:func:`_raw_runs`) -- into the result, one
+    system read per block of :data:`measure.record._SCAN_BLOCK` samples (as ``numpy.fromfile``
+    reads, without HDF5's chunk-by-chunk path, about twice the time for 20 MB); each block's
+    minimum and maximum (NaN/inf propagate) are taken while it is in cache, for the record's
+    NaN/inf and clipping checks (:func:`measure.record.note_block_extremes`). The byte ranges
+    are HDF5's own answer for this dataset (never stored by us) and are used only when the
+    file's datatype is exactly numpy's (same bytes, no conversion). Anything else goes through
+    ``read_direct``.
+
+    Returns
+    -------
+    values : numpy.ndarray
+    extremes : tuple of numpy.ndarray or None
+        ``(lows, highs)`` per block for float data read directly, else None.
+    """
+    from ..record import _SCAN_BLOCK
+
     runs = None
     if ds.size:
         try:
@@ -391,25 +586,60 @@ def _read_all(ds, userblock: int | None = None) -> np.ndarray:
     else:
         out = _congruent_empty(ds.shape[0], ds.dtype, runs[0][0])
     if not out.size:
-        return out
+        return out, None
     if runs is not None:
-        flat = out.view(np.uint8)
-        item = out.dtype.itemsize
-        with builtins.open(_h5().h5f.get_name(ds.id), "rb") as fh:
-            for offset, first, count in runs:
-                fh.seek(offset)
-                view = memoryview(flat[first * item:(first + count) * item])
-                if fh.readinto(view) != count * item:
-                    runs = None  # truncated file: let HDF5 report it
-                    break
-        probe = sorted({0, out.size // 2, out.size - 1})
-        # one sample at a time: h5py's fast path for a scalar index, ~20x cheaper than a
-        # point selection
-        if runs is not None and np.array_equal(np.array([ds[i] for i in probe], out.dtype),
-                                               out[probe], equal_nan=True):
-            return out
+        extremes = _read_runs(ds, runs, out, _SCAN_BLOCK)
+        if extremes is not False:
+            return out, extremes
     ds.read_direct(out)
-    return out
+    return out, None
+
+
+def _read_runs(ds, runs, out: np.ndarray, block: int):
+    """Fill ``out`` from the file's byte ``runs`` (:func:`_raw_runs`) in pieces ending on
+    multiples of ``block`` samples; per-block ``(lows, highs)`` of float data (None for other
+    kinds), False if the file ended early (truncated: HDF5 then reads and reports it)."""
+    flat = out.view(np.uint8)
+    item = out.dtype.itemsize
+    n = out.size
+    scan = out.dtype.kind == "f"
+    step = max(1, _PIECE_BYTES // item)
+    if scan:
+        nb = -(-n // block)
+        lows = np.full(nb, np.inf, out.dtype)
+        highs = np.full(nb, -np.inf, out.dtype)
+    with builtins.open(_h5().h5f.get_name(ds.id), "rb", buffering=0) as fh:
+        for offset, first, count in runs:
+            fh.seek(offset)
+            a, stop = first, first + count
+            while a < stop:
+                b = min(stop, a + step)
+                if fh.readinto(memoryview(flat[a * item:b * item])) != (b - a) * item:
+                    return False
+                if scan:
+                    _piece_extremes(out, a, b, block, lows, highs)
+                a = b
+    return (lows, highs) if scan else None
+
+
+def _piece_extremes(out, a: int, b: int, block: int, lows, highs) -> None:
+    """Fold the extremes of ``out[a:b]`` into the per-block ``lows``, ``highs`` (which start
+    at +inf / -inf; NaN propagates): the whole blocks inside by one reduction along rows, the
+    part-blocks at either end combined with what other pieces found there."""
+    k0 = -(-a // block)               # first block starting inside the piece
+    full_end = (b // block) * block   # whole full-length blocks end here
+    with np.errstate(invalid="ignore"):
+        if k0 * block < full_end:
+            rows = out[k0 * block:full_end].reshape(-1, block)
+            k1 = k0 + rows.shape[0]
+            np.minimum(lows[k0:k1], np.minimum.reduce(rows, axis=1), out=lows[k0:k1])
+            np.maximum(highs[k0:k1], np.maximum.reduce(rows, axis=1), out=highs[k0:k1])
+        for lo, hi in ((a, min(b, k0 * block)), (max(a, full_end, k0 * block), b)):
+            if hi > lo:  # within one block
+                k = lo // block
+                piece = out[lo:hi]
+                lows[k] = np.minimum(lows[k], np.minimum.reduce(piece))
+                highs[k] = np.maximum(highs[k], np.maximum.reduce(piece))
 
 
 def _open_read(path):
@@ -425,38 +655,44 @@ def read(path, *, channels=None) -> xr.Dataset:
     """Read a crankbench HDF5 record fully into memory."""
     file = str(path)
     fid = _open_read(path)
-    try:
-        refuse_external_links(path, file=file, h5file=fid)
-        root = _attrs(fid)
-        order, dims, group = _layout(fid, file, root)
+    try:  # every object opened is checked to be the file's own (_open_member)
+        attrs, order, dims, group, known = _layout(fid, file)
         names = select(order, channels, file=file)
         out, used = [], {}
         userblock = _userblock(fid)
         for name in names:
             ds = _dataset(group, name)
-            dim, attrs = _channel_attrs(ds, name, dims, file)
-            values, attrs = si_channel(name, _read_all(ds, userblock), attrs, file=file)
-            out.append((name, dim, values, attrs))
+            dim, cattrs = _channel_attrs(ds, name, dims, file, known.get(name))
+            raw, extremes = _read_all(ds, userblock)
+            unit = cattrs.get("units")
+            values, cattrs = si_channel(name, raw, cattrs, file=file)
+            if extremes is not None and values is raw and cattrs["units"] == unit:
+                note_block_extremes(values, *extremes)  # samples unchanged since the scan
+            out.append((name, dim, values, cattrs))
             used[dim] = True
-        explicit, implicit = {}, []
-        for dim in used:
-            c = _coordinate(dim, dims[dim], file)
-            if isinstance(c, np.ndarray):
-                explicit[dim] = c
-            elif c is not None:
-                implicit.append(c)
-        attrs = {k: _from_attr(v) for k, v in root.items()
-                 if k not in ("crankbench_format", "crankbench_format_version", "channel_order")}
+        clock = None
+        if len(used) == 1 and dims[next(iter(used))].get("kind") == "regular":
+            clock = next(iter(used))  # the usual record: one regular clock
+            clock_numbers = _regular(clock, dims[clock], file)
+        else:
+            explicit, implicit = {}, []
+            for dim in used:
+                c = _coordinate(dim, dims[dim], file)
+                if isinstance(c, np.ndarray):
+                    explicit[dim] = c
+                elif c is not None:
+                    implicit.append(c)
     finally:
         fid.close()  # strong close degree: every object opened above closes with it
-    if explicit or len(implicit) != 1:
-        ds = build_dataset(out, explicit, attrs)
-        for coords in implicit:
-            ds = ds.assign_coords(coords)
-        return ds
-    # the usual record, one regular clock: build it in one step (no merge/align pass)
-    data_vars = {name: xr.Variable((dim,), values, vattrs) for name, dim, values, vattrs in out}
-    return xr.Dataset(data_vars, coords=implicit[0], attrs=attrs)
+    if clock is not None:  # built in one step (no merge/align pass)
+        n, fs, start = clock_numbers
+        data_vars = {name: xr.Variable((dim,), values, vattrs)
+                     for name, dim, values, vattrs in out}
+        return sampled_dataset(data_vars, n, fs, start=start, dim=clock, attrs=attrs)
+    ds = build_dataset(out, explicit, attrs)
+    for coords in implicit:
+        ds = ds.assign_coords(coords)
+    return ds
 
 
 class _LazyH5:
@@ -493,12 +729,12 @@ def open(path, *, chunk_seconds: float = 10.0, channels=None) -> xr.Dataset:  # 
     file = str(path)
     refuse_external_links(path, file=file)
     with h5py.File(path, "r") as f:
-        order, dims, _ = _layout(f.id, file)
+        record_attrs, order, dims, _, known = _layout(f.id, file)
         names = select(order, channels, file=file)
         data_vars, used = {}, {}
         for name in names:
             ds = f["channels"][name]
-            dim, attrs = _channel_attrs(ds, name, dims, file)
+            dim, attrs = _channel_attrs(ds, name, dims, file, known.get(name))
             fs = attrs.get("sample_rate")
             n = ds.shape[0]
             if fs is not None and n:
@@ -524,9 +760,7 @@ def open(path, *, chunk_seconds: float = 10.0, channels=None) -> xr.Dataset:  # 
                 plain[dim] = (dim, c, {"units": "s", "long_name": "time from record start"})
             else:
                 coords.append(c)
-        attrs = {k: _from_attr(v) for k, v in _attrs(f).items()
-                 if k not in ("crankbench_format", "crankbench_format_version", "channel_order")}
-    ds = xr.Dataset(data_vars, coords=plain, attrs=attrs)
+    ds = xr.Dataset(data_vars, coords=plain, attrs=record_attrs)
     for c in coords:
         ds = ds.assign_coords(c)
     return ds

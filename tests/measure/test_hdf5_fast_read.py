@@ -68,11 +68,25 @@ def test_chunks_written_in_order_are_one_read(tmp_path, chunked):
         assert got.ctypes.data % hdf5.ALIGN_BYTES == 0 and got.shape == (N,)
 
 
-def test_bytes_that_disagree_with_hdf5_fall_back_to_hdf5(tmp_path, monkeypatch):
-    """A wrong byte range (simulated) is caught by the three-sample check."""
-    path, x = _file(tmp_path)
-    monkeypatch.setattr(hdf5, "_raw_runs", lambda ds, *_: [(0, 0, ds.shape[0])])
-    np.testing.assert_array_equal(io.read(path)["acc"].values, x)
+def test_a_datatype_other_than_numpys_is_read_by_hdf5(tmp_path):
+    """Samples whose file datatype differs from numpy's in the bits (12-bit integers at bit
+    offset 2 in 16-bit words: h5py shows them as int16) are converted by HDF5, not copied."""
+    path, _ = _file(tmp_path)
+    x = np.arange(-1000, 1000, 7, dtype=np.int16)
+    ftype = h5py.h5t.STD_I16LE.copy()
+    ftype.set_precision(12)
+    ftype.set_offset(2)
+    with h5py.File(path, "r+") as f:
+        del f["channels/acc"]
+        space = h5py.h5s.create_simple(x.shape)
+        h5py.h5d.create(f["channels"].id, b"acc", ftype, space)
+        f["channels/acc"][...] = x
+        f["dims/time"].attrs["length"] = x.size
+        raw = np.fromfile(path, np.int16, count=x.size,
+                          offset=f["channels/acc"].id.get_offset())
+        assert f["channels/acc"].dtype == np.int16 and hdf5._raw_runs(f["channels/acc"]) is None
+    assert not np.array_equal(raw, x)  # the bytes are not the values
+    np.testing.assert_array_equal(io.read(path)["acc"].values, x.astype(np.float64))
 
 
 def test_low_level_attributes_equal_h5py_high_level(tmp_path):

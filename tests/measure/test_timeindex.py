@@ -148,3 +148,23 @@ def test_regular_clock_reads_start_rate_and_length():
     assert regular_clock(lazy.isel(time=slice(4, None, 4)), "time") == (T0 + 4 / FS, FS / 4,
                                                                       74)
     assert regular_clock(pair()[1], "time") is None
+
+
+def test_sampled_dataset_is_the_public_construction():
+    """The direct build (no merge/align pass) gives exactly what ``xr.Dataset(...,
+    coords=sampled_time(...))`` gives: values, attrs, index type and behaviour."""
+    from crankbench.measure.timeindex import sampled_dataset
+
+    x = np.arange(10.0)
+    variables = {"a": xr.Variable(("time_b",), x, {"units": "m"}),
+                 "b": xr.Variable(("time_b",), -x, {"units": "V"})}
+    got = sampled_dataset(variables, 10, 250.0, start=0.5, dim="time_b", attrs={"k": 1})
+    ref = xr.Dataset(variables, coords=sampled_time(10, 250.0, start=0.5, dim="time_b"),
+                     attrs={"k": 1})
+    xr.testing.assert_identical(got, ref)
+    assert type(got.xindexes["time_b"]) is type(ref.xindexes["time_b"])
+    np.testing.assert_array_equal(got["time_b"].values, 0.5 + np.arange(10) / 250.0)
+    xr.testing.assert_identical(got.sel(time_b=slice(0.51, 0.52)),
+                                ref.sel(time_b=slice(0.51, 0.52)))
+    with pytest.raises(ValueError, match="dims \\('time_b',\\) and 11 values"):
+        sampled_dataset(variables, 11, 250.0, dim="time_b")

@@ -15,6 +15,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from crankbench.measure import io as mio
+from crankbench.measure.readers import hdf5
 from crankbench.measure.record import make_record, validate
 from hang_guard import time_limit
 from crankbench.predict.errors import CrankbenchError
@@ -50,6 +51,8 @@ def valid_files(tmp_path_factory):
         mio.write(rec, path)
         out[ext] = path.read_bytes()
     out[".wav.json"] = (folder / "valid.wav.json").read_bytes()
+    hdf5.write(rec, folder / "valid_v1.h5", _version=1)  # the layout written before 2026-11
+    out[".h5 v1"] = (folder / "valid_v1.h5").read_bytes()
     return out
 
 
@@ -165,6 +168,6 @@ def test_damaged_file_opened_lazily_gives_our_error_or_valid_data(ext, m, valid_
 
 def test_lazy_h5_with_zeroed_tail_fails_with_our_error_at_load(valid_files, tmp_path):
     path = tmp_path / "zeroed.h5"
-    path.write_bytes(_mutate(valid_files[".h5"], "zero-tail", 0.8632, 3, 1448))
+    path.write_bytes(_mutate(valid_files[".h5 v1"], "zero-tail", 0.8632, 3, 1448))
     with pytest.raises(CrankbenchError, match=r"zeroed\.h5"):
         mio.open(path, chunk_seconds=0.05).load()
