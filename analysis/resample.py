@@ -13,7 +13,12 @@ frequency of ``o`` cycles per revolution whatever the speed does. Steps:
    at the chunk's top speed (ripple ≈ 1e-5) and stopping orders ≥ ``3/4 samples_per_rev`` at
    its lowest speed; the inverse FFT keeps only the bins below the output rate's Nyquist
    frequency, so the filtered chunk comes out decimated (by a fractional factor, ≥ 4 samples
-   per period of the stop edge) for the cost of about one FFT of the chunk (lengths
+   per period of the stop edge) for the cost of about one FFT of the chunk. Where that output
+   rate is at most half the input rate, half-band decimations by 2 come first (31-tap
+   equiripple, pass band to 1/8 and stop band from 3/8 of their input rate, both within
+   1.7e-7: 135 dB; one compiled pass each), as many as keep the stop edge below 1/8 of a
+   stage's input rate (on records at least 1000× the 15·(2^stages − 1) samples they leave
+   incomplete at either end), and the FFT runs on 1/2 or 1/4 of the samples (lengths
    ``2^a 5^b 3^c``, the chunk read with real samples up to that length rather than zero
    padded — after the chunk, or before it at the record's end; the anti-alias stop band
    measured on a 1000→3000 rpm run-up: a unit tone at orders 48–63 leaves ≤ 7.7e-6 at its
@@ -329,8 +334,29 @@ def _good_size(n: int) -> int:
     return best
 
 
+#: half-band stage: equiripple taps of a 31-tap filter (pass ≤ fs/8, stop ≥ 3fs/8, both
+#: within 1.7e-7: 135 dB), the odd ones listed (the even ones are 0 but the centre, 1/2)
+_HB_TAPS = 31
+_HB_REACH = _HB_TAPS // 2          # input samples a stage output reaches on either side
+_HB_MAX_STAGES = 4
+
+
+@functools.lru_cache(maxsize=1)
+def _halfband_taps() -> np.ndarray:
+    """The odd taps ``h[1], h[3], …, h[15]`` of the half-band low-pass (Parks–McClellan,
+    pass band ``[0, fs/8]``, stop band ``[3fs/8, fs/2]``); its deviation in both bands is
+    ≤ 1.7e-7 (checked by ``tests/analysis/test_resample_halfband.py``). The half-band
+    structure (even taps 0, centre 1/2) is imposed exactly (the design has it to 1e-11)."""
+    from scipy import signal
+
+    h = signal.remez(_HB_TAPS, [0.0, 0.125, 0.375, 0.5], [1.0, 0.0], fs=1.0, maxiter=200)
+    odd = h[_HB_REACH + 1::2].copy()
+    odd.flags.writeable = False
+    return odd
+
+
 def _fft_lowpass(data: np.ndarray, fs: float, f_pass: float, f_stop: float, nfft: int,
-                 n_out: int):
+                 n_out: int, *, stages: int = 0):
     """Low-pass ``data`` in the frequency domain (transform length ``nfft``) and return it at
     ``n_out`` samples: output sample ``m`` is the filtered signal at input position
     ``m · nfft/n_out`` (keeping only the bins below the output's Nyquist frequency, where the
@@ -339,14 +365,28 @@ def _fft_lowpass(data: np.ndarray, fs: float, f_pass: float, f_stop: float, nfft
     Circular convolution with an impulse response of half-length ``T``: the first and last
     ``ceil(T fs)`` samples are incomplete (the caller never uses them). ``data`` shorter than
     ``nfft`` is zero padded here (scipy's own padding of a long transform costs as much again
-    as the transform, measured)."""
+    as the transform, measured).
+
+    ``stages`` half-band decimations by 2 (:func:`_halfband_taps`) come first: the transform
+    then has ``nfft/2^stages`` points at the rate ``fs/2^stages``, its bins at the same
+    frequencies. The caller guarantees ``f_stop ≤ fs/2^(stages+2)`` (nothing folds below the
+    stop edge but what the half-band stop band leaves, ≤ 1.7e-7) and ``n_out ≤
+    nfft/2^stages``."""
     from scipy import fft
 
     if data.shape[0] < nfft:
         padded = np.zeros(nfft)
         padded[:data.shape[0]] = data
         data = padded
-    spectrum = fft.rfft(data[:nfft])
+    data = data[:nfft]
+    if stages:
+        from ._kernels import halfband_decimate
+
+        taps = _halfband_taps()
+        for _ in range(stages):
+            data = halfband_decimate(data, taps)
+        fs, nfft = fs / (1 << stages), nfft >> stages
+    spectrum = fft.rfft(data)
     keep = n_out // 2 + 1
     out = spectrum[:keep]
     out *= _lowpass_response(float(fs), float(f_pass), float(f_stop), int(nfft), int(n_out))
@@ -405,6 +445,8 @@ class ChunkPlan:
         Per chunk: samples at either end of a read window left incomplete by the filter.
     reach : tuple of int
         Per chunk: input samples the interpolation reaches beyond an output position.
+    halfband_stages : tuple of int
+        Per chunk: half-band decimations by 2 before the FFT low-pass (:func:`_halfband_taps`).
     """
 
     n: int
@@ -417,6 +459,7 @@ class ChunkPlan:
     lengths: tuple
     filter_half: tuple
     reach: tuple
+    halfband_stages: tuple = ()
 
     @property
     def chunks(self) -> int:
@@ -438,9 +481,10 @@ class ChunkPlan:
         return first, last
 
 
-def _split_chunks(speed, n: int, chunk: int):
+def _split_chunks(speed, n: int, chunk: int, limits=None):
     """Chunk limits of at most ``chunk`` samples, split until speed varies < 2:1 in each, and
-    the (min, max) speed of each. ``speed(a, b)`` returns the speed (rpm) of samples a..b-1."""
+    the (min, max) speed of each. ``speed(a, b)`` returns the speed (rpm) of samples a..b-1;
+    ``limits``, the whole record's (min, max) when already known."""
     n_chunks = max(1, int(math.ceil(n / chunk)))
     pending = [int(v) for v in np.round(np.linspace(0, n, n_chunks + 1))]
     out = [pending[0]]
@@ -448,7 +492,8 @@ def _split_chunks(speed, n: int, chunk: int):
     for b0 in pending[1:]:
         a0 = out[-1]
         sp = speed(a0, b0)
-        low = float(sp.min())
+        whole = limits is not None and (a0, b0) == (0, n)
+        low = float(limits[0]) if whole else float(sp.min())
         if low <= 0:
             raise AnalysisError(f"rpm must be > 0 throughout; found {low:.6g} rpm "
                                 f"between samples {a0} and {b0}")
@@ -459,7 +504,7 @@ def _split_chunks(speed, n: int, chunk: int):
             b = stack[-1]
             seg = sp[a - a0:b - a0]
             lo = known[2] if (a, b) == known[:2] else float(seg.min())
-            hi = float(seg.max())
+            hi = float(limits[1]) if whole and (a, b) == (0, n) else float(seg.max())
             if hi <= 2.0 * lo or b - a <= 256:
                 out.append(b)
                 ranges.append((lo, hi))
@@ -472,7 +517,7 @@ def _split_chunks(speed, n: int, chunk: int):
 
 def plan_chunks(speed_rpm, *, n: int, fs: float, samples_per_rev: int = 64,
                 interpolation: str = "auto", antialias: bool = True,
-                chunk: int = 1 << 18) -> ChunkPlan:
+                chunk: int = 1 << 18, speed_limits_rpm=None) -> ChunkPlan:
     """Decide chunks, anti-alias filters and decimation of a resampling from the speed.
 
     Parameters
@@ -486,6 +531,8 @@ def plan_chunks(speed_rpm, *, n: int, fs: float, samples_per_rev: int = 64,
         Input sample rate, Hz.
     samples_per_rev, interpolation, antialias, chunk
         As in :func:`angle_resample`.
+    speed_limits_rpm : (float, float), optional
+        The record's lowest and highest speed (rpm), when the caller knows them already.
 
     Returns
     -------
@@ -508,7 +555,7 @@ def plan_chunks(speed_rpm, *, n: int, fs: float, samples_per_rev: int = 64,
                                  error=AnalysisError)
     method = "bandlimited" if interpolation == "auto" else interpolation
     chunk = check_int(chunk, "chunk", minimum=1024, error=AnalysisError)
-    bounds, ranges = _split_chunks(speed, n, chunk)
+    bounds, ranges = _split_chunks(speed, n, chunk, speed_limits_rpm)
     top = max(r[1] for r in ranges)
     per_rev = 60.0 * fs / top
     if per_rev < 2.0:
@@ -516,7 +563,7 @@ def plan_chunks(speed_rpm, *, n: int, fs: float, samples_per_rev: int = 64,
             f"rpm up to {top:.6g} at fs = {fs:.6g} Hz leaves {per_rev:.3g} time samples per "
             "revolution (at least 2 needed): check the speed units (rpm expected) and the "
             "sample rate")
-    bands, windows, lengths, halves, reach = [], [], [], [], []
+    bands, windows, lengths, halves, reach, n_stages = [], [], [], [], [], []
     for k, (lo, hi) in enumerate(ranges):
         f_pass = samples_per_rev / 4 * hi / 60.0
         f_stop = 3 * samples_per_rev / 4 * lo / 60.0
@@ -527,23 +574,33 @@ def plan_chunks(speed_rpm, *, n: int, fs: float, samples_per_rev: int = 64,
             halves.append(0)
             step = (_SINC_HALF + 2) if method == "bandlimited" else 4
             reach.append(step)
+            n_stages.append(0)
             windows.append((max(0, c0 - step), min(n, c1 + step)))
             continue
         if f_stop <= f_pass * 1.05:   # pragma: no cover - the 2:1 split prevents it
             raise AnalysisError(
                 f"speed varies too much within one chunk ({lo:.6g}..{hi:.6g} rpm) for "
                 f"samples_per_rev={samples_per_rev}; raise samples_per_rev or lower chunk")
+        # the filtered output at (at least) 4 samples per period of the stop edge for the
+        # band-limited kernel (its documented error holds up to a quarter of its rate); at the
+        # input rate for cubic/linear, whose error is documented there
+        ratio = max(1.0, fs / (4.0 * f_stop)) if method == "bandlimited" else 1.0
+        # half-band stages first (each halves the rate while the stop edge stays below an
+        # eighth of its input rate, i.e. while the output rate allows): the FFT then runs on
+        # 1/2^stages of the samples; their ends are incomplete over HB_REACH·(2^s − 1) more
+        # samples, so a record shorter than 1000× that margin goes without them
+        stages = min(_HB_MAX_STAGES, int(math.floor(math.log2(ratio) + 1e-12)))
         half = int(math.ceil(_aa_half_length(f_pass, f_stop) * fs)) + 1
+        if 2 * _HB_REACH * ((1 << stages) - 1) > n // 1000:
+            stages = 0      # their margin may cost 0.1 % of the record at most (a short
+            #                 record keeps every angle sample it had, and its cost is small)
+        half += _HB_REACH * ((1 << stages) - 1)
         if 2 * half + 1 > n:
             raise AnalysisError(
                 f"the anti-alias filter for {lo:.6g}..{hi:.6g} rpm at fs = {fs:.6g} Hz "
                 f"spans {2 * half + 1} samples, more than the {n} samples of the record: "
                 "the speed is far too low for this sample rate (is rpm in rpm, not rad/s "
                 "or Hz?) or the record too short")
-        # the filtered output at (at least) 4 samples per period of the stop edge for the
-        # band-limited kernel (its documented error holds up to a quarter of its rate); at the
-        # input rate for cubic/linear, whose error is documented there
-        ratio = max(1.0, fs / (4.0 * f_stop)) if method == "bandlimited" else 1.0
         step = int(math.ceil((_SINC_HALF + 2) * ratio)) + 1
         a = max(0, c0 - half - step)
         b = min(n, c1 + half + step)
@@ -552,14 +609,18 @@ def plan_chunks(speed_rpm, *, n: int, fs: float, samples_per_rev: int = 64,
             a = max(0, n - size, windows[-1][0] if windows else 0)
         b = min(n, a + size)                  # read real samples rather than pad, if any
         out = size if ratio == 1.0 else min(size, _good_size(int(math.ceil(size / ratio))))
+        while stages and (size % (1 << stages) or out > size >> stages):
+            stages -= 1              # (a margin a little wider than needed is harmless)
         bands.append((f_pass, f_stop))
+        n_stages.append(stages)
         windows.append((a, b))
         lengths.append((size, out))
         halves.append(half)
         reach.append(step)
     return ChunkPlan(n=n, fs=float(fs), samples_per_rev=samples_per_rev, interpolation=method,
                      bounds=bounds, bands=tuple(bands), windows=tuple(windows),
-                     lengths=tuple(lengths), filter_half=tuple(halves), reach=tuple(reach))
+                     lengths=tuple(lengths), filter_half=tuple(halves), reach=tuple(reach),
+                     halfband_stages=tuple(n_stages))
 
 
 def angle_range(plan: ChunkPlan, phi_first: float, phi_last: float) -> tuple[int, int]:
@@ -570,7 +631,8 @@ def angle_range(plan: ChunkPlan, phi_first: float, phi_last: float) -> tuple[int
 
 
 def resample_span(plan: ChunkPlan, ks, values: np.ndarray, start: int, phi: np.ndarray,
-                  speed_rpm: np.ndarray, j_first: int, j_last: int, *, last: bool):
+                  speed_rpm: np.ndarray, j_first: int, j_last: int, *, last: bool,
+                  positions=None):
     """Angle samples produced by chunks ``ks`` from one span of input samples.
 
     Parameters
@@ -587,6 +649,9 @@ def resample_span(plan: ChunkPlan, ks, values: np.ndarray, start: int, phi: np.n
         Angle-sample index range still to produce (the caller carries ``j_first``).
     last : bool
         The span holds the final chunk (all remaining angle samples up to ``j_last``).
+    positions : (ndarray, ndarray), optional
+        With ``last``: the input positions of the angle samples ``j_first … j_last`` and the
+        speed there, when already known (:func:`angle_grid`).
 
     Returns
     -------
@@ -599,9 +664,12 @@ def resample_span(plan: ChunkPlan, ks, values: np.ndarray, start: int, phi: np.n
     stop = int(plan.bounds[ks[-1] + 1])
     top = j_last if last else min(j_last, int(np.floor(phi[-1] / dphi)))
     grid = np.arange(j_first, top + 1) * dphi
-    from ._kernels import positions_and_values
+    if positions is not None and last:
+        u_out, rpm_out = positions
+    else:
+        from ._kernels import positions_and_values
 
-    u_out, rpm_out = positions_and_values(phi, grid, start, speed_rpm)
+        u_out, rpm_out = positions_and_values(phi, grid, start, speed_rpm)
     if not last:
         keep = int(np.searchsorted(u_out, stop, side="left"))
         grid, u_out, rpm_out = grid[:keep], u_out[:keep], rpm_out[:keep]
@@ -618,7 +686,8 @@ def resample_span(plan: ChunkPlan, ks, values: np.ndarray, start: int, phi: np.n
         scale = 1.0
         if band is not None:
             nfft, n_out = plan.lengths[k]
-            data = _fft_lowpass(data, fs, band[0], band[1], nfft, n_out)
+            stages = plan.halfband_stages[k] if plan.halfband_stages else 0
+            data = _fft_lowpass(data, fs, band[0], band[1], nfft, n_out, stages=stages)
             scale = n_out / nfft
         out[lo:hi] = _interp(data, (u_out[lo:hi] - a) * scale, plan.interpolation)
     return out, u_out / fs, rpm_out, grid
@@ -628,24 +697,43 @@ def resample_arrays(values: np.ndarray, fs: float, speed_rpm: np.ndarray, *,
                     samples_per_rev: int = 64, interpolation: str = "auto",
                     antialias: bool = True, chunk: int = 1 << 18, angle=None, label="x"):
     """:func:`angle_resample` on plain arrays: ``(values, time, rpm, angle, plan)``."""
-    n = values.shape[0]
-    speed = speed_rpm
-    plan = plan_chunks(speed, n=n, fs=fs, samples_per_rev=samples_per_rev,
+    plan = plan_chunks(speed_rpm, n=values.shape[0], fs=fs, samples_per_rev=samples_per_rev,
                        interpolation=interpolation, antialias=antialias, chunk=chunk)
-    phi = shaft_angle(speed, fs) if angle is None else angle
+    phi, j0, j1, positions = angle_samples(plan, speed_rpm, angle=angle, label=label)
+    out, t_out, rpm_out, grid = resample_span(plan, range(plan.chunks), values, 0, phi,
+                                              speed_rpm, j0, j1, last=True, positions=positions)
+    return out, t_out, rpm_out, grid, plan
+
+
+def angle_samples(plan: ChunkPlan, speed_rpm: np.ndarray, *, angle=None, label="x",
+                  speed_max=None):
+    """The shaft angle of a whole record and the angle samples its plan can produce:
+    ``(phi, j0, j1, positions)`` — ``phi`` the given ``angle`` or the integrated speed (rad),
+    samples ``j0 … j1`` (``j · 2π/samples_per_rev``) complete after the filter and the
+    interpolation, ``positions`` their input positions and speed for :func:`resample_span`
+    (found in the integration's own pass; None for a given angle)."""
+    n = plan.n
     first, last = plan.usable()
     if last <= first:
         raise AnalysisError(f"{label}: record of {n} samples is shorter than the anti-alias "
                             f"filter ({2 * max(plan.filter_half) + 1} samples); pass "
                             "antialias=False or a longer record")
-    j0, j1 = angle_range(plan, phi[first], phi[last])
+    positions = None
+    if angle is None:
+        from ._kernels import angle_grid
+
+        phi, j0, u_out, rpm_out = angle_grid(speed_rpm, plan.fs, _TWO_PI / plan.samples_per_rev,
+                                             first, last, speed_max=speed_max)
+        j1 = j0 + u_out.shape[0] - 1
+        positions = (u_out, rpm_out)
+    else:
+        phi = angle
+        j0, j1 = angle_range(plan, phi[first], phi[last])
     if j1 - j0 < 3:
         raise AnalysisError(f"{label}: the record covers only "
                             f"{(phi[-1] - phi[0]) / _TWO_PI:.3g} revolutions; need at least a "
                             "few angle samples")
-    out, t_out, rpm_out, grid = resample_span(plan, range(plan.chunks), values, 0, phi, speed,
-                                              j0, j1, last=True)
-    return out, t_out, rpm_out, grid, plan
+    return phi, j0, j1, positions
 
 
 # ---------------------------------------------------------------------------- public
