@@ -127,13 +127,11 @@ def _smoother_difference_numpy(env, r2, p):
 
 @functools.lru_cache(maxsize=1)
 def _numba():
-    import os
+    """The compiled kernels, or None (numba missing, or ``CRANKBENCH_NO_NUMBA`` set)."""
+    from ._vkf_kernels import njit_or_none
 
-    if os.environ.get("CRANKBENCH_NO_NUMBA"):
-        return None
-    try:
-        from numba import njit
-    except ImportError:
+    njit = njit_or_none()
+    if njit is None:
         return None
 
     @njit(cache=True)
