@@ -105,8 +105,18 @@ def _pdf_pages(path):
     if shutil.which("pdfinfo"):
         out = subprocess.run(["pdfinfo", str(path)], capture_output=True, text=True, check=True)
         return int(re.search(r"Pages:\s+(\d+)", out.stdout).group(1))
-    # no poppler: count page objects in the (uncompressed) page tree
-    return len(re.findall(rb"/Type\s*/Page[^s]", path.read_bytes()))
+    # no poppler: count the page objects, also those inside compressed object streams
+    # (WeasyPrint >= 68 writes the page tree into FlateDecode object streams)
+    import zlib
+
+    data = path.read_bytes()
+    texts = [data]
+    for m in re.finditer(rb"stream\r?\n(.*?)endstream", data, re.S):
+        try:
+            texts.append(zlib.decompress(m.group(1)))
+        except zlib.error:
+            pass
+    return sum(len(re.findall(rb"/Type\s*/Page(?![s\w])", t)) for t in texts)
 
 
 def test_pdf_is_weasyprint_only(tmp_path):
