@@ -246,7 +246,18 @@ def _sinc_table() -> np.ndarray:
     d = mu[:, None] - offsets[None, :]
     w = np.sinc(d) * special.i0(_SINC_BETA * np.sqrt(np.clip(1.0 - (d / _SINC_HALF) ** 2,
                                                               0.0, None)))
-    return w / w.sum(axis=1, keepdims=True)
+    table = w / w.sum(axis=1, keepdims=True)
+    table.flags.writeable = False
+    return table
+
+
+@functools.lru_cache(maxsize=1)
+def _sinc_steps() -> np.ndarray:
+    """``_sinc_table()[1:] - _sinc_table()[:-1]``: the change of each weight from one
+    tabulated phase to the next (the compiled kernel's second dot product)."""
+    steps = np.ascontiguousarray(np.diff(_sinc_table(), axis=0))
+    steps.flags.writeable = False
+    return steps
 
 
 def _interp(x: np.ndarray, u: np.ndarray, method: str) -> np.ndarray:
@@ -268,7 +279,7 @@ def _interp(x: np.ndarray, u: np.ndarray, method: str) -> np.ndarray:
     table = _sinc_table()
     from ._kernels import sinc_interp
 
-    fast = sinc_interp(x, u, table, _SINC_HALF, _SINC_PHASES)
+    fast = sinc_interp(x, u, table, _sinc_steps(), _SINC_HALF, _SINC_PHASES)
     if fast is not None:
         return fast
     i0 = np.clip(np.floor(u).astype(np.int64), _SINC_HALF - 1, n - 1 - _SINC_HALF)
