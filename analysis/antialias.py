@@ -97,9 +97,11 @@ def _fft_lowpass(data: np.ndarray, fs: float, f_pass: float, f_stop: float, nfft
 
     ``stages`` half-band decimations by 2 (:func:`_halfband_taps`) come first: the transform
     then has ``nfft/2^stages`` points at the rate ``fs/2^stages``, its bins at the same
-    frequencies. The caller guarantees ``f_stop ≤ fs/2^(stages+2)`` (nothing folds below the
-    stop edge but what the half-band stop band leaves, ≤ 1.7e-7) and ``n_out ≤
-    nfft/2^stages``."""
+    frequencies. The caller guarantees that the pass band lies within a quarter of that rate
+    (:func:`analysis.resample.plan_chunks`: flat there, nothing folded in); ``n_out`` may
+    exceed ``nfft/2^stages`` (the output rate set by the interpolation): the spectrum is then
+    zero padded, its Nyquist bin split between its two halves (exact band-limited
+    upsampling)."""
     from scipy import fft
 
     if data.shape[0] < nfft:
@@ -116,8 +118,15 @@ def _fft_lowpass(data: np.ndarray, fs: float, f_pass: float, f_stop: float, nfft
         fs, nfft = fs / (1 << stages), nfft >> stages
     spectrum = fft.rfft(data)
     keep = n_out // 2 + 1
-    out = spectrum[:keep]
-    out *= _lowpass_response(float(fs), float(f_pass), float(f_stop), int(nfft), int(n_out))
+    gain = _lowpass_response(float(fs), float(f_pass), float(f_stop), int(nfft), int(n_out))
+    if keep <= spectrum.shape[0]:
+        out = spectrum[:keep]
+        out *= gain
+    else:                           # a higher output rate: zero padded
+        out = np.zeros(keep, dtype=spectrum.dtype)
+        np.multiply(spectrum, gain, out=out[:spectrum.shape[0]])
+        if nfft % 2 == 0:           # the Nyquist bin stands for both halves
+            out[nfft // 2] *= 0.5
     return fft.irfft(out, n_out, overwrite_x=True)
 
 
@@ -126,8 +135,9 @@ def _lowpass_response(fs: float, f_pass: float, f_stop: float, nfft: int,
                       n_out: int) -> np.ndarray:
     """The low-pass response at the ``n_out//2 + 1`` kept bins of an ``nfft``-point transform,
     times the ``n_out/nfft`` of the shorter inverse transform (cached: a record's chunks, and
-    the repeated calls of a batch or a bench, share their filters)."""
-    keep = n_out // 2 + 1
+    the repeated calls of a batch or a bench, share their filters); at most the
+    ``nfft//2 + 1`` bins the transform has."""
+    keep = min(n_out // 2 + 1, nfft // 2 + 1)
     # the response is 1 below the transition band and 0 above it: interpolate only there
     half = _aa_half_length(f_pass, f_stop)
     f_cut = 0.5 * (f_pass + f_stop)

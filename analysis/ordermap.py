@@ -168,7 +168,7 @@ def order_map(x, *, fs=None, speed_rpm, samples_per_rev: int = 64, revolutions: 
     # the plan from the speed alone; the shaft angle and the angle samples' positions in one
     # pass; the channel's trend (by that angle) removed before the anti-alias filter
     plan = plan_chunks(speed, n=n, fs=fs_, samples_per_rev=spr, interpolation=interpolation,
-                       speed_limits_rpm=limits)
+                       speed_limits_rpm=limits, clean_order=top)
     phi, j0, j1, positions = angle_samples(plan, speed, angle=angle, label=label,
                                            speed_max=None if limits is None else limits[1])
     attrs_in = getattr(x, "attrs", {}) or {}

@@ -393,7 +393,8 @@ def _split_chunks(speed, n: int, chunk: int, limits=None):
 
 def plan_chunks(speed_rpm, *, n: int, fs: float, samples_per_rev: int = 64,
                 interpolation: str = "auto", antialias: bool = True,
-                chunk: int = 1 << 18, speed_limits_rpm=None) -> ChunkPlan:
+                chunk: int = 1 << 18, speed_limits_rpm=None,
+                clean_order: float | None = None) -> ChunkPlan:
     """Decide chunks, anti-alias filters and decimation of a resampling from the speed.
 
     Parameters
@@ -409,6 +410,11 @@ def plan_chunks(speed_rpm, *, n: int, fs: float, samples_per_rev: int = 64,
         As in :func:`angle_resample`.
     speed_limits_rpm : (float, float), optional
         The record's lowest and highest speed (rpm), when the caller knows them already.
+    clean_order : float, optional
+        Highest order the result is used at (default ``samples_per_rev/4``, the filter's pass
+        band; an order map showing more passes its ``max_order``). The half-band stages keep
+        every order up to it flat and free of their own folding; above it (the filter's
+        transition band) they may fold their transition band in.
 
     Returns
     -------
@@ -431,6 +437,8 @@ def plan_chunks(speed_rpm, *, n: int, fs: float, samples_per_rev: int = 64,
                                  error=AnalysisError)
     method = "bandlimited" if interpolation == "auto" else interpolation
     chunk = check_int(chunk, "chunk", minimum=1024, error=AnalysisError)
+    clean = samples_per_rev / 4.0 if clean_order is None else max(float(clean_order),
+                                                                   samples_per_rev / 4.0)
     bounds, ranges = _split_chunks(speed, n, chunk, speed_limits_rpm)
     top = max(r[1] for r in ranges)
     per_rev = 60.0 * fs / top
@@ -461,15 +469,23 @@ def plan_chunks(speed_rpm, *, n: int, fs: float, samples_per_rev: int = 64,
         # band-limited kernel (its documented error holds up to a quarter of its rate); at the
         # input rate for cubic/linear, whose error is documented there
         ratio = max(1.0, fs / (4.0 * f_stop)) if method == "bandlimited" else 1.0
-        # half-band stages first (each halves the rate while the stop edge stays below an
-        # eighth of its input rate, i.e. while the output rate allows): the FFT then runs on
-        # 1/2^stages of the samples; their ends are incomplete over HB_REACH·(2^s − 1) more
-        # samples, so a record shorter than 1000× that margin goes without them
-        stages = min(_HB_MAX_STAGES, int(math.floor(math.log2(ratio) + 1e-12)))
+        # half-band stages first, as many as keep the clean orders (up to ``clean`` at the
+        # chunk's top speed) within a quarter of the rate they leave: there each stage is flat
+        # (its pass band, 1/8 of its input rate) and nothing folds in (what folds there comes
+        # from its stop band, 135 dB); what folds from its transition band lands above the
+        # clean orders, below the stop edge or in the FFT low-pass's stop band, and never at
+        # an order that the angle sampling folds back (module docstring). The FFT then runs
+        # on 1/2^stages of the samples and returns the output rate above, zero padded where
+        # that is higher than the stages' rate. Their ends are incomplete over
+        # HB_REACH·(2^s − 1) more samples: no more stages than leave 0.1 % of the record so
+        stages = 0
+        if method == "bandlimited":
+            f_clean = clean * hi / 60.0
+            stages = max(0, min(_HB_MAX_STAGES,
+                                int(math.floor(math.log2(fs / (4.0 * f_clean)) + 1e-12))))
+            while stages and 2 * _HB_REACH * ((1 << stages) - 1) > n // 1000:
+                stages -= 1
         half = int(math.ceil(_aa_half_length(f_pass, f_stop) * fs)) + 1
-        if 2 * _HB_REACH * ((1 << stages) - 1) > n // 1000:
-            stages = 0      # their margin may cost 0.1 % of the record at most (a short
-            #                 record keeps every angle sample it had, and its cost is small)
         half += _HB_REACH * ((1 << stages) - 1)
         if 2 * half + 1 > n:
             raise AnalysisError(
@@ -485,7 +501,7 @@ def plan_chunks(speed_rpm, *, n: int, fs: float, samples_per_rev: int = 64,
             a = max(0, n - size, windows[-1][0] if windows else 0)
         b = min(n, a + size)                  # read real samples rather than pad, if any
         out = size if ratio == 1.0 else min(size, _good_size(int(math.ceil(size / ratio))))
-        while stages and (size % (1 << stages) or out > size >> stages):
+        while stages and size % (1 << stages):
             stages -= 1              # (a margin a little wider than needed is harmless)
         bands.append((f_pass, f_stop))
         n_stages.append(stages)

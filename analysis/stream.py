@@ -136,16 +136,17 @@ def _channel(record, channel):
 
 
 def _chunk_plan(speed: SpanSpeed, chunk: int, samples_per_rev: int = 64,
-                interpolation: str = "auto"):
+                interpolation: str = "auto", clean_order: float | None = None):
     """The resampling plan of :func:`analysis.resample.plan_chunks`, computed span by span
     (cached on ``speed``: one pass over the speed per setting)."""
     from .resample import plan_chunks
 
     cache = speed.__dict__.setdefault("_plans", {})
-    key = (chunk, samples_per_rev, interpolation)
+    key = (chunk, samples_per_rev, interpolation, clean_order)
     if key not in cache:
         cache[key] = plan_chunks(speed, n=speed.n, fs=speed.fs, samples_per_rev=samples_per_rev,
-                                 interpolation=interpolation, chunk=chunk)
+                                 interpolation=interpolation, chunk=chunk,
+                                 clean_order=clean_order)
     return cache[key]
 
 
@@ -185,14 +186,14 @@ class _AngleCarry:
 
 
 def _angle_samples(read, speed: SpanSpeed, *, samples_per_rev, interpolation, chunk,
-                   segment, label):
+                   segment, label, clean_order=None):
     """Yield ``(values, t_rel, rpm, angle)`` arrays of consecutive angle samples, computed by
     :func:`analysis.resample.resample_span` (the in-memory engine) one group of chunks at a
     time."""
     from .resample import angle_range, resample_span
 
     n = speed.n
-    plan = _chunk_plan(speed, chunk, samples_per_rev, interpolation)
+    plan = _chunk_plan(speed, chunk, samples_per_rev, interpolation, clean_order)
     first, last_u = plan.usable()
     if last_u <= first:
         raise AnalysisError(f"{label}: record of {n} samples is shorter than the anti-alias "
@@ -321,9 +322,10 @@ def _detrending_reader(var, speed, chunk, trend, segment):
 
 
 def _blocks(speed, reader, *, label, samples_per_rev, revolutions, overlap, interpolation,
-            chunk, segment, per_frames, centroid=None):
+            chunk, segment, per_frames, centroid=None, clean_order=None):
     """Run the streamed angle resampling and call ``per_frames(frames, phi0, t, r, span)``
-    (``t``, ``r`` at ``centroid`` samples from each block's first, default its middle)."""
+    (``t``, ``r`` at ``centroid`` samples from each block's first, default its middle;
+    ``clean_order`` as in :func:`analysis.resample.plan_chunks`)."""
     samples_per_rev = check_int(samples_per_rev, "samples_per_rev", minimum=4,
                                 error=AnalysisError)
     revolutions = check_int(revolutions, "revolutions", minimum=1, error=AnalysisError)
@@ -338,7 +340,7 @@ def _blocks(speed, reader, *, label, samples_per_rev, revolutions, overlap, inte
     n_blocks = 0
     for arrays in _angle_samples(reader, speed, samples_per_rev=samples_per_rev,
                                  interpolation=interpolation, chunk=chunk, segment=segment,
-                                 label=label):
+                                 label=label, clean_order=clean_order):
         got = framer.push(arrays)
         if got is None:
             continue
@@ -560,10 +562,10 @@ def order_map_stream(record, channel: str, *, speed_rpm=None, speed_channel=None
 
     _blocks(speed, reader, label=label, samples_per_rev=spr, revolutions=revolutions,
             overlap=overlap, interpolation=interpolation, chunk=chunk, segment=segment,
-            per_frames=per_frames)
+            per_frames=per_frames, clean_order=top)
     units = str(var.attrs.get("units", ""))
     out_units = units if scaling == "amplitude" else (f"({units})^2" if units else "1")
-    plan = _chunk_plan(speed, chunk, spr, interpolation)
+    plan = _chunk_plan(speed, chunk, spr, interpolation, top)
     attrs = {"units": out_units, "method": "order map (angle resampling + block rfft, block "
                                            "trend removed; order 0 = block mean)",
              "scaling": scaling, "amplitude_convention": amplitude if scaling == "amplitude"

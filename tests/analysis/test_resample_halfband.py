@@ -1,7 +1,8 @@
 """The half-band decimation stages in front of the anti-alias FFT (issue 13/21: the order map's
 FFT then runs on a quarter or half of the samples): the filter's response against its stated
 bands (evaluated independently as a DTFT on a dense grid), the compiled and numpy kernels against
-a direct convolution, and the plan choosing stages only where the output rate allows."""
+a direct convolution, and the plan choosing stages while the orders it must keep clean stay
+in their pass band."""
 
 import numpy as np
 import pytest
@@ -49,21 +50,49 @@ def test_halfband_kernels_match_a_direct_convolution(n, monkeypatch):
     np.testing.assert_allclose(plain, want, rtol=0, atol=1e-14)
 
 
-def test_plan_uses_stages_only_where_the_output_rate_allows():
-    """1000→3000 rpm at 20 kHz, 64 samples/rev: stop edges 800 and 1600 Hz, output rates 3.2
-    and 6.4 kHz: two stages (to 5 kHz) and one (to 10 kHz); cubic keeps the full rate."""
+def test_plan_uses_stages_while_the_clean_orders_stay_in_their_pass_band():
+    """1000→3000 rpm at 20 kHz, 64 samples/rev: orders up to 16 at the chunks' top speeds
+    (2000 and 3000 rpm) lie at 533 and 800 Hz, which a stage leaves flat and unfolded while it
+    is within a quarter of the rate it leaves: 3 stages (to 2.5 kHz) and 2 (to 5 kHz) -- the
+    first limited to 2 by the 0.1 % margin rule (15·(2^s − 1) samples at either end: 210 of
+    200 000 for 3). The output rates (4 samples per period of the 800 and 1600 Hz stop edges:
+    3.2 and 6.4 kHz) may exceed the stages' rate (the FFT zero pads); cubic keeps the full
+    rate. A longer record takes the third stage; a map showing orders to 32 (1067 and 1600 Hz)
+    takes 2 and 1."""
     fs = 20_000.0
     rpm = 1000.0 + 2000.0 * np.arange(200_000) / 200_000
     plan = plan_chunks(rpm, n=rpm.size, fs=fs)
-    assert plan.halfband_stages == (2, 1)
-    for (nfft, n_out), s, (_, f_stop) in zip(plan.lengths, plan.halfband_stages, plan.bands):
-        assert nfft % (1 << s) == 0 and n_out <= nfft >> s
-        assert f_stop <= fs / (1 << (s + 2))
+    assert plan.halfband_stages == (2, 2)
+    for (nfft, n_out), s, (lo, hi) in zip(plan.lengths, plan.halfband_stages,
+                                          [(1000.0, 2000.0), (2000.0, 3000.0)]):
+        assert nfft % (1 << s) == 0
+        assert 16 * hi / 60.0 <= fs / (1 << (s + 2))
+        assert n_out / nfft * fs == pytest.approx(4 * 48 * lo / 60.0, rel=0.08)
+    assert plan.lengths[1][1] > plan.lengths[1][0] >> 2            # zero padded: 32768 > 25600
     assert plan_chunks(rpm, n=rpm.size, fs=fs, interpolation="cubic").halfband_stages == (0, 0)
-    # a 2.5 s record: the stages' margin (15·(2^s − 1) samples at either end) may take 0.1 %
-    # of it at most (50 samples): one stage for the second chunk, none for the first
+    assert plan_chunks(rpm, n=rpm.size, fs=fs, clean_order=32).halfband_stages == (2, 1)
+    longer = 1000.0 + 2000.0 * np.arange(400_000) / 400_000
+    assert plan_chunks(longer, n=longer.size, fs=fs).halfband_stages == (3, 2)
+    # a 2.5 s record: the stages' margin may take 0.1 % of it at most (50 samples): one stage
     short = 1000.0 + 2000.0 * np.arange(50_000) / 50_000
-    assert plan_chunks(short, n=short.size, fs=fs).halfband_stages == (0, 1)
+    assert plan_chunks(short, n=short.size, fs=fs).halfband_stages == (1, 1)
+
+
+def test_fft_lowpass_upsamples_exactly_past_the_stages_rate():
+    """Two stages take 20 kHz to 5 kHz; the output at 6.4 kHz (more samples than the stages
+    leave) is the zero-padded spectrum's inverse: a tone in the pass band comes out as the
+    tone at the output instants (closed form) within the filter's ripple, 1e-5."""
+    from crankbench.analysis.antialias import _fft_lowpass
+
+    fs, nfft, n_out = 20_000.0, 102_400, 32_768
+    t = np.arange(nfft) / fs
+    for f in (50.0, 433.0, 790.0):
+        x = np.cos(2 * np.pi * f * t + 0.4)
+        y = _fft_lowpass(x, fs, 800.0, 1600.0, nfft, n_out, stages=2)
+        t_out = np.arange(n_out) * (nfft / n_out) / fs
+        inner = slice(400, n_out - 400)                 # the filter's incomplete ends
+        np.testing.assert_allclose(y[inner], np.cos(2 * np.pi * f * t_out[inner] + 0.4),
+                                   rtol=0, atol=1e-5)
 
 
 @pytest.mark.parametrize("speed", ["runup", "steady", "wobbly"])
