@@ -13,18 +13,25 @@ frequency of ``o`` cycles per revolution whatever the speed does. Steps:
    at the chunk's top speed (ripple ≈ 1e-5) and stopping orders ≥ ``3/4 samples_per_rev`` at
    its lowest speed; the inverse FFT keeps only the bins below the output rate's Nyquist
    frequency, so the filtered chunk comes out decimated (by a fractional factor, ≥ 4 samples
-   per period of the stop edge) for the cost of about one FFT of the chunk. Where that output
-   rate is at most half the input rate, half-band decimations by 2 come first (31-tap
-   equiripple, pass band to 1/8 and stop band from 3/8 of their input rate, both within
-   1.7e-7: 135 dB; one compiled pass each), as many as keep the stop edge below 1/8 of a
-   stage's input rate (on records at least 1000× the 15·(2^stages − 1) samples they leave
-   incomplete at either end), and the FFT runs on 1/2 or 1/4 of the samples (lengths
-   ``2^a 5^b 3^c``, the chunk read with real samples up to that length rather than zero
-   padded — after the chunk, or before it at the record's end; the anti-alias stop band
-   measured on a 1000→3000 rpm run-up: a unit tone at orders 48–63 leaves ≤ 7.7e-6 at its
-   alias, i.e. ≥ 102 dB). The ``T·fs`` samples at either end of a chunk
-   window, where the filter is incomplete, are never used: chunks are read with that margin,
-   and the record ends are trimmed rather than padded;
+   per period of the stop edge) for the cost of about one FFT of the chunk. Half-band
+   decimations by 2 come first (31-tap equiripple, pass band to 1/8 and stop band from 3/8
+   of their input rate, both within 1.7e-7: 135 dB; one compiled pass each), as many as keep
+   the orders in use (``samples_per_rev/4``, or an order map's ``max_order``) at the chunk's
+   top speed within a quarter of the rate they leave: there every stage is flat and what it
+   folds comes from its stop band; what it folds from its transition band lands above those
+   orders and below ``3/4 samples_per_rev``, where the angle sampling does not fold it back
+   (on records at least 1000× the 15·(2^stages − 1) samples they leave incomplete at either
+   end). The FFT then runs on 1/2^stages of the samples (lengths ``2^a 5^b 3^c``, the chunk
+   read with real samples up to that length rather than zero padded — after the chunk, or
+   before it at the record's end) and zero pads its spectrum where the output rate is higher
+   than the stages' rate; the anti-alias stop band measured on a 1000→3000 rpm run-up: a
+   unit tone at orders 48–63 leaves ≤ 7.7e-6 at its alias, i.e. ≥ 102 dB. The ``T·fs``
+   samples at either end of a chunk window, where the filter is incomplete, are never used:
+   chunks are read with that margin, and the record ends are trimmed rather than padded.
+   Neighbouring chunks' filters differ in their transition band, so at a boundary the signal
+   crossfades from one to the other over 2 revolutions either side
+   (:mod:`analysis.chunk_blend`): a component there is faded, not switched (switched, a unit
+   tone at order 20–30 leaked 1.8e-3 into every order of the straddling block);
 3. the times of the constant-angle samples from the inverse of φ(t);
 4. interpolation of the filtered signal at those times: ``"bandlimited"`` (default through
    ``"auto"``: Kaiser-windowed sinc, 16 taps, β = 12.5, weights normalised to a unit sum),
@@ -323,6 +330,9 @@ class ChunkPlan:
         Per chunk: input samples the interpolation reaches beyond an output position.
     halfband_stages : tuple of int
         Per chunk: half-band decimations by 2 before the FFT low-pass (:func:`_halfband_taps`).
+    blends : tuple of int
+        Per chunk: half-width (input samples) of the crossfade to the next chunk's filter
+        around their boundary (:mod:`analysis.chunk_blend`), 0 for none.
     """
 
     n: int
@@ -336,6 +346,7 @@ class ChunkPlan:
     filter_half: tuple
     reach: tuple
     halfband_stages: tuple = ()
+    blends: tuple = ()
 
     @property
     def chunks(self) -> int:
@@ -509,10 +520,13 @@ def plan_chunks(speed_rpm, *, n: int, fs: float, samples_per_rev: int = 64,
         lengths.append((size, out))
         halves.append(half)
         reach.append(step)
+    from .chunk_blend import blend_widths
+
     return ChunkPlan(n=n, fs=float(fs), samples_per_rev=samples_per_rev, interpolation=method,
                      bounds=bounds, bands=tuple(bands), windows=tuple(windows),
                      lengths=tuple(lengths), filter_half=tuple(halves), reach=tuple(reach),
-                     halfband_stages=tuple(n_stages))
+                     halfband_stages=tuple(n_stages),
+                     blends=blend_widths(bounds, ranges, bands, halves, reach, fs, n))
 
 
 def angle_range(plan: ChunkPlan, phi_first: float, phi_last: float) -> tuple[int, int]:
@@ -553,7 +567,10 @@ def resample_span(plan: ChunkPlan, ks, values: np.ndarray, start: int, phi: np.n
     """
     fs = plan.fs
     dphi = _TWO_PI / plan.samples_per_rev
-    stop = int(plan.bounds[ks[-1] + 1])
+    blends = plan.blends or (0,) * plan.chunks
+    # a span that is not the record's last stops before the crossfade at its upper boundary
+    # (the next span, which holds the next chunk, produces it: analysis.chunk_blend)
+    stop = int(plan.bounds[ks[-1] + 1]) - blends[ks[-1]]
     top = j_last if last else min(j_last, int(np.floor(phi[-1] / dphi)))
     grid = np.arange(j_first, top + 1) * dphi
     if positions is not None and last:
@@ -568,8 +585,17 @@ def resample_span(plan: ChunkPlan, ks, values: np.ndarray, start: int, phi: np.n
     out = np.empty(grid.shape[0])
     for k in ks:
         c0, c1 = int(plan.bounds[k]), int(plan.bounds[k + 1])
-        lo = int(np.searchsorted(u_out, c0, side="left"))
-        hi = int(np.searchsorted(u_out, c1, side="left")) if c1 < plan.n else grid.shape[0]
+        w_lo = blends[k - 1] if k else 0
+        if w_lo:              # the crossfade from the previous chunk's filter to this one's
+            from .chunk_blend import zone_values
+
+            lo = int(np.searchsorted(u_out, c0 - w_lo, side="left"))
+            hi = int(np.searchsorted(u_out, c0 + w_lo, side="left"))
+            if hi > lo:
+                out[lo:hi] = zone_values(plan, k - 1, values, start, u_out[lo:hi])
+        lo = int(np.searchsorted(u_out, c0 + w_lo, side="left"))
+        hi = (int(np.searchsorted(u_out, c1 - blends[k], side="left")) if c1 < plan.n
+              else grid.shape[0])
         if hi <= lo:
             continue
         a, b = plan.window(k)

@@ -226,7 +226,12 @@ def _angle_samples(read, speed: SpanSpeed, *, samples_per_rev, interpolation, ch
             cur, size = [], 0
     if cur:
         groups.append(cur)
-    windows = [(plan.window(g[0])[0], plan.window(g[-1])[1]) for g in groups]
+    from .chunk_blend import zone_input
+
+    # each group reads its chunks' windows and, from its first chunk's lower boundary on,
+    # the input of the crossfade there (which this group produces)
+    windows = [(min(plan.window(g[0])[0], zone_input(plan, g[0] - 1)[0] if g[0] else n),
+                plan.window(g[-1])[1]) for g in groups]
     carry = _AngleCarry(speed)
     next_j = j0
     for gi, g in enumerate(groups):
