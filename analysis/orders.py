@@ -202,18 +202,21 @@ def _frame_batches(starts: np.ndarray, batch: int = _FRAMES_PER_BATCH):
 
 
 def _scale_spectrum(X: np.ndarray, w: np.ndarray, scaling: str, factor: float) -> np.ndarray:
-    """Coherent amplitude or mean-square per bin of one-sided DFTs ``X`` (rows)."""
+    """Coherent amplitude or mean-square per bin of one-sided DFTs ``X`` (rows; the first
+    ``X.shape[1]`` bins of transforms of ``len(w)`` points). Bin 0 and, when ``X`` reaches it,
+    the Nyquist bin of an even length stand for one frequency, not two: halved."""
     length = w.shape[0]
+    nyquist = length % 2 == 0 and X.shape[1] == length // 2 + 1
     if scaling == "amplitude":
         out = np.abs(X) * (2.0 / w.sum())
         out[:, 0] *= 0.5
-        if length % 2 == 0:
+        if nyquist:
             out[:, -1] *= 0.5
         return out * factor
     # mean square per bin: P_k = 2|X_k|^2 / (M Σ w^2); band sums give A_rms^2 (Parseval)
     out = np.abs(X) ** 2 * (2.0 / (length * np.sum(w ** 2)))
     out[:, 0] *= 0.5
-    if length % 2 == 0:
+    if nyquist:
         out[:, -1] *= 0.5
     return out
 

@@ -118,6 +118,26 @@ def test_order_map_rpm_bins_and_campbell():
     assert np.abs(ridge - 2 * c["rpm"].values / 60).max() <= c.attrs["resolution_hz"]
 
 
+@pytest.mark.parametrize("scaling, want", [("amplitude", 0.7), ("power", 0.7 ** 2 / 2 / 1.5)])
+def test_the_top_bin_of_a_map_reads_its_order_in_full(scaling, want):
+    """The map keeps bins up to max_order (default samples_per_rev/4 = 16), far below the block
+    transform's Nyquist bin: its last column is an ordinary bin. A tone at order 16 reads its
+    amplitude 0.7 (power: its mean square 0.245 over the Hann window's 1.5-bin noise
+    bandwidth on its bin), as one at order 15 does -- not half of it (a bin halved as if it
+    were the Nyquist bin). Likewise a Campbell map cut at max_frequency."""
+    fs = 20_000.0
+    t, rpm, phi = _runup(fs, 5.0, 1500.0, 1500.0)
+    for o in (15.0, 16.0):
+        m = order_map(0.7 * np.cos(o * phi), fs=fs, speed_rpm=rpm, scaling=scaling)
+        assert float(m["order"][-1]) == 16.0
+        assert float(m.sel(order=o).mean()) == pytest.approx(want, rel=1e-4)
+    f = 1500.0 / 60.0 * 8                                  # 200 Hz, on a bin of nperseg=1000
+    c = campbell_map(0.7 * np.cos(8 * phi), fs=fs, speed_rpm=rpm, nperseg=1000,
+                     max_frequency=f)
+    assert float(c["frequency"][-1]) == f
+    assert float(c.sel(frequency=f).mean()) == pytest.approx(0.7, rel=1e-4)
+
+
 def test_record_channel_input_takes_fs_and_units():
     fs = 5000.0
     t, rpm, phi = _runup(fs, 3.0, 1500.0, 1500.0)
