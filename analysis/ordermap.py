@@ -43,13 +43,15 @@ class MapSpectra:
     """Order spectra of angle-domain blocks with each block's trend removed first.
 
     The weighted (window, negative lobes clipped) least-squares constant and slope of each block
-    are subtracted before
-    the window and the rfft; the constant (the block mean) is then put in bin 0 (amplitude:
-    its magnitude; power: its square), so the channel's mean and drift cannot leak into low
-    orders. Shared by :func:`order_map` and :func:`analysis.stream.order_map_stream`.
+    are removed -- their windowed spectrum subtracted from the block's, the same as removing
+    them before the window and the rfft (linearity) for one pass less; the constant (the
+    block mean) is then put in bin 0 (amplitude: its magnitude; power: its square), so the
+    channel's mean and drift cannot leak into low orders. Shared by :func:`order_map` and :func:`analysis.stream.order_map_stream`.
     """
 
     def __init__(self, length: int, window, scaling: str, factor: float, n_orders: int):
+        from scipy import fft
+
         self.w = w = get_window(window, length)
         self.length, self.scaling, self.factor, self.n_orders = length, scaling, factor, n_orders
         s = np.linspace(-1.0, 1.0, length)
@@ -57,17 +59,18 @@ class MapSpectra:
         weight = np.clip(w, 0.0, None)            # flat-top windows dip below zero
         gram = basis.T @ (basis * weight[:, None])
         self.proj = np.ascontiguousarray(np.linalg.solve(gram, (basis * weight[:, None]).T).T)
-        self.basis_t = np.ascontiguousarray(basis.T)
+        # the trend's windowed spectrum: subtracted after the transform (linear), which spares
+        # a pass over every block
+        self.trend_spectra = fft.rfft(basis.T * w, axis=1)[:, :n_orders]
         self.enbw = float(length * np.sum(w ** 2) / np.sum(w) ** 2)
 
     def __call__(self, frames: np.ndarray) -> np.ndarray:
         from scipy import fft
 
         coef = frames @ self.proj
-        detrended = frames - coef @ self.basis_t
-        detrended *= self.w
-        out = _scale_spectrum(fft.rfft(detrended, axis=1)[:, :self.n_orders], self.w,
-                              self.scaling, self.factor)
+        spectra = fft.rfft(frames * self.w, axis=1)[:, :self.n_orders]
+        spectra -= coef @ self.trend_spectra
+        out = _scale_spectrum(spectra, self.w, self.scaling, self.factor)
         out[:, 0] = np.abs(coef[:, 0]) if self.scaling == "amplitude" else coef[:, 0] ** 2
         return out
 
