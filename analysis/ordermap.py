@@ -27,9 +27,12 @@ from crankbench.predict._validate import (check_finite_array, check_int, check_o
                                           check_positive, check_range)
 from crankbench.predict.errors import AnalysisError
 
-from .orders import (_check_order_range, _check_orders, _frame_batches, _frames, _scale_spectrum,
+from .orders import (_block_coords, _check_order_range, _check_orders, _frame_batches, _frames,
+                     _scale_spectrum, _stopped_spans, _track_running_spans,
                      _t0, amplitude_factor, get_window)
-from .resample import _angle_input, _as_rpm, _as_signal, angle_resample
+from .resample import (_angle_input, _as_rpm, _as_signal, angle_resample, angle_samples,
+                       plan_chunks, resample_span)
+from .trend import remove_trend
 
 __all__ = ["order_map", "order_spectrum", "band_amplitude", "campbell_map"]
 
@@ -63,6 +66,10 @@ class MapSpectra:
         # a pass over every block
         self.trend_spectra = fft.rfft(basis.T * w, axis=1)[:, :n_orders]
         self.enbw = float(length * np.sum(w ** 2) / np.sum(w) ** 2)
+        # a block's time is its window's centroid (samples from its first; a periodic Hann's
+        # is length/2, half a sample after the middle): where the envelope is a ramp, the
+        # estimate is the envelope there
+        self.centroid = float(np.sum(np.arange(length) * w) / np.sum(w))
 
     def __call__(self, frames: np.ndarray) -> np.ndarray:
         from scipy import fft
@@ -143,8 +150,6 @@ def order_map(x, *, fs=None, speed_rpm, samples_per_rev: int = 64, revolutions: 
                           error=AnalysisError)
     top = spr / 4.0 if max_order is None else check_positive(max_order, "max_order",
                                                              error=AnalysisError)
-    from .orders import _stopped_spans, _track_running_spans
-
     limits, running = _running_throughout(x, speed_rpm)
     stops = None if running or np.isscalar(speed_rpm) else _stopped_spans(x, fs, speed_rpm)
     if stops is not None:   # a record that stops: the map of each running span, as tracks
@@ -165,9 +170,6 @@ def order_map(x, *, fs=None, speed_rpm, samples_per_rev: int = 64, revolutions: 
              else _as_rpm(speed_rpm, n, fs_))
     if max_order is not None:
         _check_order_range(top, spr, values, fs_, speed, divisor=2)
-    from .resample import angle_samples, plan_chunks, resample_span
-    from .trend import remove_trend
-
     # the plan from the speed alone; the shaft angle and the angle samples' positions in one
     # pass; the channel's trend (by that angle) removed before the anti-alias filter
     plan = plan_chunks(speed, n=n, fs=fs_, samples_per_rev=spr, interpolation=interpolation,
@@ -188,16 +190,14 @@ def order_map(x, *, fs=None, speed_rpm, samples_per_rev: int = 64, revolutions: 
     n_orders = min(length // 2 + 1, int(np.floor(top * revolutions)) + 1)
     spectra = _map_spectra(length, window, scaling, factor, n_orders)
     out = np.empty((starts.shape[0], n_orders))
-    from numpy.lib.stride_tricks import sliding_window_view
-
-    blocks = sliding_window_view(y, length)     # rows gathered per batch, no index arrays
+    # every block start as a row (a strided view, no copy; rows gathered per batch)
+    blocks = np.lib.stride_tricks.as_strided(y, (y.shape[0] - length + 1, length),
+                                             (y.strides[0], y.strides[0]), writeable=False)
     for sl in _frame_batches(starts):
         out[sl] = spectra(blocks[starts[sl]])
     values = out
     order_axis = np.arange(n_orders) / revolutions
-    from .orders import _block_coords
-
-    t, r, _ = _block_coords(t_rel, r_s, starts, length)
+    t, r, _ = _block_coords(t_rel, r_s, starts, length, spectra.centroid)
     t = t + _t0(x)
     out_units = units if scaling == "amplitude" else (f"({units})^2" if units else "1")
     attrs = {"units": out_units, "method": "order map (angle resampling + block rfft, block "

@@ -567,7 +567,7 @@ def order_map_stream(record, channel: str, *, speed_rpm=None, speed_channel=None
 
     _blocks(speed, reader, label=label, samples_per_rev=spr, revolutions=revolutions,
             overlap=overlap, interpolation=interpolation, chunk=chunk, segment=segment,
-            per_frames=per_frames, clean_order=top)
+            per_frames=per_frames, centroid=spectra.centroid, clean_order=top)
     units = str(var.attrs.get("units", ""))
     out_units = units if scaling == "amplitude" else (f"({units})^2" if units else "1")
     plan = _chunk_plan(speed, chunk, spr, interpolation, top)
