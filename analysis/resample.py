@@ -124,16 +124,24 @@ def _as_signal(x, fs, name: str = "x"):
     if np.ndim(x) == 1 and np.shape(x)[0] == 0:
         raise AnalysisError(f"{label} holds no samples (zero-length channel); order analysis "
                             "needs a record of at least a few revolutions")
-    values = _finite_fast(x, 8)
+    values = _finite_fast(x, 8, label)
     if values is None:          # something is wrong: the full check names it
         values = check_finite_array(x, label, ndim=1, min_length=8, error=AnalysisError)
     return values, fs, units, label
 
 
-def _finite_fast(x, min_length: int):
-    """``x`` as a float64 1-D array when it is one of at least ``min_length`` finite values,
-    decided in one pass (a sum is finite only if every term is), else None (then the full
-    check, :func:`check_finite_array`, names what is wrong)."""
+#: about the largest magnitude the order analysis takes (in the channel's unit): the sum of
+#: squares of the samples must be finite (a record of 10⁸ samples at this level sums to 1e308)
+MAX_MAGNITUDE = 1e150
+
+
+def _finite_fast(x, min_length: int, label: str | None = None):
+    """``x`` as a float64 1-D array when it is one of at least ``min_length`` finite values
+    whose sum of squares is finite, decided in one pass (``x·x``, finite only if every term
+    is and nothing overflows), else None (then the full check, :func:`check_finite_array`,
+    names what is wrong). With ``label``: finite values too large to square and sum raise
+    :class:`AnalysisError` naming the channel and its largest magnitude (every later sum of
+    squares of the analysis would overflow into NaN)."""
     if isinstance(x, np.ndarray) and x.dtype == np.float64:
         arr = x
     else:
@@ -144,8 +152,16 @@ def _finite_fast(x, min_length: int):
     if arr.ndim != 1 or arr.shape[0] < min_length:
         return None
     with np.errstate(over="ignore", invalid="ignore"):     # an overflow means: check fully
-        total = np.add.reduce(arr)
-    return arr if np.isfinite(total) else None
+        total = float(np.dot(arr, arr)) if arr.flags.c_contiguous else float(
+            np.add.reduce(arr * arr))
+    if np.isfinite(total):
+        return arr
+    if label is not None and np.isfinite(arr).all():
+        raise AnalysisError(
+            f"{label} reaches {float(np.max(np.abs(arr))):.3g} (in its unit): too large to "
+            f"analyse (its sum of squares overflows; magnitudes up to about {MAX_MAGNITUDE:.0e} "
+            "are taken); check the channel's unit and calibration, or scale it")
+    return None
 
 
 def _as_rpm(rpm, n: int, fs: float | None = None, *, allow_stop: bool = False) -> np.ndarray:

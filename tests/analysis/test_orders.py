@@ -151,6 +151,26 @@ def test_map_block_time_is_its_window_centroid():
     assert np.abs(m.sel(order=3).values[inner] / (1 + 0.5 * tt[inner]) - 1).max() <= 1e-5
 
 
+@pytest.mark.parametrize("method", ["auto", "cot", "map"])
+def test_a_channel_too_large_to_square_is_refused_by_name(method):
+    """Finite samples whose sum of squares overflows (1e200: a unit or calibration slip)
+    gave NaN tracks; now a clear error naming the channel and its magnitude. 1e150 (the
+    documented limit for records up to 10⁸ samples) is still analysed, exactly."""
+    fs = 5000.0
+    t, rpm, phi = _runup(fs, 10.0, 1200.0, 1200.0)
+    for scale, ok in ((1e150, True), (1e200, False)):
+        x = xr.DataArray(scale * np.cos(2 * phi), dims="time", name="acc_z",
+                         attrs={"sample_rate": fs, "units": "m/s^2"})
+        call = ((lambda: order_map(x, speed_rpm=rpm).sel(order=2).values) if method == "map"
+                else (lambda: order_track(x, speed_rpm=rpm, orders=[2],
+                                          method=method).amplitude.values))
+        if ok:
+            assert np.nanmax(np.abs(call() / scale - 1)) < 1e-4
+        else:
+            with pytest.raises(AnalysisError, match=r"acc_z reaches 1e\+200 .*too large to analyse"):
+                call()
+
+
 def test_record_channel_input_takes_fs_and_units():
     fs = 5000.0
     t, rpm, phi = _runup(fs, 3.0, 1500.0, 1500.0)
