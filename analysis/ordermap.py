@@ -240,25 +240,42 @@ def _labelled_map(values, t, r, order_coord, attrs, name):
     import xarray as xr
     from xarray.indexes import PandasIndex
 
-    order_axis = order_coord[1]
     time_index = PandasIndex(pd.Index(t, name="time"), "time")
-    order_index = PandasIndex(pd.Index(order_axis, name="order"), "order")
     time_var = xr.Variable("time", t, {"units": "s"})
     order_var = xr.Variable(*order_coord)
     try:
+        order_index, order_ivar = _order_index(
+            np.asarray(order_coord[1], dtype=np.float64).tobytes(),
+            tuple(sorted(order_coord[2].items())))
         coords = {"time": time_index.create_variables({"time": time_var})["time"],
                   "rpm": xr.Variable("time", r, {"units": "rpm"}),
-                  "order": order_index.create_variables({"order": order_var})["order"]}
+                  "order": order_ivar.copy(deep=False)}          # its own attrs dict
         return xr.DataArray(xr.Variable(("time", "order"), values, attrs), coords=coords,
                             name=name, indexes={"time": time_index, "order": order_index},
                             fastpath=True)
     except Exception:  # pragma: no cover - an xarray whose private route changed
+        order_index = PandasIndex(pd.Index(order_coord[1], name="order"), "order")
         coords = xr.Coordinates(
             {"time": time_var, "rpm": xr.Variable("time", r, {"units": "rpm"}),
              "order": order_var},
             indexes={"time": time_index, "order": order_index})
         return xr.DataArray(values, coords=coords, dims=("time", "order"), attrs=attrs,
                             name=name)
+
+
+@functools.lru_cache(maxsize=16)
+def _order_index(axis_bytes: bytes, attrs: tuple):
+    """An order axis (float64 values as bytes, attrs as sorted items) as an index and its
+    index variable, made once per axis: the pandas index is immutable, and each map gets a
+    shallow copy of the variable (its own attrs dict)."""
+    import pandas as pd
+    import xarray as xr
+    from xarray.indexes import PandasIndex
+
+    axis = np.frombuffer(axis_bytes, dtype=np.float64).copy()
+    index = PandasIndex(pd.Index(axis, name="order"), "order")
+    var = xr.Variable("order", axis, dict(attrs))
+    return index, index.create_variables({"order": var})["order"]
 
 
 def _speed_binned(values, r, speed_bins_rpm, scaling, attrs, order_coord, label):

@@ -31,10 +31,14 @@ def test_a_non_finite_sample_is_located(bad):
         order_map(x, fs=fs, speed_rpm=rpm)
 
 
-def test_huge_finite_values_pass_the_sum_check():
-    """Finite samples whose sum overflows (10 × 1e308) are still accepted: the full check
-    decides, and it finds nothing wrong."""
+def test_huge_finite_values_are_refused_by_name():
+    """Finite samples whose sum of squares overflows (10 × 1e308) are not NaN nor inf, but
+    every sum of squares of the analysis would overflow into NaN tracks: refused with the
+    channel's name and magnitude (the full check finds no NaN/inf, so it is the size)."""
     from crankbench.analysis.resample import _as_signal
+    from crankbench.predict.errors import AnalysisError
 
-    values, fs, _, _ = _as_signal(np.full(10, 1e308), 2.0)
-    assert values.shape == (10,) and fs == 2.0 and np.isfinite(values).all()
+    with pytest.raises(AnalysisError, match=r"x reaches 1e\+308 .*too large to analyse"):
+        _as_signal(np.full(10, 1e308), 2.0)
+    values, fs, _, _ = _as_signal(np.full(10, 1e150), 2.0)
+    assert values.shape == (10,) and fs == 2.0
