@@ -102,6 +102,14 @@ def _fft_lowpass(data: np.ndarray, fs: float, f_pass: float, f_stop: float, nfft
     exceed ``nfft/2^stages`` (the output rate set by the interpolation): the spectrum is then
     zero padded, its Nyquist bin split between its two halves (exact band-limited
     upsampling)."""
+    spectrum, fs, nfft = _stage_spectrum(data, fs, nfft, stages)
+    return _lowpass_spectrum(spectrum, fs, f_pass, f_stop, nfft, n_out)
+
+
+def _stage_spectrum(data: np.ndarray, fs: float, nfft: int, stages: int):
+    """``(rfft, rate Hz, length)`` of ``data`` zero padded or cut to ``nfft`` samples and
+    decimated by ``stages`` half-band stages: the first half of :func:`_fft_lowpass` (one
+    spectrum serves several filters)."""
     from scipy import fft
 
     if data.shape[0] < nfft:
@@ -116,11 +124,20 @@ def _fft_lowpass(data: np.ndarray, fs: float, f_pass: float, f_stop: float, nfft
         for _ in range(stages):
             data = halfband_decimate(data, taps)
         fs, nfft = fs / (1 << stages), nfft >> stages
-    spectrum = fft.rfft(data)
+    return fft.rfft(data), fs, nfft
+
+
+def _lowpass_spectrum(spectrum: np.ndarray, fs: float, f_pass: float, f_stop: float,
+                      nfft: int, n_out: int, *, own: bool = True) -> np.ndarray:
+    """The second half of :func:`_fft_lowpass`: the low-pass applied to ``spectrum`` (rfft of
+    ``nfft`` samples at ``fs``) and the filtered signal at ``n_out`` samples (``own``: the
+    spectrum may be overwritten)."""
+    from scipy import fft
+
     keep = n_out // 2 + 1
     gain = _lowpass_response(float(fs), float(f_pass), float(f_stop), int(nfft), int(n_out))
     if keep <= spectrum.shape[0]:
-        out = spectrum[:keep]
+        out = spectrum[:keep] if own else spectrum[:keep].copy()
         out *= gain
     else:                           # a higher output rate: zero padded
         out = np.zeros(keep, dtype=spectrum.dtype)

@@ -107,15 +107,18 @@ def zone_values(plan, k: int, values: np.ndarray, start: int, u: np.ndarray) -> 
     a, size = _patch(plan, k)
     data = values[a - start:min(a + size, plan.n) - start]
     lam = 0.5 - 0.5 * np.cos(np.pi * (u - (c1 - w)) / (2.0 * w))
-    lower = _side(plan, k, data, a, size, u)
-    upper = _side(plan, k + 1, data, a, size, u)
+    spectra = {}                 # one transform per stage count: both sides usually share it
+    lower = _side(plan, k, data, a, size, u, spectra)
+    upper = _side(plan, k + 1, data, a, size, u, spectra)
     return lower + lam * (upper - lower)
 
 
-def _side(plan, k: int, data: np.ndarray, a: int, size: int, u: np.ndarray) -> np.ndarray:
+def _side(plan, k: int, data: np.ndarray, a: int, size: int, u: np.ndarray,
+          spectra: dict) -> np.ndarray:
     """Chunk ``k``'s filter (transform length ``size``; ``data``, input samples from ``a``,
-    zero padded to it) and interpolation, read at positions ``u``."""
-    from .antialias import _fft_lowpass
+    zero padded to it) and interpolation, read at positions ``u``; ``spectra`` holds the
+    decimated transforms already made, by stage count."""
+    from .antialias import _good_size, _lowpass_spectrum, _stage_spectrum
     from .resample import _interp
 
     band = plan.bands[k]
@@ -125,11 +128,9 @@ def _side(plan, k: int, data: np.ndarray, a: int, size: int, u: np.ndarray) -> n
     while stages and size % (1 << stages):
         stages -= 1
     nfft, n_out = plan.lengths[k]
-    if n_out == nfft:
-        out = size
-    else:
-        from .antialias import _good_size
-
-        out = min(size, _good_size(int(math.ceil(size * n_out / nfft))))
-    filtered = _fft_lowpass(data, plan.fs, band[0], band[1], size, out, stages=stages)
+    out = size if n_out == nfft else min(size, _good_size(int(math.ceil(size * n_out / nfft))))
+    if stages not in spectra:
+        spectra[stages] = _stage_spectrum(data, plan.fs, size, stages)
+    spectrum, fs_s, n_s = spectra[stages]
+    filtered = _lowpass_spectrum(spectrum, fs_s, band[0], band[1], n_s, out, own=False)
     return _interp(filtered, (u - a) * (out / size), plan.interpolation)
