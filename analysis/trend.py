@@ -247,9 +247,10 @@ def remove_trend(values: np.ndarray, fs: float, *, phi: np.ndarray, speed_rpm: n
     # the tests on about 4000 samples (a fit of a line needs no more; cheap on a long record)
     step = max(1, values.shape[0] // 4000)
     sub = slice(None, None, step)
+    values_sub = np.ascontiguousarray(values[sub])       # the tests' samples, copied once
     if kind in ("auto", "angle ramp"):
         # a cheap test on the raw reference first; the cycle average only when it may apply
-        if kind == "angle ramp" or _is_ramp(_fit(values[sub], phi[sub])):
+        if kind == "angle ramp" or _is_ramp(_fit(values_sub, np.ascontiguousarray(phi[sub]))):
             smooth = cycle_average(phi, phi, fs)
             ramp = _fit(values, smooth)
             if kind == "angle ramp" or _is_ramp(ramp):
@@ -262,8 +263,8 @@ def remove_trend(values: np.ndarray, fs: float, *, phi: np.ndarray, speed_rpm: n
                 return values - (s * smooth + c), info
     if kind in ("auto", "speed mean"):
         omega_sub = speed_rpm[sub] * (_TWO_PI / 60.0)
-        if kind == "speed mean" or _carries_speed(values[sub], omega_sub,
-                                                  _fit(values[sub], omega_sub)):
+        if kind == "speed mean" or _carries_speed(values_sub, omega_sub,
+                                                  _fit(values_sub, omega_sub)):
             omega = speed_rpm * (_TWO_PI / 60.0)
             smooth = cycle_average(omega, phi, fs)
             fit = _fit(values, smooth)
@@ -294,7 +295,8 @@ def _carries_speed(values, omega, fit) -> bool:
 
 def _fit(y, x):
     """Least-squares line ``y ≈ s x + c`` with its R²."""
-    xm, ym = float(np.mean(x)), float(np.mean(y))
+    n = max(int(x.shape[0]), 1)
+    xm, ym = float(np.add.reduce(x)) / n, float(np.add.reduce(y)) / n
     dx = x - xm
     var = float(np.dot(dx, dx))
     if var <= 0:
