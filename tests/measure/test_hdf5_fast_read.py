@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from crankbench.measure import io
-from crankbench.measure.readers import hdf5
+from crankbench.measure.readers import _h5raw, hdf5
 from crankbench.measure.record import make_record
 
 N, FS = 300_001, 1000.0   # a partial last chunk
@@ -42,7 +42,7 @@ def _file(tmp_path, **storage):
 def test_every_storage_reads_back_exactly(tmp_path, storage, direct):
     path, x = _file(tmp_path, **storage)
     with h5py.File(path, "r") as f:
-        assert (hdf5._raw_runs(f["channels/acc"]) is not None) == direct
+        assert (_h5raw.raw_runs(f["channels/acc"]) is not None) == direct
     got = io.read(path)["acc"].values
     np.testing.assert_array_equal(got.astype(np.float64), x.astype(np.float64))
 
@@ -60,11 +60,11 @@ def test_chunks_written_in_order_are_one_read(tmp_path, chunked):
         np.testing.assert_array_equal(io.read(path)["acc"].values, x)
     with h5py.File(path, "r") as f:
         assert (f["channels/acc"].chunks is not None) == chunked
-        runs = hdf5._raw_runs(f["channels/acc"])
+        runs = _h5raw.raw_runs(f["channels/acc"])
     assert len(runs) == 1 and runs[0][1:] == (0, N)
     if not chunked:  # >= 64 KiB: starts on a page, read into a page-aligned array
         assert runs[0][0] % hdf5.ALIGN_BYTES == 0
-        got = hdf5._congruent_empty(N, np.float32, runs[0][0])
+        got = _h5raw.congruent_empty(N, np.float32, runs[0][0])
         assert got.ctypes.data % hdf5.ALIGN_BYTES == 0 and got.shape == (N,)
 
 
@@ -84,7 +84,7 @@ def test_a_datatype_other_than_numpys_is_read_by_hdf5(tmp_path):
         f["dims/time"].attrs["length"] = x.size
         raw = np.fromfile(path, np.int16, count=x.size,
                           offset=f["channels/acc"].id.get_offset())
-        assert f["channels/acc"].dtype == np.int16 and hdf5._raw_runs(f["channels/acc"]) is None
+        assert f["channels/acc"].dtype == np.int16 and _h5raw.raw_runs(f["channels/acc"]) is None
     assert not np.array_equal(raw, x)  # the bytes are not the values
     np.testing.assert_array_equal(io.read(path)["acc"].values, x.astype(np.float64))
 
