@@ -248,6 +248,8 @@ def _runs_at(x: np.ndarray, level, blocks) -> tuple[np.ndarray, np.ndarray]:
     :data:`_SCAN_BLOCK` samples (all of ``x`` when ``blocks`` is None)."""
     if blocks is None:
         groups = [(0, x.size)]
+    elif blocks.size == 1:  # the usual case: one block holds the level
+        groups = [(int(blocks[0]) * _SCAN_BLOCK, min((int(blocks[0]) + 1) * _SCAN_BLOCK, x.size))]
     else:  # contiguous groups of blocks
         cut = np.flatnonzero(np.diff(blocks) > 1) + 1
         groups = [(int(g[0]) * _SCAN_BLOCK, min((int(g[-1]) + 1) * _SCAN_BLOCK, x.size))
@@ -275,8 +277,11 @@ def _describe_spans(spans, t) -> str:
     return "; ".join(parts) + more
 
 
-def _is_lazy(var: xr.DataArray) -> bool:
-    return var.chunks is not None
+def _is_lazy(var) -> bool:
+    """True for a chunked (dask-backed) Variable or DataArray (a numpy-backed one is answered
+    without xarray's protocol check of ``.chunks``, which costs more than the rest of a small
+    record's validation)."""
+    return not isinstance(var.data, np.ndarray) and var.chunks is not None
 
 
 def _check_time_axis(name: str, t: np.ndarray, fs: float | None, dim: str) -> None:
