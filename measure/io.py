@@ -43,8 +43,8 @@ from ._atomic import atomic_path, check_overwrite
 from .provenance import STAT_ATTR, sha256_of, source_sha256, stamp_source
 from .readers import EXTENSIONS, format_of_magic, module_for
 from .readers._common import REGULAR_KEY
-from .record import (CLIP_QUANTITIES, RecordWarning, _is_lazy, clipped_spans,
-                     nonfinite_spans, shared_scans, validate)
+from .record import RecordWarning, _is_lazy, validate
+from .scan import CLIP_QUANTITIES, clipped_spans, nonfinite_spans, shared_scans
 
 __all__ = ["read", "write", "open", "read_truth", "iter_blocks", "sha256_of", "source_sha256",
            "EXTENSIONS"]
@@ -198,7 +198,7 @@ def read(path, *, channels=None, allow_nonfinite: bool = False, map=None) -> xr.
     Notes
     -----
     Clipping (runs of >= 3 samples flat at a vibration-type channel's own maximum or minimum,
-    see :func:`measure.record.clipped_spans`) is reported by a :class:`RecordWarning` naming
+    see :func:`measure.scan.clipped_spans`) is reported by a :class:`RecordWarning` naming
     channel and spans, which are listed in the channel attr ``clipped_spans_s``; the samples
     are kept as recorded.
 
@@ -244,7 +244,7 @@ def _read_checked(path, module, st, cmap, channels, allow_nonfinite) -> xr.Datas
     flag clipping, stamp the source's identity ``st`` (its SHA-256 is computed on demand by
     :func:`measure.provenance.source_sha256`; a channel map's raw export is hashed now)."""
     # the NaN/inf check and the clipping check share one scan of each channel, or none where
-    # the reader scanned the samples while reading them (measure.record.note_block_extremes)
+    # the reader scanned the samples while reading them (measure.scan.note_block_extremes)
     with shared_scans():
         ds = _parse(path, module, cmap, channels, allow_nonfinite)
         if allow_nonfinite:

@@ -19,6 +19,8 @@ import os
 
 import numpy as np
 
+from ..scan import _SCAN_BLOCK
+
 #: the kernel copies from the page cache fastest when source and destination share their
 #: offset within a page (about 20 % less CPU for 20 MB than at an arbitrary offset)
 _PAGE = 4096
@@ -39,7 +41,8 @@ def _h5():
     return h5py
 
 
-def _native(dtype):
+def native_type(dtype):
+    """HDF5 datatype (``h5py.h5t.TypeID``) of numpy ``dtype``, as h5py makes it (made once)."""
     tid = _NATIVE.get(dtype)
     if tid is None:
         tid = _NATIVE[dtype] = _h5().h5t.py_create(dtype)
@@ -79,7 +82,7 @@ def raw_runs(ds, userblock: int | None = None, dcpl=None, shape: tuple | None = 
     shape = did.shape if shape is None else shape
     if len(shape) != 1 or not dtype.isnative or dtype.kind not in "fiu":
         return None
-    if did.get_type() != _native(dtype):  # bytes not numpy's (bit offset, precision,
+    if did.get_type() != native_type(dtype):  # bytes not numpy's (bit offset, precision,
         return None                       # custom float): HDF5 converts
     plist = did.get_create_plist() if dcpl is None else dcpl
     layout = plist.get_layout()
@@ -230,8 +233,8 @@ def piece_extremes(out, a: int, b: int, block: int, lows, highs) -> None:
 
 def read_all(ds, userblock: int | None = None):
     """All samples of a 1-D dataset of an open file, and their per-block extremes when scanned
-    while read (blocks of :data:`measure.record._SCAN_BLOCK` samples; for the record's NaN/inf
-    and clipping checks, :func:`measure.record.note_block_extremes`).
+    while read (blocks of :data:`measure.scan._SCAN_BLOCK` samples; for the record's NaN/inf
+    and clipping checks, :func:`measure.scan.note_block_extremes`).
 
     Parameters
     ----------
@@ -245,8 +248,6 @@ def read_all(ds, userblock: int | None = None):
     extremes : tuple of numpy.ndarray or None
         ``(lows, highs)`` per block for float data read directly, else None.
     """
-    from ..record import _SCAN_BLOCK
-
     did = _low(ds)
     out, runs = prepare(did, did.shape, userblock)
     if not out.size:

@@ -40,7 +40,8 @@ import xarray as xr
 
 from crankbench.predict.errors import RecordError
 
-from ..record import is_pulse_dim, note_block_extremes
+from ..record import is_pulse_dim
+from ..scan import _SCAN_BLOCK, note_block_extremes
 from ..timeindex import regular_clock, sampled_dataset, sampled_time
 from . import _h5raw
 from ._common import (
@@ -262,9 +263,19 @@ class _Bound:
 
 def _members(gid) -> list[str]:
     """Names of the links in a low-level group, in HDF5's (name) order."""
-    names = []
-    gid.links.iterate(lambda name: names.append(name.decode("utf-8", "surrogateescape")))
-    return names
+    return list(_member_links(gid))
+
+
+def _member_links(gid) -> dict[str, bool]:
+    """Name -> "is a hard link" of the links in a low-level group, in HDF5's (name) order."""
+    hard = _h5().h5l.TYPE_HARD
+    links = {}
+
+    def note(name, info):
+        links[name.decode("utf-8", "surrogateescape")] = info.type == hard
+
+    gid.links.iterate(note, info=True)
+    return links
 
 
 def _has(gid, name: str) -> bool:
@@ -328,8 +339,12 @@ def _scalar_attr(oid, name: str):
         a = h5py.h5a.open(oid, name.encode())
     except KeyError:
         return None
+    tid = a.get_type()
+    scalar = a.get_space().get_simple_extent_type() == h5py.h5s.SCALAR
+    if scalar and tid.get_class() == h5py.h5t.STRING and tid.is_variable_str():
+        return _vlen_str(a, tid.get_cset())  # the JSON text (what write stores)
     dtype = a.dtype
-    if a.get_space().get_simple_extent_type() == h5py.h5s.SCALAR:
+    if scalar:
         if dtype.kind in "biuf":
             buf = np.empty((), dtype)
             a.read(buf)
@@ -341,6 +356,25 @@ def _scalar_attr(oid, name: str):
             raw = buf[()]
             return raw.decode(info.encoding, "surrogateescape") if isinstance(raw, bytes) else raw
     return clean_attr(h5py.AttributeManager(_Bound(oid))[name])
+
+
+#: HDF5 character set -> (h5py's memory type of a variable-length string in it, encoding)
+_VLEN = {}
+
+
+def _vlen_str(a, cset: int) -> str:
+    """Value of the scalar variable-length string attribute ``a`` (an ``h5py.h5a.AttrID``) of
+    character set ``cset``, decoded as ``_attrs`` decodes it."""
+    h5py = _h5()
+    if cset not in _VLEN:
+        encoding = "utf-8" if cset == h5py.h5t.CSET_UTF8 else "ascii"
+        dtype = h5py.string_dtype(encoding)
+        _VLEN[cset] = (dtype, h5py.h5t.py_create(dtype), encoding)
+    dtype, mtype, encoding = _VLEN[cset]
+    buf = np.empty((), dtype)
+    a.read(buf, mtype=mtype)
+    raw = buf[()]
+    return raw.decode(encoding, "surrogateescape") if isinstance(raw, bytes) else raw
 
 
 def _root(fid, file: str) -> tuple[dict, dict | None]:
@@ -375,7 +409,7 @@ def _int_attr(oid, name: str):
         a = h5py.h5a.open(oid, name.encode())
         buf = np.empty((), np.int64)
         if a.get_type().get_class() == h5py.h5t.INTEGER:
-            a.read(buf)
+            a.read(buf, mtype=_h5raw.native_type(buf.dtype))
             return int(buf)
     except (KeyError, TypeError, ValueError, OSError):
         pass
@@ -417,18 +451,26 @@ def _layout(fid, file: str) -> tuple[dict, list[str], dict, object, dict]:
             meta["channel_order"])
     except (KeyError, TypeError, ValueError):
         order = sorted(_members(gch))
-    missing = [n for n in order if not _has(gch, str(n))]
+    links = _member_links(gch)  # a hard link always has its object; others are resolved
+    missing = [n for n in order if not (links.get(str(n)) or (str(n) in links
+                                                             and _has(gch, str(n))))]
     if missing:
         raise RecordError(f"{file}: header lists channel(s) {missing} that have no data "
                           "(header/body mismatch; file truncated?)")
     dims = {dim: dict(info) for dim, info in meta.get("dims", {}).items()}
-    for dim in _members(gdims):
-        g = _open_member(gdims, dim)
+    for dim, hard in _member_links(gdims).items():
+        if not hard:
+            _refuse_outside(gdims)
         info = dims.setdefault(dim, {})
-        if h5py.h5a.get_num_attrs(g):
+        # opened only when it has attributes (version 1, or edited) or explicit times
+        obj = h5py.h5o.get_info(gdims, dim.encode("utf-8", "surrogateescape"))
+        g = _open_member(gdims, dim) if obj.num_attrs else None
+        if g is not None:
             info.update(_attrs(g))
-        if isinstance(g, h5py.h5g.GroupID) and _has(g, "values"):
-            info["values_ds"] = h5py.Dataset(_open_member(g, "values"))
+        if obj.type == h5py.h5o.TYPE_GROUP and info.get("kind") == "explicit":
+            g = g or _open_member(gdims, dim)
+            if _has(g, "values"):
+                info["values_ds"] = h5py.Dataset(_open_member(g, "values"))
     channels = {name: {k: _from_json(v) for k, v in attrs.items()}
                 for name, attrs in meta.get("channels", {}).items()}
     return record_attrs, order, dims, gch, channels
@@ -587,8 +629,6 @@ def _fill(path, planned, fd, file: str) -> list[tuple[str, str, np.ndarray, dict
     """Read the ``planned`` channels' byte ranges through descriptor ``fd`` and convert them to
     SI: ``[(name, dim, values, attrs)]``. A channel whose file ended early is read again by
     HDF5, which reports the damage."""
-    from ..record import _SCAN_BLOCK
-
     pread = None if fd is None else _h5raw.positioned_reader(fd)
     out = []
     for name, dim, cattrs, raw, runs in planned:
