@@ -199,7 +199,7 @@ def validate(record: xr.Dataset, *, allow_nonfinite: bool = False,
                               "(expected e.g. '2026-01-31T12:00:00+00:00')") from None
     checked_dims: set[str] = set()
     variables = record.variables  # Variables, not DataArrays: record[name] costs O(channels)
-    coords = set(record.coords)
+    coords = record.coords  # membership only: no set of names built
     ends: dict[str, tuple] = {}
     for name in record.data_vars:
         var = variables[name]
@@ -253,8 +253,9 @@ def validate(record: xr.Dataset, *, allow_nonfinite: bool = False,
             units_t = coord.attrs.get("units", "s")
             if units_t != "s":
                 raise RecordError(f"time coordinate {dim!r} has units {units_t!r}; expected 's'")
-            ends[dim] = _ends(coord, record.xindexes.get(dim))
-            if dim in _regular_dims or _lazy_index(record, dim):
+            index = record.xindexes.get(dim)
+            ends[dim] = _ends(coord, index)
+            if dim in _regular_dims or _lazy_index(index):
                 # built as start + i / sample_rate by a reader: strictly increasing and
                 # evenly spaced by construction; only the rate needs checking
                 _check_time_axis_rate_only(name, ends[dim], fs, dim)
@@ -275,10 +276,10 @@ def validate(record: xr.Dataset, *, allow_nonfinite: bool = False,
     return record
 
 
-def _lazy_index(record: xr.Dataset, dim: str) -> bool:
+def _lazy_index(index) -> bool:
     from .timeindex import is_implicit_time  # implicit regular clocks (issue 21)
 
-    return is_implicit_time(record.xindexes.get(dim))
+    return is_implicit_time(index)
 
 
 def _ends(coord, index=None) -> tuple[int, float, float]:

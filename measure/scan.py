@@ -157,7 +157,8 @@ def clipped_spans(values: np.ndarray, *, min_run: int = 3) -> list[tuple[int, in
     spans = []
     step = None
     for level in (hi, lo):
-        starts, stops = _runs_at(x, level, None if blocks is None else blocks[level])
+        starts, stops = _runs_at(x, level, None if blocks is None else blocks[level],
+                                 2 * min_run)
         if int(np.sum(stops - starts)) < 2 * min_run:
             continue
         keep = stops - starts >= min_run
@@ -175,9 +176,11 @@ def clipped_spans(values: np.ndarray, *, min_run: int = 3) -> list[tuple[int, in
     return sorted(spans)
 
 
-def _runs_at(x: np.ndarray, level, blocks) -> tuple[np.ndarray, np.ndarray]:
+def _runs_at(x: np.ndarray, level, blocks, min_count: int = 0
+             ) -> tuple[np.ndarray, np.ndarray]:
     """Start and stop indices of the runs of ``x == level``, scanning only the given blocks of
-    :data:`_SCAN_BLOCK` samples (all of ``x`` when ``blocks`` is None)."""
+    :data:`_SCAN_BLOCK` samples (all of ``x`` when ``blocks`` is None); none at all when fewer
+    than ``min_count`` samples are at the level."""
     if blocks is None:
         groups = [(0, x.size)]
     elif blocks.size == 1:  # the usual case: one block holds the level
@@ -186,13 +189,11 @@ def _runs_at(x: np.ndarray, level, blocks) -> tuple[np.ndarray, np.ndarray]:
         cut = np.flatnonzero(np.diff(blocks) > 1) + 1
         groups = [(int(g[0]) * _SCAN_BLOCK, min((int(g[-1]) + 1) * _SCAN_BLOCK, x.size))
                   for g in np.split(blocks, cut) if g.size]
-    starts, stops = [], []
-    for a, b in groups:
-        at = np.flatnonzero(x[a:b] == level)  # few: a level is an extreme of the signal
-        if at.size:
-            cut = np.flatnonzero(np.diff(at) != 1) + 1  # gaps between runs
-            starts.append(at[np.concatenate(([0], cut))] + a)
-            stops.append(at[np.concatenate((cut - 1, [at.size - 1]))] + a + 1)
-    if not starts:
+    # indices at the level: few (it is an extreme of the signal); groups are a block apart, so
+    # no run spans two of them
+    found = [np.flatnonzero(x[a:b] == level) + a for a, b in groups]
+    at = found[0] if len(found) == 1 else np.concatenate(found)
+    if at.size < max(min_count, 1):
         return np.zeros(0, int), np.zeros(0, int)
-    return np.concatenate(starts), np.concatenate(stops)
+    cut = np.flatnonzero(np.diff(at) != 1) + 1  # gaps between runs
+    return at[np.concatenate(([0], cut))], at[np.concatenate((cut - 1, [at.size - 1]))] + 1
