@@ -577,45 +577,21 @@ def read(path, *, channels=None) -> xr.Dataset:
     file = str(path)
     fid = _open_read(path)
     fd = None
-    try:  # every object opened is checked to be the file's own (_open_member)
-        attrs, order, dims, group, known = _layout(fid, file)
-        names = select(order, channels, file=file)
-        planned, used = [], {}
-        userblock = _userblock(fid)
-        for name in names:
-            did, dcpl = _dataset(group, name)
-            shape = did.shape
-            dim, cattrs = _channel_attrs(did, shape, name, dims, file, known.get(name))
-            raw, runs = _h5raw.prepare(did, shape, userblock, dcpl)
-            if runs is None and raw.size:
-                did.read(_h5().h5s.ALL, _h5().h5s.ALL, raw)  # HDF5 converts: it reads
-            planned.append((name, dim, cattrs, raw, runs))
-            used[dim] = True
-        clock = None
-        if len(used) == 1 and dims[next(iter(used))].get("kind") == "regular":
-            clock = next(iter(used))  # the usual record: one regular clock
-            clock_numbers = _regular(clock, dims[clock], file)
-        else:
-            explicit, implicit = {}, []
-            for dim in used:
-                c = _coordinate(dim, dims[dim], file)
-                if isinstance(c, np.ndarray):
-                    explicit[dim] = c
-                elif c is not None:
-                    implicit.append(c)
+    try:
+        attrs, planned, clock, (explicit, implicit) = _plan(fid, file, channels)
         if any(runs for *_, runs in planned):
             fd = _h5raw.vfd_dup(fid)
             if fd is None:  # no descriptor to share: one of our own
                 fd = os.open(os.fsencode(os.fspath(path)), os.O_RDONLY | getattr(os, "O_BINARY", 0))
     finally:
-        fid.close()  # strong close degree: every object opened above closes with it
+        _close(fid)
     try:
         out = _fill(path, planned, fd, file)
     finally:
         if fd is not None:
             os.close(fd)
     if clock is not None:  # built in one step (no merge/align pass)
-        n, fs, start = clock_numbers
+        clock, (n, fs, start) = clock
         data_vars = {name: xr.Variable((dim,), values, vattrs)
                      for name, dim, values, vattrs in out}
         return sampled_dataset(data_vars, n, fs, start=start, dim=clock, attrs=attrs)
@@ -623,6 +599,50 @@ def read(path, *, channels=None) -> xr.Dataset:
     for coords in implicit:
         ds = ds.assign_coords(coords)
     return ds
+
+
+def _plan(fid, file: str, channels):
+    """What :func:`read` takes from the open file ``fid``: record attrs; per channel ``(name,
+    dim, attrs, array, byte runs)`` (the array already filled by HDF5 where the runs are None);
+    ``(dim, (n, sample_rate, start))`` of the one regular clock of the usual record, else None;
+    and the explicit and implicit time coordinates otherwise. No HDF5 object outlives it."""
+    attrs, order, dims, group, known = _layout(fid, file)
+    names = select(order, channels, file=file)
+    planned, used = [], {}
+    userblock = _userblock(fid)
+    for name in names:  # every object opened is checked to be the file's own (_open_member)
+        did, dcpl = _dataset(group, name)
+        shape = did.shape
+        dim, cattrs = _channel_attrs(did, shape, name, dims, file, known.get(name))
+        raw, runs = _h5raw.prepare(did, shape, userblock, dcpl)
+        if runs is None and raw.size:
+            did.read(_h5().h5s.ALL, _h5().h5s.ALL, raw)  # HDF5 converts: it reads
+        planned.append((name, dim, cattrs, raw, runs))
+        used[dim] = True
+    explicit, implicit = {}, []
+    if len(used) == 1 and dims[next(iter(used))].get("kind") == "regular":
+        clock = next(iter(used))  # the usual record: one regular clock
+        return attrs, planned, (clock, _regular(clock, dims[clock], file)), (explicit, implicit)
+    for dim in used:
+        c = _coordinate(dim, dims[dim], file)
+        if isinstance(c, np.ndarray):
+            explicit[dim] = c
+        elif c is not None:
+            implicit.append(c)
+    return attrs, planned, None, (explicit, implicit)
+
+
+def _close(fid) -> None:
+    """Close the file ``fid`` with every object opened in it (strong close degree). When
+    nothing else of the file is open -- after a read has released all it opened -- h5py's
+    sweep over every HDF5 object of the process (``nonlocal_close``, which marks the handles
+    such a close invalidated) has nothing to mark and is skipped."""
+    h5py = _h5()
+    quick = getattr(fid, "_close", None)  # FileID.close without the sweep (h5py >= 3)
+    if quick is not None and h5py.h5f.get_obj_count(fid, h5py.h5f.OBJ_ALL) == 1:
+        quick()
+    else:
+        fid.close()
 
 
 def _fill(path, planned, fd, file: str) -> list[tuple[str, str, np.ndarray, dict]]:

@@ -133,3 +133,20 @@ def test_the_file_is_closed_after_a_read(tmp_path):
     with h5py.File(path, "r+") as f:
         f.attrs["touched"] = 1
     np.testing.assert_array_equal(rec["acc"].values, x)
+
+
+def test_a_read_leaves_no_hdf5_object_open_and_other_handles_valid(tmp_path):
+    """A read closes all it opened (the file too: no HDF5 identifier is left behind), and the
+    quick close taken when nothing else of the file is open does not touch handles another
+    opener of the same file holds."""
+    path, x = _file(tmp_path)
+    before = h5py.h5f.get_obj_count(h5py.h5f.OBJ_ALL, h5py.h5f.OBJ_ALL)
+    np.testing.assert_array_equal(io.read(path)["acc"].values, x)
+    assert h5py.h5f.get_obj_count(h5py.h5f.OBJ_ALL, h5py.h5f.OBJ_ALL) == before
+    fapl = h5py.h5p.create(h5py.h5p.FILE_ACCESS)
+    fapl.set_fclose_degree(h5py.h5f.CLOSE_STRONG)  # what the reader opens with
+    with h5py.File(h5py.h5f.open(str(path).encode(), h5py.h5f.ACC_RDONLY, fapl=fapl)) as f:
+        d = f["channels/acc"]
+        np.testing.assert_array_equal(io.read(path)["acc"].values, x)
+        assert d.id.valid
+        np.testing.assert_array_equal(d[...], x)
