@@ -96,9 +96,8 @@ def nonfinite_spans(values: np.ndarray) -> list[tuple[int, int]]:
     values = np.asarray(values)
     if values.size and values.dtype.kind == "f":
         lows, highs = _block_extremes(values.reshape(-1))
-        with np.errstate(invalid="ignore"):  # -inf + inf
-            if np.isfinite(lows.min() + highs.max()):
-                return []  # min/max propagate NaN and inf: one pass clears the usual case
+        if math.isfinite(lows.min()) and math.isfinite(highs.max()):
+            return []  # min/max propagate NaN and inf: one pass clears the usual case
     bad = ~np.isfinite(values)
     if not bad.any():
         return []
@@ -107,6 +106,10 @@ def nonfinite_spans(values: np.ndarray) -> list[tuple[int, int]]:
     stops = np.flatnonzero(edges == -1)
     return [(int(a), int(b)) for a, b in zip(starts, stops)]
 
+
+#: the block list of a channel of one block
+_FIRST = np.zeros(1, np.intp)
+_FIRST.flags.writeable = False
 
 #: Quantities whose flat runs at the extremes mean saturation (speed plateaus are legitimate).
 #: Voltage is left out: raw tacho signals are square waves whose flat tops are not clipping.
@@ -139,13 +142,13 @@ def clipped_spans(values: np.ndarray, *, min_run: int = 3) -> list[tuple[int, in
         return []
     x = x.reshape(-1)
     lows, highs = _block_extremes(x)
-    with np.errstate(invalid="ignore"):
-        hi, lo = highs.max(), lows.min()
-    if np.isfinite(hi) and np.isfinite(lo):
+    hi, lo = highs.max(), lows.min()
+    if math.isfinite(hi) and math.isfinite(lo):
         finite = None  # all finite (NaN/inf would propagate into min/max)
         # only blocks holding an extreme can hold a run at it (a run crossing a block edge
         # puts the level in both blocks): the equality scans below skip all others
-        blocks = {hi: np.flatnonzero(highs == hi), lo: np.flatnonzero(lows == lo)}
+        blocks = ({hi: _FIRST, lo: _FIRST} if highs.size == 1 else
+                  {hi: np.flatnonzero(highs == hi), lo: np.flatnonzero(lows == lo)})
     else:
         finite = np.isfinite(x)
         if not finite.any():
@@ -159,7 +162,7 @@ def clipped_spans(values: np.ndarray, *, min_run: int = 3) -> list[tuple[int, in
     for level in (hi, lo):
         starts, stops = _runs_at(x, level, None if blocks is None else blocks[level],
                                  2 * min_run)
-        if int(np.sum(stops - starts)) < 2 * min_run:
+        if not starts.size or int(np.sum(stops - starts)) < 2 * min_run:
             continue
         keep = stops - starts >= min_run
         starts, stops = starts[keep], stops[keep]
@@ -191,7 +194,8 @@ def _runs_at(x: np.ndarray, level, blocks, min_count: int = 0
                   for g in np.split(blocks, cut) if g.size]
     # indices at the level: few (it is an extreme of the signal); groups are a block apart, so
     # no run spans two of them
-    found = [np.flatnonzero(x[a:b] == level) + a for a, b in groups]
+    found = [np.flatnonzero(x[a:b] == level) + a if a else np.flatnonzero(x[:b] == level)
+             for a, b in groups]
     at = found[0] if len(found) == 1 else np.concatenate(found)
     if at.size < max(min_count, 1):
         return np.zeros(0, int), np.zeros(0, int)
