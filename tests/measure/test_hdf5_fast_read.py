@@ -150,3 +150,18 @@ def test_a_read_leaves_no_hdf5_object_open_and_other_handles_valid(tmp_path):
         np.testing.assert_array_equal(io.read(path)["acc"].values, x)
         assert d.id.valid
         np.testing.assert_array_equal(d[...], x)
+
+
+def test_a_byte_range_that_reads_short_is_read_again_by_hdf5(tmp_path, monkeypatch):
+    """A piece that comes back short (the file shrank under the reader) is not taken: HDF5
+    reads the channel again from the file and reports what it finds there (here, the same
+    intact file: the samples, scanned afterwards by the record checks)."""
+    path, x = _file(tmp_path)
+    real = _h5raw.positioned_reader
+
+    def short(fd):
+        pread = real(fd)
+        return lambda buffer, offset: pread(buffer[:-4], offset)
+
+    monkeypatch.setattr(_h5raw, "positioned_reader", short)
+    np.testing.assert_array_equal(io.read(path)["acc"].values, x)
