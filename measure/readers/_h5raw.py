@@ -213,22 +213,23 @@ def read_runs(pread, runs, out: np.ndarray, block: int):
 
 def piece_extremes(out, a: int, b: int, block: int, lows, highs) -> None:
     """Fold the extremes of ``out[a:b]`` into the per-block ``lows``, ``highs`` (which start
-    at +inf / -inf; NaN propagates): the whole blocks inside by one reduction along rows, the
-    part-blocks at either end combined with what other pieces found there."""
+    at +inf / -inf; NaN propagates through numpy's minimum and maximum, silently): the whole
+    blocks inside -- no other piece holds a sample of them -- by one reduction along rows
+    written straight into their places, the part-blocks at either end combined with what
+    other pieces found there."""
     k0 = -(-a // block)               # first block starting inside the piece
     full_end = (b // block) * block   # whole full-length blocks end here
-    with np.errstate(invalid="ignore"):
-        if k0 * block < full_end:
-            rows = out[k0 * block:full_end].reshape(-1, block)
-            k1 = k0 + rows.shape[0]
-            np.minimum(lows[k0:k1], np.minimum.reduce(rows, axis=1), out=lows[k0:k1])
-            np.maximum(highs[k0:k1], np.maximum.reduce(rows, axis=1), out=highs[k0:k1])
-        for lo, hi in ((a, min(b, k0 * block)), (max(a, full_end, k0 * block), b)):
-            if hi > lo:  # within one block
-                k = lo // block
-                piece = out[lo:hi]
-                lows[k] = np.minimum(lows[k], np.minimum.reduce(piece))
-                highs[k] = np.maximum(highs[k], np.maximum.reduce(piece))
+    if k0 * block < full_end:
+        rows = out[k0 * block:full_end].reshape(-1, block)
+        k1 = k0 + rows.shape[0]
+        np.minimum.reduce(rows, axis=1, out=lows[k0:k1])
+        np.maximum.reduce(rows, axis=1, out=highs[k0:k1])
+    for lo, hi in ((a, min(b, k0 * block)), (max(a, full_end, k0 * block), b)):
+        if hi > lo:  # within one block
+            k = lo // block
+            piece = out[lo:hi]
+            lows[k] = np.minimum(lows[k], np.minimum.reduce(piece))
+            highs[k] = np.maximum(highs[k], np.maximum.reduce(piece))
 
 
 def read_all(ds, userblock: int | None = None):
