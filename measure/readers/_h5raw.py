@@ -19,8 +19,6 @@ import os
 
 import numpy as np
 
-from ..scan import _SCAN_BLOCK
-
 #: the kernel copies from the page cache fastest when source and destination share their
 #: offset within a page (about 20 % less CPU for 20 MB than at an arbitrary offset)
 _PAGE = 4096
@@ -230,38 +228,3 @@ def piece_extremes(out, a: int, b: int, block: int, lows, highs) -> None:
             piece = out[lo:hi]
             lows[k] = np.minimum(lows[k], np.minimum.reduce(piece))
             highs[k] = np.maximum(highs[k], np.maximum.reduce(piece))
-
-
-def read_all(ds, userblock: int | None = None):
-    """All samples of a 1-D dataset of an open file, and their per-block extremes when scanned
-    while read (blocks of :data:`measure.scan._SCAN_BLOCK` samples; for the record's NaN/inf
-    and clipping checks, :func:`measure.scan.note_block_extremes`).
-
-    Parameters
-    ----------
-    ds : h5py.Dataset or h5py.h5d.DatasetID
-    userblock : int, optional
-        The file's user-block size, bytes, if known.
-
-    Returns
-    -------
-    values : numpy.ndarray
-    extremes : tuple of numpy.ndarray or None
-        ``(lows, highs)`` per block for float data read directly, else None.
-    """
-    did = _low(ds)
-    out, runs = prepare(did, did.shape, userblock)
-    if not out.size:
-        return out, None
-    if runs is not None:
-        fd = vfd_dup(_h5().h5i.get_file_id(did))
-        if fd is None:  # a descriptor of our own
-            fd = os.open(_h5().h5f.get_name(did), os.O_RDONLY | getattr(os, "O_BINARY", 0))
-        try:
-            extremes = read_runs(positioned_reader(fd), runs, out, _SCAN_BLOCK)
-        finally:
-            os.close(fd)
-        if extremes is not False:
-            return out, extremes
-    did.read(_h5().h5s.ALL, _h5().h5s.ALL, out)
-    return out, None

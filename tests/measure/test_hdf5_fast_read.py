@@ -165,3 +165,14 @@ def test_a_byte_range_that_reads_short_is_read_again_by_hdf5(tmp_path, monkeypat
 
     monkeypatch.setattr(_h5raw, "positioned_reader", short)
     np.testing.assert_array_equal(io.read(path)["acc"].values, x)
+
+
+def test_without_positioned_reads_the_reader_opens_the_file_itself(tmp_path, monkeypatch):
+    """Where ``os.preadv`` is missing, HDF5's descriptor is not shared (a seek would move its
+    position): the reader opens the file itself and reads by seek and ``readinto``."""
+    path, x = _file(tmp_path)
+    monkeypatch.delattr("os.preadv")
+    with h5py.File(path, "r") as f:
+        assert _h5raw.vfd_dup(f.id) is None
+    got = io.read(path)
+    np.testing.assert_array_equal(got["acc"].values, x)
