@@ -128,6 +128,17 @@ def congruent_empty(n: int, dtype, file_offset: int) -> np.ndarray:
 def prepare(did, shape: tuple, userblock: int | None = None, dcpl=None):
     """The array to hold a 1-D dataset's samples and the byte ranges to fill it from.
 
+    Parameters
+    ----------
+    did : h5py.h5d.DatasetID
+        The dataset.
+    shape : tuple
+        Its shape (samples,).
+    userblock : int, optional
+        The file's user-block size, bytes, if known.
+    dcpl : h5py.h5p.PropDCID, optional
+        Its creation property list, if already at hand.
+
     Returns
     -------
     out : numpy.ndarray
@@ -181,6 +192,17 @@ def positioned_reader(fd: int):
 def read_runs(pread, runs, out: np.ndarray, block: int):
     """Fill ``out`` from the file's byte ``runs`` (:func:`raw_runs`) by ``pread(buffer, offset)``
     (:func:`positioned_reader`), in pieces ending on multiples of ``block`` samples.
+
+    Parameters
+    ----------
+    pread : callable
+        ``pread(buffer, offset in bytes) -> bytes read``.
+    runs : list of tuple
+        ``[(file offset in bytes, first sample, samples)]``.
+    out : numpy.ndarray
+        The array to fill (:func:`prepare`).
+    block : int
+        Samples per block of the extremes (:data:`measure.scan._SCAN_BLOCK`).
 
     Returns
     -------
