@@ -30,6 +30,7 @@ from __future__ import annotations
 
 import logging
 import os
+import stat
 import warnings
 from pathlib import Path
 
@@ -42,8 +43,8 @@ from ._atomic import atomic_path, check_overwrite
 from .provenance import STAT_ATTR, sha256_of, source_sha256, stamp_source
 from .readers import EXTENSIONS, format_of_magic, module_for
 from .readers._common import REGULAR_KEY
-from .record import (CLIP_QUANTITIES, RecordWarning, clipped_spans, nonfinite_spans,
-                     shared_scans, validate)
+from .record import RecordWarning, _is_lazy, validate
+from .scan import CLIP_QUANTITIES, clipped_spans, nonfinite_spans, shared_scans
 
 __all__ = ["read", "write", "open", "read_truth", "iter_blocks", "sha256_of", "source_sha256",
            "EXTENSIONS"]
@@ -59,6 +60,35 @@ def _check_input(path) -> tuple[Path, object, os.stat_result]:
     before any of its data is read (its identity for :mod:`measure.provenance`)."""
     path = Path(path)
     module = module_for(path)
+    try:  # the usual case, a regular file: one stat
+        st = os.stat(path)
+    except (OSError, ValueError):
+        st = None
+    regular = st is not None and stat.S_ISREG(st.st_mode)
+    if not regular:
+        st = _check_exists(path, module)
+    if st.st_size == 0:
+        raise RecordError(f"{path}: file is empty (0 bytes); expected {module.FORMAT} content")
+    if regular:  # one read gives the first 64 bytes (or all of a shorter file)
+        fd = os.open(path, os.O_RDONLY | getattr(os, "O_BINARY", 0))
+        try:
+            head = os.read(fd, 64)
+        finally:
+            os.close(fd)
+    else:
+        with path.open("rb") as f:
+            head = f.read(64)
+    if not module.check_magic(head):
+        actual = format_of_magic(head)
+        hint = (f"; its first bytes look like {actual.upper()} — rename it to "
+                f"{path.with_suffix(_FORMAT_EXT[actual]).name!r}?") if actual else ""
+        raise RecordError(f"{path}: wrong magic bytes {head[:8]!r} for a {module.FORMAT} file "
+                          f"(extension {path.suffix!r}){hint}")
+    return path, module, st
+
+
+def _check_exists(path: Path, module) -> os.stat_result:
+    """The stat of ``path``, or the error naming what it is instead of a file."""
     if not path.exists():
         near = ""
         if path.parent.is_dir():
@@ -69,18 +99,7 @@ def _check_input(path) -> tuple[Path, object, os.stat_result]:
         raise FileNotFoundError(f"record file {str(path)!r} does not exist{near}")
     if path.is_dir():
         raise RecordError(f"{path} is a directory; expected a {module.FORMAT} file")
-    st = path.stat()
-    if st.st_size == 0:
-        raise RecordError(f"{path}: file is empty (0 bytes); expected {module.FORMAT} content")
-    with path.open("rb") as f:
-        head = f.read(64)
-    if not module.check_magic(head):
-        actual = format_of_magic(head)
-        hint = (f"; its first bytes look like {actual.upper()} — rename it to "
-                f"{path.with_suffix(_FORMAT_EXT[actual]).name!r}?") if actual else ""
-        raise RecordError(f"{path}: wrong magic bytes {head[:8]!r} for a {module.FORMAT} file "
-                          f"(extension {path.suffix!r}){hint}")
-    return path, module, st
+    return path.stat()
 
 
 def _wrap(path: Path, module, exc: Exception) -> RecordError:
@@ -99,7 +118,7 @@ def _named(path: Path, exc: CrankbenchError) -> CrankbenchError:
 def _mask_nonfinite(ds: xr.Dataset, path: Path) -> xr.Dataset:
     for name in list(ds.data_vars):
         var = ds.variables[name]  # a Variable: ds[name] would cost O(channels) each
-        if var.dtype.kind != "f" or var.chunks is not None:
+        if var.dtype.kind != "f" or _is_lazy(var):
             continue
         values = var.values
         spans = nonfinite_spans(values)
@@ -132,7 +151,7 @@ def _mask_nonfinite(ds: xr.Dataset, path: Path) -> xr.Dataset:
 def _flag_clipping(ds: xr.Dataset, path: Path) -> None:
     for name in ds.data_vars:
         var = ds.variables[name]
-        if (var.dtype.kind != "f" or var.chunks is not None
+        if (var.dtype.kind != "f" or _is_lazy(var)
                 or var.attrs.get("quantity") not in CLIP_QUANTITIES):
             continue
         spans = clipped_spans(var.values)
@@ -179,7 +198,7 @@ def read(path, *, channels=None, allow_nonfinite: bool = False, map=None) -> xr.
     Notes
     -----
     Clipping (runs of >= 3 samples flat at a vibration-type channel's own maximum or minimum,
-    see :func:`measure.record.clipped_spans`) is reported by a :class:`RecordWarning` naming
+    see :func:`measure.scan.clipped_spans`) is reported by a :class:`RecordWarning` naming
     channel and spans, which are listed in the channel attr ``clipped_spans_s``; the samples
     are kept as recorded.
 
@@ -225,7 +244,7 @@ def _read_checked(path, module, st, cmap, channels, allow_nonfinite) -> xr.Datas
     flag clipping, stamp the source's identity ``st`` (its SHA-256 is computed on demand by
     :func:`measure.provenance.source_sha256`; a channel map's raw export is hashed now)."""
     # the NaN/inf check and the clipping check share one scan of each channel, or none where
-    # the reader scanned the samples while reading them (measure.record.note_block_extremes)
+    # the reader scanned the samples while reading them (measure.scan.note_block_extremes)
     with shared_scans():
         ds = _parse(path, module, cmap, channels, allow_nonfinite)
         if allow_nonfinite:

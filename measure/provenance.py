@@ -118,11 +118,11 @@ def stamp_source(attrs: dict, path, st: os.stat_result | None = None) -> dict:
     >>> print(a["source"], "sha256" in a, json.loads(a["source_stat"])["size"])
     x.bin False 3
     """
-    path = Path(path).resolve()
-    st = path.stat() if st is None else st
+    real = os.path.realpath(path)  # what Path.resolve() gives, without its extra stat
+    st = os.stat(real) if st is None else st
     attrs.pop("sha256", None)
-    attrs["source"] = path.name
-    attrs[STAT_ATTR] = json.dumps({"path": str(path), **_identity(st)})
+    attrs["source"] = os.path.basename(real)
+    attrs[STAT_ATTR] = json.dumps({"path": real, **_identity(st)})
     return attrs
 
 

@@ -25,10 +25,8 @@ and ``channel_map_sha256``. Mixed sample rates are never resampled.
 
 from __future__ import annotations
 
-import contextlib
 import datetime as _dt
 import math
-import threading
 from collections.abc import Mapping
 
 import numpy as np
@@ -37,6 +35,9 @@ import xarray as xr
 
 from crankbench.predict.errors import RecordError
 
+from .scan import (  # noqa: F401 - re-exported: the Record's sample checks
+    _SCAN_BLOCK, CLIP_QUANTITIES, _block_extremes, clipped_spans, nonfinite_spans,
+    note_block_extremes, shared_scans)
 from .units import QUANTITIES, QUANTITY_UNITS, SI_UNITS, sensitivity_to_si, to_si
 
 __all__ = [
@@ -88,182 +89,6 @@ def time_coordinate(n: int, sample_rate: float, start: float = 0.0) -> np.ndarra
     return t
 
 
-#: samples per block of the cache-friendly scans below (1 MB of float64: min and max of a block
-#: read it from memory once)
-_SCAN_BLOCK = 1 << 17
-
-
-_SCAN_CACHE = threading.local()
-
-
-@contextlib.contextmanager
-def shared_scans():
-    """Within the block, :func:`nonfinite_spans` and :func:`clipped_spans` share one scan of
-    each array (``measure.read`` validates, then flags clipping, on samples nobody changes in
-    between). Per thread; forgotten on exit."""
-    outer = getattr(_SCAN_CACHE, "table", None)
-    _SCAN_CACHE.table = {} if outer is None else outer
-    try:
-        yield
-    finally:
-        if outer is None:
-            _SCAN_CACHE.table = None
-
-
-def _scan_key(x: np.ndarray) -> tuple:
-    return x.__array_interface__["data"][0], x.shape, x.strides, x.dtype.str
-
-
-def note_block_extremes(x: np.ndarray, lows: np.ndarray, highs: np.ndarray) -> None:
-    """Inside :func:`shared_scans`, give the scans the per-block extremes of ``x`` computed by
-    whoever filled it (a reader that scanned each block while it was in cache): ``lows[b]`` and
-    ``highs[b]`` the minimum and maximum of ``x[b * _SCAN_BLOCK:(b + 1) * _SCAN_BLOCK]``, NaN
-    propagated. ``x`` must not change afterwards within the block; it is kept alive until the
-    block ends (so its address is not reused by another array). Outside the block: no-op."""
-    table = getattr(_SCAN_CACHE, "table", None)
-    blocks = (-(-x.size // _SCAN_BLOCK),)
-    if table is None or x.ndim != 1 or lows.shape != blocks or highs.shape != blocks:
-        return
-    table[_scan_key(x)] = (lows, highs)
-    table.setdefault("_alive", []).append(x)
-
-
-def _block_extremes(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Minimum and maximum of each block of :data:`_SCAN_BLOCK` samples (NaN propagates): one
-    pass over memory where ``x.min()`` then ``x.max()`` are two."""
-    table = getattr(_SCAN_CACHE, "table", None)
-    if table is not None:
-        key = _scan_key(x)
-        if key not in table:
-            table[key] = _block_extremes_uncached(x)
-        return table[key]
-    return _block_extremes_uncached(x)
-
-
-def _block_extremes_uncached(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    n = x.size
-    starts = range(0, n, _SCAN_BLOCK)
-    lows = np.empty(len(starts), dtype=x.dtype)
-    highs = np.empty(len(starts), dtype=x.dtype)
-    with np.errstate(invalid="ignore"):
-        for b, a in enumerate(starts):
-            block = x[a:a + _SCAN_BLOCK]
-            lows[b] = block.min()
-            highs[b] = block.max()
-    return lows, highs
-
-
-def nonfinite_spans(values: np.ndarray) -> list[tuple[int, int]]:
-    """Index spans ``[start, stop)`` of consecutive NaN/inf values.
-
-    Examples
-    --------
-    >>> nonfinite_spans(np.array([1.0, np.nan, np.nan, 2.0, np.inf]))
-    [(1, 3), (4, 5)]
-    """
-    values = np.asarray(values)
-    if values.size and values.dtype.kind == "f":
-        lows, highs = _block_extremes(values.reshape(-1))
-        with np.errstate(invalid="ignore"):  # -inf + inf
-            if np.isfinite(lows.min() + highs.max()):
-                return []  # min/max propagate NaN and inf: one pass clears the usual case
-    bad = ~np.isfinite(values)
-    if not bad.any():
-        return []
-    edges = np.diff(np.concatenate(([0], bad.view(np.int8), [0])))
-    starts = np.flatnonzero(edges == 1)
-    stops = np.flatnonzero(edges == -1)
-    return [(int(a), int(b)) for a, b in zip(starts, stops)]
-
-
-#: Quantities whose flat runs at the extremes mean saturation (speed plateaus are legitimate).
-#: Voltage is left out: raw tacho signals are square waves whose flat tops are not clipping.
-CLIP_QUANTITIES = ("acceleration", "velocity", "displacement", "pressure", "force", "torque",
-                   "angular_velocity", "angle")
-
-
-def clipped_spans(values: np.ndarray, *, min_run: int = 3) -> list[tuple[int, int]]:
-    """Index spans ``[start, stop)`` where the signal sits flat at its own maximum or minimum.
-
-    A saturated amplifier or ADC holds its limit value for consecutive samples. A level is
-    taken as a clipping limit when (1) the channel sits on it, at its global maximum or
-    minimum, in runs of at least ``min_run`` samples, (2) at least two such runs occur (a limit
-    cuts every large peak, one flat peak is not evidence), and (3) the signal enters those runs
-    with a median jump larger than two quantisation steps (the smallest gap between distinct
-    values of the channel), so the flat crest of a slow, finely sampled, quantised peak is not mistaken for a
-    limit. NaN/inf are ignored; a constant channel (max == min) returns no span.
-
-    Examples
-    --------
-    >>> x = np.array([0, 0.5, 1, 1, 1, 0.5, 0, -0.5, -1, -1, -1, -1, 0, 0.6, 1, 1, 1, 0,
-    ...               -1, -1, -1])
-    >>> clipped_spans(x)
-    [(2, 5), (8, 12), (14, 17), (18, 21)]
-    """
-    x = np.asarray(values)
-    if x.dtype.kind != "f":
-        x = x.astype(np.float64)
-    if x.size == 0:
-        return []
-    x = x.reshape(-1)
-    lows, highs = _block_extremes(x)
-    with np.errstate(invalid="ignore"):
-        hi, lo = highs.max(), lows.min()
-    if np.isfinite(hi) and np.isfinite(lo):
-        finite = None  # all finite (NaN/inf would propagate into min/max)
-        # only blocks holding an extreme can hold a run at it (a run crossing a block edge
-        # puts the level in both blocks): the equality scans below skip all others
-        blocks = {hi: np.flatnonzero(highs == hi), lo: np.flatnonzero(lows == lo)}
-    else:
-        finite = np.isfinite(x)
-        if not finite.any():
-            return []
-        hi, lo = np.max(x, where=finite, initial=-np.inf), np.min(x, where=finite, initial=np.inf)
-        blocks = None
-    if hi == lo:
-        return []
-    spans = []
-    step = None
-    for level in (hi, lo):
-        starts, stops = _runs_at(x, level, None if blocks is None else blocks[level])
-        if int(np.sum(stops - starts)) < 2 * min_run:
-            continue
-        keep = stops - starts >= min_run
-        starts, stops = starts[keep], stops[keep]
-        if starts.size < 2:
-            continue
-        if step is None:  # quantisation step: smallest gap between distinct values
-            levels = np.unique(x if finite is None else x[finite])
-            step = float(np.diff(levels).min()) if levels.size > 1 else 0.0
-        entries = [abs(float(x[a - 1]) - level) for a in starts
-                   if a > 0 and math.isfinite(float(x[a - 1]))]
-        if entries and np.median(entries) <= 2 * step:
-            continue
-        spans += [(int(a), int(b)) for a, b in zip(starts, stops)]
-    return sorted(spans)
-
-
-def _runs_at(x: np.ndarray, level, blocks) -> tuple[np.ndarray, np.ndarray]:
-    """Start and stop indices of the runs of ``x == level``, scanning only the given blocks of
-    :data:`_SCAN_BLOCK` samples (all of ``x`` when ``blocks`` is None)."""
-    if blocks is None:
-        groups = [(0, x.size)]
-    else:  # contiguous groups of blocks
-        cut = np.flatnonzero(np.diff(blocks) > 1) + 1
-        groups = [(int(g[0]) * _SCAN_BLOCK, min((int(g[-1]) + 1) * _SCAN_BLOCK, x.size))
-                  for g in np.split(blocks, cut) if g.size]
-    starts, stops = [], []
-    for a, b in groups:
-        at = np.flatnonzero(x[a:b] == level)  # few: a level is an extreme of the signal
-        if at.size:
-            cut = np.flatnonzero(np.diff(at) != 1) + 1  # gaps between runs
-            starts.append(at[np.concatenate(([0], cut))] + a)
-            stops.append(at[np.concatenate((cut - 1, [at.size - 1]))] + a + 1)
-    if not starts:
-        return np.zeros(0, int), np.zeros(0, int)
-    return np.concatenate(starts), np.concatenate(stops)
-
-
 def _describe_spans(spans, t) -> str:
     parts = []
     for a, b in spans[:3]:
@@ -275,8 +100,11 @@ def _describe_spans(spans, t) -> str:
     return "; ".join(parts) + more
 
 
-def _is_lazy(var: xr.DataArray) -> bool:
-    return var.chunks is not None
+def _is_lazy(var) -> bool:
+    """True for a chunked (dask-backed) Variable or DataArray (a numpy-backed one is answered
+    without xarray's protocol check of ``.chunks``, which costs more than the rest of a small
+    record's validation)."""
+    return not isinstance(var.data, np.ndarray) and var.chunks is not None
 
 
 def _check_time_axis(name: str, t: np.ndarray, fs: float | None, dim: str) -> None:
@@ -371,7 +199,7 @@ def validate(record: xr.Dataset, *, allow_nonfinite: bool = False,
                               "(expected e.g. '2026-01-31T12:00:00+00:00')") from None
     checked_dims: set[str] = set()
     variables = record.variables  # Variables, not DataArrays: record[name] costs O(channels)
-    coords = set(record.coords)
+    coords = record.coords  # membership only: no set of names built
     ends: dict[str, tuple] = {}
     for name in record.data_vars:
         var = variables[name]
@@ -425,8 +253,9 @@ def validate(record: xr.Dataset, *, allow_nonfinite: bool = False,
             units_t = coord.attrs.get("units", "s")
             if units_t != "s":
                 raise RecordError(f"time coordinate {dim!r} has units {units_t!r}; expected 's'")
-            ends[dim] = _ends(coord, record.xindexes.get(dim))
-            if dim in _regular_dims or _lazy_index(record, dim):
+            index = record.xindexes.get(dim)
+            ends[dim] = _ends(coord, index)
+            if dim in _regular_dims or _lazy_index(index):
                 # built as start + i / sample_rate by a reader: strictly increasing and
                 # evenly spaced by construction; only the rate needs checking
                 _check_time_axis_rate_only(name, ends[dim], fs, dim)
@@ -447,10 +276,10 @@ def validate(record: xr.Dataset, *, allow_nonfinite: bool = False,
     return record
 
 
-def _lazy_index(record: xr.Dataset, dim: str) -> bool:
+def _lazy_index(index) -> bool:
     from .timeindex import is_implicit_time  # implicit regular clocks (issue 21)
 
-    return is_implicit_time(record.xindexes.get(dim))
+    return is_implicit_time(index)
 
 
 def _ends(coord, index=None) -> tuple[int, float, float]:

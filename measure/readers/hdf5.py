@@ -32,7 +32,6 @@ array is built unless asked for, and a 2 GB record streams with bounded memory.
 
 from __future__ import annotations
 
-import builtins
 import json
 import os
 
@@ -41,8 +40,10 @@ import xarray as xr
 
 from crankbench.predict.errors import RecordError
 
-from ..record import is_pulse_dim, note_block_extremes
+from ..record import is_pulse_dim
+from ..scan import _SCAN_BLOCK, note_block_extremes
 from ..timeindex import regular_clock, sampled_dataset, sampled_time
+from . import _h5raw
 from ._common import (
     build_dataset,
     clean_attr,
@@ -262,9 +263,19 @@ class _Bound:
 
 def _members(gid) -> list[str]:
     """Names of the links in a low-level group, in HDF5's (name) order."""
-    names = []
-    gid.links.iterate(lambda name: names.append(name.decode("utf-8", "surrogateescape")))
-    return names
+    return list(_member_links(gid))
+
+
+def _member_links(gid) -> dict[str, bool]:
+    """Name -> "is a hard link" of the links in a low-level group, in HDF5's (name) order."""
+    hard = _h5().h5l.TYPE_HARD
+    links = {}
+
+    def note(name, info):
+        links[name.decode("utf-8", "surrogateescape")] = info.type == hard
+
+    gid.links.iterate(note, info=True)
+    return links
 
 
 def _has(gid, name: str) -> bool:
@@ -281,15 +292,23 @@ def _open_member(parent, name: str):
     virtual datasets anywhere in it (naming them) and lets soft links within it pass. The
     objects a read opens are thus checked one by one (a few microseconds each) instead of by a
     walk over the whole file at every read."""
+    return _open_checked(parent, name)[0]
+
+
+def _open_checked(parent, name: str):
+    """:func:`_open_member`, and the dataset creation property list of a dataset (None for
+    other objects)."""
     h5py = _h5()
     bname = name.encode("utf-8", "surrogateescape")
     if parent.links.get_info(bname).type != h5py.h5l.TYPE_HARD:
         _refuse_outside(parent)
     obj = h5py.h5o.open(parent, bname)
-    if (isinstance(obj, h5py.h5d.DatasetID)
-            and obj.get_create_plist().get_layout() == h5py.h5d.VIRTUAL):
-        _refuse_outside(parent)
-    return obj
+    dcpl = None
+    if isinstance(obj, h5py.h5d.DatasetID):
+        dcpl = obj.get_create_plist()
+        if dcpl.get_layout() == h5py.h5d.VIRTUAL:
+            _refuse_outside(parent)
+    return obj, dcpl
 
 
 def _refuse_outside(oid) -> None:
@@ -320,8 +339,12 @@ def _scalar_attr(oid, name: str):
         a = h5py.h5a.open(oid, name.encode())
     except KeyError:
         return None
+    tid = a.get_type()
+    scalar = a.get_space().get_simple_extent_type() == h5py.h5s.SCALAR
+    if scalar and tid.get_class() == h5py.h5t.STRING and tid.is_variable_str():
+        return _vlen_str(a, tid.get_cset())  # the JSON text (what write stores)
     dtype = a.dtype
-    if a.get_space().get_simple_extent_type() == h5py.h5s.SCALAR:
+    if scalar:
         if dtype.kind in "biuf":
             buf = np.empty((), dtype)
             a.read(buf)
@@ -333,6 +356,25 @@ def _scalar_attr(oid, name: str):
             raw = buf[()]
             return raw.decode(info.encoding, "surrogateescape") if isinstance(raw, bytes) else raw
     return clean_attr(h5py.AttributeManager(_Bound(oid))[name])
+
+
+#: HDF5 character set -> (h5py's memory type of a variable-length string in it, encoding)
+_VLEN = {}
+
+
+def _vlen_str(a, cset: int) -> str:
+    """Value of the scalar variable-length string attribute ``a`` (an ``h5py.h5a.AttrID``) of
+    character set ``cset``, decoded as ``_attrs`` decodes it."""
+    h5py = _h5()
+    if cset not in _VLEN:
+        encoding = "utf-8" if cset == h5py.h5t.CSET_UTF8 else "ascii"
+        dtype = h5py.string_dtype(encoding)
+        _VLEN[cset] = (dtype, h5py.h5t.py_create(dtype), encoding)
+    dtype, mtype, encoding = _VLEN[cset]
+    buf = np.empty((), dtype)
+    a.read(buf, mtype=mtype)
+    raw = buf[()]
+    return raw.decode(encoding, "surrogateescape") if isinstance(raw, bytes) else raw
 
 
 def _root(fid, file: str) -> tuple[dict, dict | None]:
@@ -367,7 +409,7 @@ def _int_attr(oid, name: str):
         a = h5py.h5a.open(oid, name.encode())
         buf = np.empty((), np.int64)
         if a.get_type().get_class() == h5py.h5t.INTEGER:
-            a.read(buf)
+            a.read(buf, mtype=_h5raw.native_type(buf.dtype))
             return int(buf)
     except (KeyError, TypeError, ValueError, OSError):
         pass
@@ -409,47 +451,56 @@ def _layout(fid, file: str) -> tuple[dict, list[str], dict, object, dict]:
             meta["channel_order"])
     except (KeyError, TypeError, ValueError):
         order = sorted(_members(gch))
-    missing = [n for n in order if not _has(gch, str(n))]
+    links = _member_links(gch)  # a hard link always has its object; others are resolved
+    missing = [n for n in order if not (links.get(str(n)) or (str(n) in links
+                                                             and _has(gch, str(n))))]
     if missing:
         raise RecordError(f"{file}: header lists channel(s) {missing} that have no data "
                           "(header/body mismatch; file truncated?)")
     dims = {dim: dict(info) for dim, info in meta.get("dims", {}).items()}
-    for dim in _members(gdims):
-        g = _open_member(gdims, dim)
+    for dim, hard in _member_links(gdims).items():
+        if not hard:
+            _refuse_outside(gdims)
         info = dims.setdefault(dim, {})
-        if h5py.h5a.get_num_attrs(g):
+        # opened only when it has attributes (version 1, or edited) or explicit times
+        obj = h5py.h5o.get_info(gdims, dim.encode("utf-8", "surrogateescape"))
+        g = _open_member(gdims, dim) if obj.num_attrs else None
+        if g is not None:
             info.update(_attrs(g))
-        if isinstance(g, h5py.h5g.GroupID) and _has(g, "values"):
-            info["values_ds"] = h5py.Dataset(_open_member(g, "values"))
+        if obj.type == h5py.h5o.TYPE_GROUP and info.get("kind") == "explicit":
+            g = g or _open_member(gdims, dim)
+            if _has(g, "values"):
+                info["values_ds"] = h5py.Dataset(_open_member(g, "values"))
     channels = {name: {k: _from_json(v) for k, v in attrs.items()}
                 for name, attrs in meta.get("channels", {}).items()}
     return record_attrs, order, dims, gch, channels
 
 
 def _dataset(gch, name: str):
-    """Channel ``name`` of the low-level ``/channels`` group as an ``h5py.Dataset``."""
+    """Channel ``name`` of the low-level ``/channels`` group: its ``h5py.h5d.DatasetID`` and
+    dataset creation property list."""
     h5py = _h5()
-    obj = _open_member(gch, name)
+    obj, dcpl = _open_checked(gch, name)
     if not isinstance(obj, h5py.h5d.DatasetID):
         raise RecordError(f"channel {name!r} is an HDF5 {type(obj).__name__[:-2].lower()}, "
                           "not a dataset; expected one dataset per channel under /channels")
-    return h5py.Dataset(obj)
+    return obj, dcpl
 
 
-def _channel_attrs(ds, name: str, dims: dict, file: str, known: dict | None = None
-                   ) -> tuple[str, dict]:
-    """Dim and attrs of channel dataset ``ds``: ``known`` (version 2's JSON) updated with the
-    dataset's own attributes, if it has any."""
+def _channel_attrs(did, shape: tuple, name: str, dims: dict, file: str,
+                   known: dict | None = None) -> tuple[str, dict]:
+    """Dim and attrs of the channel dataset ``did`` (``h5py.h5d.DatasetID``) of ``shape``:
+    ``known`` (version 2's JSON) updated with the dataset's own attributes, if it has any."""
     attrs = dict(known or {})
-    if _h5().h5a.get_num_attrs(ds.id):
-        attrs.update({k: _from_attr(v) for k, v in _attrs(ds).items()})
+    if _h5().h5a.get_num_attrs(did):
+        attrs.update({k: _from_attr(v) for k, v in _attrs(did).items()})
     dim = attrs.pop("dim", None)
     if dim not in dims:
         raise RecordError(f"{file}: channel {name!r} refers to dim {dim!r} which is not in "
                           "/dims (header/body mismatch)")
     length = int(dims[dim].get("length", -1))
-    if ds.shape != (length,):
-        raise RecordError(f"{file}: channel {name!r} has {ds.shape[0] if ds.shape else 0} "
+    if shape != (length,):
+        raise RecordError(f"{file}: channel {name!r} has {shape[0] if shape else 0} "
                           f"samples but its dim {dim!r} declares {length} (header/body mismatch;"
                           " file truncated?)")
     return dim, attrs
@@ -489,203 +540,58 @@ def _userblock(fid) -> int:
     return fid.get_create_plist().get_userblock()
 
 
-def _raw_runs(ds, userblock: int | None = None):
-    """File byte ranges holding a 1-D dataset's samples, as ``[(file offset, first sample,
-    samples)]`` with file-adjacent chunks merged, or None when HDF5 must do the read itself
-    (filters, foreign byte order, external or virtual storage, a user block, unallocated
-    chunks). ``userblock``: the file's user-block size if known (else asked here)."""
-    h5py = _h5()
-    did = ds.id  # h5py's low-level calls: each high-level property costs several
-    dtype = did.dtype
-    shape = did.shape
-    if len(shape) != 1 or not dtype.isnative or dtype.kind not in "fiu":
-        return None
-    if did.get_type() != h5py.h5t.py_create(dtype):  # bytes not numpy's (bit offset,
-        return None                                  # precision, custom float): HDF5 converts
-    plist = did.get_create_plist()
-    layout = plist.get_layout()
-    if (layout not in (h5py.h5d.CONTIGUOUS, h5py.h5d.CHUNKED)
-            or plist.get_nfilters() or plist.get_external_count()):
-        return None
-    if (_userblock(h5py.h5i.get_file_id(did)) if userblock is None else userblock) != 0:
-        return None
-    item = dtype.itemsize
-    n = shape[0]
-    if layout == h5py.h5d.CONTIGUOUS:
-        offset = did.get_offset()
-        return None if offset is None else [(int(offset), 0, n)]
-    chunk = plist.get_chunk()[0]
-    info = []
-    did.chunk_iter(lambda si: info.append((si.chunk_offset[0], si.byte_offset, si.size,
-                                             si.filter_mask)))
-    if len(info) != -(-n // chunk):
-        return None
-    runs = []
-    for first, offset, size, mask in sorted(info):
-        count = min(chunk, n - first)
-        if mask or size != chunk * item or offset is None:
-            return None
-        if runs and runs[-1][0] + runs[-1][2] * item == offset and runs[-1][1] + runs[-1][2] == first:
-            runs[-1][2] += count
-        else:
-            runs.append([int(offset), int(first), int(count)])
-    return [tuple(r) for r in runs]
-
-
-#: the kernel copies from the page cache fastest when source and destination share their
-#: offset within a page (about 20 % less CPU for 20 MB than at an arbitrary offset)
-_PAGE = 4096
-
-
-def _congruent_empty(n: int, dtype, file_offset: int) -> np.ndarray:
-    """An uninitialised array of ``n`` items whose address is congruent to ``file_offset``
-    modulo the page size (a view into a buffer one page larger)."""
-    dtype = np.dtype(dtype)
-    buf = np.empty(n * dtype.itemsize + _PAGE, dtype=np.uint8)
-    shift = (file_offset - buf.ctypes.data) % _PAGE
-    if shift % dtype.alignment:
-        shift = (shift + dtype.alignment - shift % dtype.alignment) % _PAGE
-    return buf[shift:shift + n * dtype.itemsize].view(dtype)
-
-
-#: bytes read per system call: each piece is scanned (minimum, maximum, NaN/inf) right after
-#: the kernel copied it, while it is still in cache, instead of once more from memory by the
-#: record checks
-_PIECE_BYTES = 1 << 21
-
-
-def _read_all(ds, userblock: int | None = None):
-    """All samples of a 1-D dataset, and their per-block extremes when scanned while read.
-
-    Unfiltered chunked or contiguous data (what :func:`write` produces) is read straight from
-    the file's byte ranges -- given by HDF5 itself (:func:`_raw_runs`) -- into the result, one
-    system read per block of :data:`measure.record._SCAN_BLOCK` samples (as ``numpy.fromfile``
-    reads, without HDF5's chunk-by-chunk path, about twice the time for 20 MB); each block's
-    minimum and maximum (NaN/inf propagate) are taken while it is in cache, for the record's
-    NaN/inf and clipping checks (:func:`measure.record.note_block_extremes`). The byte ranges
-    are HDF5's own answer for this dataset (never stored by us) and are used only when the
-    file's datatype is exactly numpy's (same bytes, no conversion). Anything else goes through
-    ``read_direct``.
-
-    Returns
-    -------
-    values : numpy.ndarray
-    extremes : tuple of numpy.ndarray or None
-        ``(lows, highs)`` per block for float data read directly, else None.
-    """
-    from ..record import _SCAN_BLOCK
-
-    runs = None
-    if ds.size:
-        try:
-            runs = _raw_runs(ds, userblock)
-        except Exception:  # noqa: BLE001 - an h5py build without chunk queries: HDF5 reads
-            runs = None
-    if runs is None:
-        out = np.empty(ds.shape, dtype=ds.dtype)
-    else:
-        out = _congruent_empty(ds.shape[0], ds.dtype, runs[0][0])
-    if not out.size:
-        return out, None
-    if runs is not None:
-        extremes = _read_runs(ds, runs, out, _SCAN_BLOCK)
-        if extremes is not False:
-            return out, extremes
-    ds.read_direct(out)
-    return out, None
-
-
-def _read_runs(ds, runs, out: np.ndarray, block: int):
-    """Fill ``out`` from the file's byte ``runs`` (:func:`_raw_runs`) in pieces ending on
-    multiples of ``block`` samples; per-block ``(lows, highs)`` of float data (None for other
-    kinds), False if the file ended early (truncated: HDF5 then reads and reports it)."""
-    flat = out.view(np.uint8)
-    item = out.dtype.itemsize
-    n = out.size
-    scan = out.dtype.kind == "f"
-    step = max(1, _PIECE_BYTES // item)
-    if scan:
-        nb = -(-n // block)
-        lows = np.full(nb, np.inf, out.dtype)
-        highs = np.full(nb, -np.inf, out.dtype)
-    with builtins.open(_h5().h5f.get_name(ds.id), "rb", buffering=0) as fh:
-        for offset, first, count in runs:
-            fh.seek(offset)
-            a, stop = first, first + count
-            while a < stop:
-                b = min(stop, a + step)
-                if fh.readinto(memoryview(flat[a * item:b * item])) != (b - a) * item:
-                    return False
-                if scan:
-                    _piece_extremes(out, a, b, block, lows, highs)
-                a = b
-    return (lows, highs) if scan else None
-
-
-def _piece_extremes(out, a: int, b: int, block: int, lows, highs) -> None:
-    """Fold the extremes of ``out[a:b]`` into the per-block ``lows``, ``highs`` (which start
-    at +inf / -inf; NaN propagates): the whole blocks inside by one reduction along rows, the
-    part-blocks at either end combined with what other pieces found there."""
-    k0 = -(-a // block)               # first block starting inside the piece
-    full_end = (b // block) * block   # whole full-length blocks end here
-    with np.errstate(invalid="ignore"):
-        if k0 * block < full_end:
-            rows = out[k0 * block:full_end].reshape(-1, block)
-            k1 = k0 + rows.shape[0]
-            np.minimum(lows[k0:k1], np.minimum.reduce(rows, axis=1), out=lows[k0:k1])
-            np.maximum(highs[k0:k1], np.maximum.reduce(rows, axis=1), out=highs[k0:k1])
-        for lo, hi in ((a, min(b, k0 * block)), (max(a, full_end, k0 * block), b)):
-            if hi > lo:  # within one block
-                k = lo // block
-                piece = out[lo:hi]
-                lows[k] = np.minimum(lows[k], np.minimum.reduce(piece))
-                highs[k] = np.maximum(highs[k], np.maximum.reduce(piece))
+_FAPL = []
 
 
 def _open_read(path):
     """``path`` opened read-only as a low-level ``h5py.h5f.FileID`` whose close also closes
     every object opened in it (what ``h5py.File.close`` does by enumerating them)."""
     h5py = _h5()
-    fapl = h5py.h5p.create(h5py.h5p.FILE_ACCESS)
-    fapl.set_fclose_degree(h5py.h5f.CLOSE_STRONG)
-    return h5py.h5f.open(os.fsencode(os.fspath(path)), h5py.h5f.ACC_RDONLY, fapl=fapl)
+    if not _FAPL:  # one property list (it describes how to open, not any file)
+        fapl = h5py.h5p.create(h5py.h5p.FILE_ACCESS)
+        fapl.set_fclose_degree(h5py.h5f.CLOSE_STRONG)
+        _FAPL.append(fapl)
+    return h5py.h5f.open(os.fsencode(os.fspath(path)), h5py.h5f.ACC_RDONLY, fapl=_FAPL[0])
 
 
 def read(path, *, channels=None) -> xr.Dataset:
-    """Read a crankbench HDF5 record fully into memory."""
+    """Read a crankbench HDF5 record fully into memory.
+
+    HDF5 gives the layout, the metadata and where each channel's samples lie in the file; it
+    is closed before plain samples are read, straight from those byte ranges through its own
+    file descriptor and scanned for the record checks as they arrive
+    (:mod:`measure.readers._h5raw`). Samples HDF5 must convert are read by HDF5 first.
+
+    Parameters
+    ----------
+    path : path-like
+        The ``.h5`` file.
+    channels : list of str, optional
+        Only these channels.
+
+    Returns
+    -------
+    xarray.Dataset
+        Channels in SI units, time coordinates in s.
+    """
     file = str(path)
     fid = _open_read(path)
-    try:  # every object opened is checked to be the file's own (_open_member)
-        attrs, order, dims, group, known = _layout(fid, file)
-        names = select(order, channels, file=file)
-        out, used = [], {}
-        userblock = _userblock(fid)
-        for name in names:
-            ds = _dataset(group, name)
-            dim, cattrs = _channel_attrs(ds, name, dims, file, known.get(name))
-            raw, extremes = _read_all(ds, userblock)
-            unit = cattrs.get("units")
-            values, cattrs = si_channel(name, raw, cattrs, file=file)
-            if extremes is not None and values is raw and cattrs["units"] == unit:
-                note_block_extremes(values, *extremes)  # samples unchanged since the scan
-            out.append((name, dim, values, cattrs))
-            used[dim] = True
-        clock = None
-        if len(used) == 1 and dims[next(iter(used))].get("kind") == "regular":
-            clock = next(iter(used))  # the usual record: one regular clock
-            clock_numbers = _regular(clock, dims[clock], file)
-        else:
-            explicit, implicit = {}, []
-            for dim in used:
-                c = _coordinate(dim, dims[dim], file)
-                if isinstance(c, np.ndarray):
-                    explicit[dim] = c
-                elif c is not None:
-                    implicit.append(c)
+    fd = None
+    try:
+        attrs, planned, clock, (explicit, implicit) = _plan(fid, file, channels)
+        if any(runs for *_, runs in planned):
+            fd = _h5raw.vfd_dup(fid)
+            if fd is None:  # no descriptor to share: one of our own
+                fd = os.open(os.fsencode(os.fspath(path)), os.O_RDONLY | getattr(os, "O_BINARY", 0))
     finally:
-        fid.close()  # strong close degree: every object opened above closes with it
+        _close(fid)
+    try:
+        out = _fill(path, planned, fd, file)
+    finally:
+        if fd is not None:
+            os.close(fd)
     if clock is not None:  # built in one step (no merge/align pass)
-        n, fs, start = clock_numbers
+        clock, (n, fs, start) = clock
         data_vars = {name: xr.Variable((dim,), values, vattrs)
                      for name, dim, values, vattrs in out}
         return sampled_dataset(data_vars, n, fs, start=start, dim=clock, attrs=attrs)
@@ -693,6 +599,83 @@ def read(path, *, channels=None) -> xr.Dataset:
     for coords in implicit:
         ds = ds.assign_coords(coords)
     return ds
+
+
+def _plan(fid, file: str, channels):
+    """What :func:`read` takes from the open file ``fid``: record attrs; per channel ``(name,
+    dim, attrs, array, byte runs)`` (the array already filled by HDF5 where the runs are None);
+    ``(dim, (n, sample_rate, start))`` of the one regular clock of the usual record, else None;
+    and the explicit and implicit time coordinates otherwise. No HDF5 object outlives it."""
+    attrs, order, dims, group, known = _layout(fid, file)
+    names = select(order, channels, file=file)
+    planned, used = [], {}
+    userblock = _userblock(fid)
+    for name in names:  # every object opened is checked to be the file's own (_open_member)
+        did, dcpl = _dataset(group, name)
+        shape = did.shape
+        dim, cattrs = _channel_attrs(did, shape, name, dims, file, known.get(name))
+        raw, runs = _h5raw.prepare(did, shape, userblock, dcpl)
+        if runs is None and raw.size:
+            did.read(_h5().h5s.ALL, _h5().h5s.ALL, raw)  # HDF5 converts: it reads
+        planned.append((name, dim, cattrs, raw, runs))
+        used[dim] = True
+    explicit, implicit = {}, []
+    if len(used) == 1 and dims[next(iter(used))].get("kind") == "regular":
+        clock = next(iter(used))  # the usual record: one regular clock
+        return attrs, planned, (clock, _regular(clock, dims[clock], file)), (explicit, implicit)
+    for dim in used:
+        c = _coordinate(dim, dims[dim], file)
+        if isinstance(c, np.ndarray):
+            explicit[dim] = c
+        elif c is not None:
+            implicit.append(c)
+    return attrs, planned, None, (explicit, implicit)
+
+
+def _close(fid) -> None:
+    """Close the file ``fid`` with every object opened in it (strong close degree). When
+    nothing else of the file is open -- after a read has released all it opened -- h5py's
+    sweep over every HDF5 object of the process (``nonlocal_close``, which marks the handles
+    such a close invalidated) has nothing to mark and is skipped."""
+    h5py = _h5()
+    quick = getattr(fid, "_close", None)  # FileID.close without the sweep (h5py >= 3)
+    if quick is not None and h5py.h5f.get_obj_count(fid, h5py.h5f.OBJ_ALL) == 1:
+        quick()
+    else:
+        fid.close()
+
+
+def _fill(path, planned, fd, file: str) -> list[tuple[str, str, np.ndarray, dict]]:
+    """Read the ``planned`` channels' byte ranges through descriptor ``fd`` and convert them to
+    SI: ``[(name, dim, values, attrs)]``. A channel whose file ended early is read again by
+    HDF5, which reports the damage."""
+    pread = None if fd is None else _h5raw.positioned_reader(fd)
+    out = []
+    for name, dim, cattrs, raw, runs in planned:
+        extremes = None
+        if runs is not None:
+            extremes = _h5raw.read_runs(pread, runs, raw, _SCAN_BLOCK)
+            if extremes is False:
+                extremes = None
+                _reread(path, name, raw)
+        unit = cattrs.get("units")
+        values, cattrs = si_channel(name, raw, cattrs, file=file)
+        if extremes is not None and values is raw and cattrs["units"] == unit:
+            note_block_extremes(values, *extremes)  # samples unchanged since the scan
+        out.append((name, dim, values, cattrs))
+    return out
+
+
+def _reread(path, name: str, out: np.ndarray) -> None:
+    """Channel ``name`` read into ``out`` by HDF5 itself (raises what HDF5 finds wrong)."""
+    h5py = _h5()
+    fid = _open_read(path)
+    try:
+        gch = _group(fid, "channels")
+        did, _ = _dataset(gch, name)
+        did.read(h5py.h5s.ALL, h5py.h5s.ALL, out)
+    finally:
+        fid.close()
 
 
 class _LazyH5:
@@ -734,7 +717,7 @@ def open(path, *, chunk_seconds: float = 10.0, channels=None) -> xr.Dataset:  # 
         data_vars, used = {}, {}
         for name in names:
             ds = f["channels"][name]
-            dim, attrs = _channel_attrs(ds, name, dims, file, known.get(name))
+            dim, attrs = _channel_attrs(ds.id, ds.shape, name, dims, file, known.get(name))
             fs = attrs.get("sample_rate")
             n = ds.shape[0]
             if fs is not None and n:

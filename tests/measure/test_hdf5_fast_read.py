@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from crankbench.measure import io
-from crankbench.measure.readers import hdf5
+from crankbench.measure.readers import _h5raw, hdf5
 from crankbench.measure.record import make_record
 
 N, FS = 300_001, 1000.0   # a partial last chunk
@@ -42,7 +42,7 @@ def _file(tmp_path, **storage):
 def test_every_storage_reads_back_exactly(tmp_path, storage, direct):
     path, x = _file(tmp_path, **storage)
     with h5py.File(path, "r") as f:
-        assert (hdf5._raw_runs(f["channels/acc"]) is not None) == direct
+        assert (_h5raw.raw_runs(f["channels/acc"]) is not None) == direct
     got = io.read(path)["acc"].values
     np.testing.assert_array_equal(got.astype(np.float64), x.astype(np.float64))
 
@@ -60,11 +60,11 @@ def test_chunks_written_in_order_are_one_read(tmp_path, chunked):
         np.testing.assert_array_equal(io.read(path)["acc"].values, x)
     with h5py.File(path, "r") as f:
         assert (f["channels/acc"].chunks is not None) == chunked
-        runs = hdf5._raw_runs(f["channels/acc"])
+        runs = _h5raw.raw_runs(f["channels/acc"])
     assert len(runs) == 1 and runs[0][1:] == (0, N)
     if not chunked:  # >= 64 KiB: starts on a page, read into a page-aligned array
         assert runs[0][0] % hdf5.ALIGN_BYTES == 0
-        got = hdf5._congruent_empty(N, np.float32, runs[0][0])
+        got = _h5raw.congruent_empty(N, np.float32, runs[0][0])
         assert got.ctypes.data % hdf5.ALIGN_BYTES == 0 and got.shape == (N,)
 
 
@@ -84,7 +84,7 @@ def test_a_datatype_other_than_numpys_is_read_by_hdf5(tmp_path):
         f["dims/time"].attrs["length"] = x.size
         raw = np.fromfile(path, np.int16, count=x.size,
                           offset=f["channels/acc"].id.get_offset())
-        assert f["channels/acc"].dtype == np.int16 and hdf5._raw_runs(f["channels/acc"]) is None
+        assert f["channels/acc"].dtype == np.int16 and _h5raw.raw_runs(f["channels/acc"]) is None
     assert not np.array_equal(raw, x)  # the bytes are not the values
     np.testing.assert_array_equal(io.read(path)["acc"].values, x.astype(np.float64))
 
@@ -133,3 +133,46 @@ def test_the_file_is_closed_after_a_read(tmp_path):
     with h5py.File(path, "r+") as f:
         f.attrs["touched"] = 1
     np.testing.assert_array_equal(rec["acc"].values, x)
+
+
+def test_a_read_leaves_no_hdf5_object_open_and_other_handles_valid(tmp_path):
+    """A read closes all it opened (the file too: no HDF5 identifier is left behind), and the
+    quick close taken when nothing else of the file is open does not touch handles another
+    opener of the same file holds."""
+    path, x = _file(tmp_path)
+    before = h5py.h5f.get_obj_count(h5py.h5f.OBJ_ALL, h5py.h5f.OBJ_ALL)
+    np.testing.assert_array_equal(io.read(path)["acc"].values, x)
+    assert h5py.h5f.get_obj_count(h5py.h5f.OBJ_ALL, h5py.h5f.OBJ_ALL) == before
+    fapl = h5py.h5p.create(h5py.h5p.FILE_ACCESS)
+    fapl.set_fclose_degree(h5py.h5f.CLOSE_STRONG)  # what the reader opens with
+    with h5py.File(h5py.h5f.open(str(path).encode(), h5py.h5f.ACC_RDONLY, fapl=fapl)) as f:
+        d = f["channels/acc"]
+        np.testing.assert_array_equal(io.read(path)["acc"].values, x)
+        assert d.id.valid
+        np.testing.assert_array_equal(d[...], x)
+
+
+def test_a_byte_range_that_reads_short_is_read_again_by_hdf5(tmp_path, monkeypatch):
+    """A piece that comes back short (the file shrank under the reader) is not taken: HDF5
+    reads the channel again from the file and reports what it finds there (here, the same
+    intact file: the samples, scanned afterwards by the record checks)."""
+    path, x = _file(tmp_path)
+    real = _h5raw.positioned_reader
+
+    def short(fd):
+        pread = real(fd)
+        return lambda buffer, offset: pread(buffer[:-4], offset)
+
+    monkeypatch.setattr(_h5raw, "positioned_reader", short)
+    np.testing.assert_array_equal(io.read(path)["acc"].values, x)
+
+
+def test_without_positioned_reads_the_reader_opens_the_file_itself(tmp_path, monkeypatch):
+    """Where ``os.preadv`` is missing, HDF5's descriptor is not shared (a seek would move its
+    position): the reader opens the file itself and reads by seek and ``readinto``."""
+    path, x = _file(tmp_path)
+    monkeypatch.delattr("os.preadv")
+    with h5py.File(path, "r") as f:
+        assert _h5raw.vfd_dup(f.id) is None
+    got = io.read(path)
+    np.testing.assert_array_equal(got["acc"].values, x)

@@ -4,6 +4,7 @@ Record; attributes set with h5py after writing override the JSON; a damaged JSON
 layout is refused by name; the block extremes taken while reading are the samples' own."""
 
 import json
+import os
 
 import h5py
 import numpy as np
@@ -11,7 +12,7 @@ import pytest
 import xarray as xr
 
 from crankbench.measure import io
-from crankbench.measure.readers import hdf5
+from crankbench.measure.readers import _h5raw, hdf5
 from crankbench.measure.record import _SCAN_BLOCK, clipped_spans, make_record
 from crankbench.predict.errors import RecordError
 
@@ -155,7 +156,7 @@ def test_block_extremes_taken_while_reading_are_the_samples_own(tmp_path, storag
     """Per-block min/max from the read equal numpy's over the samples, NaN and inf
     included, also where a block spans chunks read by separate runs or pieces."""
     if piece_bytes:
-        monkeypatch.setattr(hdf5, "_PIECE_BYTES", piece_bytes)
+        monkeypatch.setattr(_h5raw, "_PIECE_BYTES", piece_bytes)
     n = 3 * _SCAN_BLOCK + 12_345
     x = np.random.default_rng(5).standard_normal(n).astype(np.float32)
     x[_SCAN_BLOCK + 7] = np.nan
@@ -170,9 +171,14 @@ def test_block_extremes_taken_while_reading_are_the_samples_own(tmp_path, storag
         else:
             f.create_dataset("x", data=x)
     with h5py.File(path, "r") as f:
-        runs = hdf5._raw_runs(f["x"])
+        runs = _h5raw.raw_runs(f["x"])
         assert runs is not None and (len(runs) > 1) == bool(storage)
-        got, (lows, highs) = hdf5._read_all(f["x"])
+        got, runs = _h5raw.prepare(f["x"].id, (n,))
+        fd = os.open(path, os.O_RDONLY)
+        try:
+            lows, highs = _h5raw.read_runs(_h5raw.positioned_reader(fd), runs, got, _SCAN_BLOCK)
+        finally:
+            os.close(fd)
     np.testing.assert_array_equal(got, x)
     blocks = [x[a:a + _SCAN_BLOCK] for a in range(0, n, _SCAN_BLOCK)]
     np.testing.assert_array_equal(lows, [b.min() for b in blocks])

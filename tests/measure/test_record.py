@@ -207,7 +207,7 @@ def test_quantised_slow_sine_is_not_clipping():
 def test_runs_at_a_level_match_a_boolean_edge_count():
     """``_runs_at`` (indices of the level, split at gaps) equals the runs found from the edges
     of the boolean mask, on random 3-level signals, whole and by blocks."""
-    from crankbench.measure.record import _SCAN_BLOCK, _runs_at
+    from crankbench.measure.scan import _SCAN_BLOCK, _runs_at
 
     rng = np.random.default_rng(1)
     for _ in range(300):
