@@ -150,7 +150,7 @@ def order_map(x, *, fs=None, speed_rpm, samples_per_rev: int = 64, revolutions: 
                           error=AnalysisError)
     top = spr / 4.0 if max_order is None else check_positive(max_order, "max_order",
                                                              error=AnalysisError)
-    limits, running = _running_throughout(x, speed_rpm)
+    limits, running, extremes = _running_throughout(x, speed_rpm)
     stops = None if running or np.isscalar(speed_rpm) else _stopped_spans(x, fs, speed_rpm)
     if stops is not None:   # a record that stops: the map of each running span, as tracks
         m = _track_running_spans(
@@ -173,7 +173,7 @@ def order_map(x, *, fs=None, speed_rpm, samples_per_rev: int = 64, revolutions: 
     # the plan from the speed alone; the shaft angle and the angle samples' positions in one
     # pass; the channel's trend (by that angle) removed before the anti-alias filter
     plan = plan_chunks(speed, n=n, fs=fs_, samples_per_rev=spr, interpolation=interpolation,
-                       speed_limits_rpm=limits, clean_order=top)
+                       speed_limits_rpm=limits, clean_order=top, span_extremes=extremes)
     phi, j0, j1, positions = angle_samples(plan, speed, angle=angle, label=label,
                                            speed_max=None if limits is None else limits[1])
     attrs_in = getattr(x, "attrs", {}) or {}
@@ -215,18 +215,23 @@ def order_map(x, *, fs=None, speed_rpm, samples_per_rev: int = 64, revolutions: 
 
 
 def _running_throughout(x, speed_rpm):
-    """``((min, max) speed, True)`` when ``speed_rpm`` is a finite float64 array, one value per
-    sample of ``x``, above 0.5 % of its maximum everywhere (no stop, nothing for
-    :func:`_as_rpm` to refuse), found from its minimum and maximum alone (NaN and inf show in
-    one of them: two vectorised passes); else ``(None, False)`` (the full checks then run)."""
+    """``((min, max) speed, True, extremes)`` when ``speed_rpm`` is a finite float64 array,
+    one value per sample of ``x``, above 0.5 % of its maximum everywhere (no stop, nothing for
+    :func:`_as_rpm` to refuse), found from the extremes of its blocks (two vectorised passes;
+    NaN and inf show in them), which then serve every span the plan asks about
+    (:class:`analysis.resample.SpanExtremes`); else ``(None, False, None)`` (the full checks
+    then run)."""
+    from .resample import SpanExtremes
+
     speed = getattr(speed_rpm, "values", speed_rpm) if hasattr(speed_rpm, "dims") else speed_rpm
     if not (isinstance(speed, np.ndarray) and speed.dtype == np.float64 and speed.ndim == 1
             and speed.shape[0] == np.shape(getattr(x, "values", x))[0] and speed.shape[0]):
-        return None, False
-    lo, hi = float(speed.min()), float(speed.max())
+        return None, False, None
+    extremes = SpanExtremes(speed)
+    lo, hi = extremes.limits()
     if np.isfinite(lo) and np.isfinite(hi) and hi > 0 and lo > 5e-3 * hi:
-        return (lo, hi), True
-    return None, False
+        return (lo, hi), True, extremes
+    return None, False, None
 
 
 def _labelled_map(values, t, r, order_coord, attrs, name):

@@ -384,14 +384,66 @@ class ChunkPlan:
         return first, last
 
 
-def _split_chunks(speed, n: int, chunk: int, limits=None):
+class SpanExtremes:
+    """Lowest and highest value of any span of a record from the extremes of its blocks of
+    ``block`` samples (two vectorised passes over the record, then only the part blocks at a
+    span's ends are read): what :func:`plan_chunks` asks of the speed, span after span, without
+    a pass over the samples per span. NaN propagates (numpy's minimum and maximum)."""
+
+    def __init__(self, values: np.ndarray, block: int = 4096):
+        self.values, self.block = values, block
+        n = values.shape[0]
+        whole = n - n % block
+        body = values[:whole].reshape(-1, block)
+        self.lows, self.highs = body.min(axis=1), body.max(axis=1)
+        if whole < n:
+            self.lows = np.append(self.lows, values[whole:].min())
+            self.highs = np.append(self.highs, values[whole:].max())
+
+    def limits(self) -> tuple[float, float]:
+        """The record's lowest and highest value."""
+        return float(self.lows.min()), float(self.highs.max())
+
+    def __call__(self, a: int, b: int) -> tuple[float, float]:
+        """``(min, max)`` of ``values[a:b]`` (a < b)."""
+        k0, k1 = -(-a // self.block), b // self.block        # whole blocks inside
+        if k0 >= k1:
+            seg = self.values[a:b]
+            return float(seg.min()), float(seg.max())
+        lo, hi = float(self.lows[k0:k1].min()), float(self.highs[k0:k1].max())
+        for seg in (self.values[a:k0 * self.block], self.values[k1 * self.block:b]):
+            if seg.shape[0]:
+                lo, hi = min(lo, float(seg.min())), max(hi, float(seg.max()))
+        return lo, hi
+
+
+def _split_chunks(speed, n: int, chunk: int, limits=None, extremes=None):
     """Chunk limits of at most ``chunk`` samples, split until speed varies < 2:1 in each, and
     the (min, max) speed of each. ``speed(a, b)`` returns the speed (rpm) of samples a..b-1;
-    ``limits``, the whole record's (min, max) when already known."""
+    ``limits``, the whole record's (min, max) when already known; ``extremes(a, b)``, a
+    span's (min, max) without reading it whole (:class:`SpanExtremes`)."""
     n_chunks = max(1, int(math.ceil(n / chunk)))
     pending = [int(v) for v in np.round(np.linspace(0, n, n_chunks + 1))]
     out = [pending[0]]
     ranges = []
+    if extremes is not None:
+        for b0 in pending[1:]:
+            a = out[-1]
+            if extremes(a, b0)[0] <= 0:
+                raise AnalysisError(f"rpm must be > 0 throughout; found "
+                                    f"{extremes(a, b0)[0]:.6g} rpm between samples {a} and {b0}")
+            stack = [b0]
+            while stack:
+                b = stack[-1]
+                lo, hi = extremes(a, b)
+                if hi <= 2.0 * lo or b - a <= 256:
+                    out.append(b)
+                    ranges.append((lo, hi))
+                    stack.pop()
+                    a = b
+                else:
+                    stack.append((a + b) // 2)
+        return np.asarray(out, dtype=np.int64), ranges
     for b0 in pending[1:]:
         a0 = out[-1]
         sp = speed(a0, b0)
@@ -421,7 +473,7 @@ def _split_chunks(speed, n: int, chunk: int, limits=None):
 def plan_chunks(speed_rpm, *, n: int, fs: float, samples_per_rev: int = 64,
                 interpolation: str = "auto", antialias: bool = True,
                 chunk: int = 1 << 18, speed_limits_rpm=None,
-                clean_order: float | None = None) -> ChunkPlan:
+                clean_order: float | None = None, span_extremes=None) -> ChunkPlan:
     """Decide chunks, anti-alias filters and decimation of a resampling from the speed.
 
     Parameters
@@ -437,6 +489,8 @@ def plan_chunks(speed_rpm, *, n: int, fs: float, samples_per_rev: int = 64,
         As in :func:`angle_resample`.
     speed_limits_rpm : (float, float), optional
         The record's lowest and highest speed (rpm), when the caller knows them already.
+    span_extremes : SpanExtremes, optional
+        The speed's extremes by span (saves a pass over the speed per span).
     clean_order : float, optional
         Highest order the result is used at (default ``samples_per_rev/4``, the filter's pass
         band; an order map showing more passes its ``max_order``). The half-band stages keep
@@ -466,7 +520,7 @@ def plan_chunks(speed_rpm, *, n: int, fs: float, samples_per_rev: int = 64,
     chunk = check_int(chunk, "chunk", minimum=1024, error=AnalysisError)
     clean = samples_per_rev / 4.0 if clean_order is None else max(float(clean_order),
                                                                    samples_per_rev / 4.0)
-    bounds, ranges = _split_chunks(speed, n, chunk, speed_limits_rpm)
+    bounds, ranges = _split_chunks(speed, n, chunk, speed_limits_rpm, span_extremes)
     top = max(r[1] for r in ranges)
     per_rev = 60.0 * fs / top
     if per_rev < 2.0:

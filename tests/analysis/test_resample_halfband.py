@@ -125,3 +125,23 @@ def test_angle_grid_matches_integration_and_inverse_interpolation(speed, compile
     want_pos = np.interp(grid, phi, np.arange(n, dtype=float))
     np.testing.assert_allclose(pos, want_pos, rtol=0, atol=1e-9)
     np.testing.assert_allclose(at, np.interp(grid, phi, rpm), rtol=1e-12)
+
+
+def test_span_extremes_equal_a_direct_reduction():
+    """The plan's span extremes from block extremes (analysis.resample.SpanExtremes) equal
+    numpy's min and max of the span itself, for spans inside one block, across blocks and
+    at the record's ends; NaN propagates."""
+    from crankbench.analysis.resample import SpanExtremes
+
+    rng = np.random.default_rng(4)
+    v = rng.normal(1500.0, 300.0, 10_007)
+    ext = SpanExtremes(v, block=1000)
+    assert ext.limits() == (v.min(), v.max())
+    spans = [(0, 10_007), (3, 17), (999, 1001), (1000, 2000), (1500, 9_999), (9_000, 10_007)]
+    spans += [tuple(sorted(rng.integers(0, 10_008, 2))) for _ in range(200)]
+    for a, b in spans:
+        if b > a:
+            assert ext(a, b) == (v[a:b].min(), v[a:b].max()), (a, b)
+    v[4321] = np.nan
+    ext = SpanExtremes(v, block=1000)
+    assert np.isnan(ext(4000, 5000)[0]) and ext(0, 4000) == (v[:4000].min(), v[:4000].max())
