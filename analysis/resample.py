@@ -426,40 +426,17 @@ def _split_chunks(speed, n: int, chunk: int, limits=None, extremes=None):
     pending = [int(v) for v in np.round(np.linspace(0, n, n_chunks + 1))]
     out = [pending[0]]
     ranges = []
-    if extremes is not None:
-        for b0 in pending[1:]:
-            a = out[-1]
-            if extremes(a, b0)[0] <= 0:
-                raise AnalysisError(f"rpm must be > 0 throughout; found "
-                                    f"{extremes(a, b0)[0]:.6g} rpm between samples {a} and {b0}")
-            stack = [b0]
-            while stack:
-                b = stack[-1]
-                lo, hi = extremes(a, b)
-                if hi <= 2.0 * lo or b - a <= 256:
-                    out.append(b)
-                    ranges.append((lo, hi))
-                    stack.pop()
-                    a = b
-                else:
-                    stack.append((a + b) // 2)
-        return np.asarray(out, dtype=np.int64), ranges
     for b0 in pending[1:]:
-        a0 = out[-1]
-        sp = speed(a0, b0)
-        whole = limits is not None and (a0, b0) == (0, n)
-        low = float(limits[0]) if whole else float(sp.min())
+        a = out[-1]
+        ext = extremes if extremes is not None else _span_reader(speed, a, b0, n, limits)
+        low = ext(a, b0)[0]
         if low <= 0:
             raise AnalysisError(f"rpm must be > 0 throughout; found {low:.6g} rpm "
-                                f"between samples {a0} and {b0}")
-        a = a0
+                                f"between samples {a} and {b0}")
         stack = [b0]
-        known = (a0, b0, low)            # the whole span's minimum is known already
         while stack:
             b = stack[-1]
-            seg = sp[a - a0:b - a0]
-            lo = known[2] if (a, b) == known[:2] else float(seg.min())
-            hi = float(limits[1]) if whole and (a, b) == (0, n) else float(seg.max())
+            lo, hi = ext(a, b)
             if hi <= 2.0 * lo or b - a <= 256:
                 out.append(b)
                 ranges.append((lo, hi))
@@ -468,6 +445,26 @@ def _split_chunks(speed, n: int, chunk: int, limits=None, extremes=None):
             else:
                 stack.append((a + b) // 2)
     return np.asarray(out, dtype=np.int64), ranges
+
+
+def _span_reader(speed, a0: int, b0: int, n: int, limits):
+    """``(min, max)`` of sub-spans of samples ``a0..b0-1``, read once through ``speed(a, b)``
+    (the whole record's from ``limits`` when known; the last answer kept)."""
+    sp = speed(a0, b0)
+    memo = {}
+
+    def ext(a, b):
+        if (a, b) not in memo:
+            if limits is not None and (a, b) == (0, n):
+                memo.clear()
+                memo[a, b] = float(limits[0]), float(limits[1])
+            else:
+                seg = sp[a - a0:b - a0]
+                memo.clear()
+                memo[a, b] = float(seg.min()), float(seg.max())
+        return memo[a, b]
+
+    return ext
 
 
 def plan_chunks(speed_rpm, *, n: int, fs: float, samples_per_rev: int = 64,
