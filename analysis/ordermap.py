@@ -219,9 +219,9 @@ def _running_throughout(x, speed_rpm):
     one value per sample of ``x``, above 0.5 % of its maximum everywhere (no stop, nothing for
     :func:`_as_rpm` to refuse), found from the extremes of its blocks (two vectorised passes;
     NaN and inf show in them), which then serve every span the plan asks about
-    (:class:`analysis.resample.SpanExtremes`); else ``(None, False, None)`` (the full checks
+    (:class:`analysis.speed_spans.SpanExtremes`); else ``(None, False, None)`` (the full checks
     then run)."""
-    from .resample import SpanExtremes
+    from .speed_spans import SpanExtremes
 
     speed = getattr(speed_rpm, "values", speed_rpm) if hasattr(speed_rpm, "dims") else speed_rpm
     if not (isinstance(speed, np.ndarray) and speed.dtype == np.float64 and speed.ndim == 1

@@ -128,10 +128,10 @@ def test_angle_grid_matches_integration_and_inverse_interpolation(speed, compile
 
 
 def test_span_extremes_equal_a_direct_reduction():
-    """The plan's span extremes from block extremes (analysis.resample.SpanExtremes) equal
+    """The plan's span extremes from block extremes (analysis.speed_spans.SpanExtremes) equal
     numpy's min and max of the span itself, for spans inside one block, across blocks and
     at the record's ends; NaN propagates."""
-    from crankbench.analysis.resample import SpanExtremes
+    from crankbench.analysis.speed_spans import SpanExtremes
 
     rng = np.random.default_rng(4)
     v = rng.normal(1500.0, 300.0, 10_007)
