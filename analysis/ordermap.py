@@ -49,7 +49,8 @@ class MapSpectra:
     are removed -- their windowed spectrum subtracted from the block's, the same as removing
     them before the window and the rfft (linearity) for one pass less; the constant (the
     block mean) is then put in bin 0 (amplitude: its magnitude; power: its square), so the
-    channel's mean and drift cannot leak into low orders. Shared by :func:`order_map` and :func:`analysis.stream.order_map_stream`.
+    channel's mean and drift cannot leak into low orders. Shared by :func:`order_map` and
+    :func:`analysis.stream.order_map_stream`.
     """
 
     def __init__(self, length: int, window, scaling: str, factor: float, n_orders: int):
@@ -247,7 +248,6 @@ def _labelled_map(values, t, r, order_coord, attrs, name):
 
     time_index = PandasIndex(pd.Index(t, name="time"), "time")
     time_var = xr.Variable("time", t, {"units": "s"})
-    order_var = xr.Variable(*order_coord)
     try:
         order_index, order_ivar = _order_index(
             np.asarray(order_coord[1], dtype=np.float64).tobytes(),
@@ -262,7 +262,7 @@ def _labelled_map(values, t, r, order_coord, attrs, name):
         order_index = PandasIndex(pd.Index(order_coord[1], name="order"), "order")
         coords = xr.Coordinates(
             {"time": time_var, "rpm": xr.Variable("time", r, {"units": "rpm"}),
-             "order": order_var},
+             "order": xr.Variable(*order_coord)},
             indexes={"time": time_index, "order": order_index})
         return xr.DataArray(values, coords=coords, dims=("time", "order"), attrs=attrs,
                             name=name)
