@@ -77,11 +77,19 @@ def smearing_bias(coef: np.ndarray, t: np.ndarray, span_s: np.ndarray, mu2: floa
 #: crossing at 1000 rpm/s with 2-rev blocks: 4 % stated, 8 % lost at the peak)
 _SMEAR_WARN = 0.02
 
+#: the resampled angle samples' numerical error relative to the block's level: the band-limited
+#: interpolator's documented bound (5e-6 up to a quarter of the rate, ``analysis.resample``).
+#: An order whose block estimates are that small (an order the record does not have, read
+#: from what the other orders leave behind) has no curvature to judge: a clean two-order
+#: signal's absent order 6 (3.6e-7 of the level) had been warned of as "smearing 38 %"
+_NUMERICAL_FLOOR = 5e-6
 
-def warn_block_smearing(coef, bias, speed_rpm, fitter, label, noise=None):
+
+def warn_block_smearing(coef, bias, speed_rpm, fitter, label, noise=None, level=None):
     """Warn (:class:`analysis.orders.OrderWarning`) when the stated smearing of a block
     estimate passes 2 % (``_SMEAR_WARN``) of its amplitude; blocks in a dip below 5 % of the
-    order's largest amplitude are not judged.
+    order's largest amplitude are not judged, nor smearing within 3× the estimate's floor:
+    its noise and the resampling's numerical error (``_NUMERICAL_FLOOR`` × the block's level).
 
     Parameters
     ----------
@@ -98,6 +106,9 @@ def warn_block_smearing(coef, bias, speed_rpm, fitter, label, noise=None):
     noise : ndarray, shape (blocks, orders), optional
         1-σ amplitude noise of each estimate (signal units): a smearing below 3× it is the
         noise's own curvature (finite differences of noisy estimates), not judged.
+    level : ndarray, shape (blocks,), optional
+        Each block's rms (the orders and the residual; signal units), the scale of the
+        numerical floor (default: the largest estimate of the block).
     """
     from .orders import OrderWarning
 
@@ -105,8 +116,12 @@ def warn_block_smearing(coef, bias, speed_rpm, fitter, label, noise=None):
     with np.errstate(divide="ignore", invalid="ignore"):
         rel = np.where(amp > 0, bias / amp, 0.0)
     rel = np.where(amp >= 0.05 * amp.max(axis=0, initial=0.0), rel, 0.0)   # not in dips
+    if level is None:
+        level = amp.max(axis=1, initial=0.0) / np.sqrt(2.0)
+    floor = _NUMERICAL_FLOOR * np.asarray(level, dtype=float)[:, None]
     if noise is not None:
-        rel = np.where(bias > 3.0 * np.broadcast_to(noise, bias.shape), rel, 0.0)
+        floor = np.hypot(floor, np.broadcast_to(noise, bias.shape))
+    rel = np.where(bias > 3.0 * floor, rel, 0.0)
     if rel.size == 0 or not np.nanmax(rel) > _SMEAR_WARN:
         return
     i, j = np.unravel_index(int(np.nanargmax(rel)), rel.shape)

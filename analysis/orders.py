@@ -321,7 +321,9 @@ class BlockFit:
 
     def fit(self, frames: np.ndarray, phi0: np.ndarray):
         """Complex amplitudes (blocks, orders) referred to the absolute angle, the block means,
-        and the broadband noise floor per bin of the residual (mean square per bin)."""
+        the broadband noise floor per bin of the residual (mean square per bin) and the
+        block's level: the rms of what varies in it (the fitted orders and the residual, trend
+        excluded; signal units), the scale of the resampling's numerical error."""
         from scipy import fft
 
         k = self.orders.shape[0]
@@ -334,7 +336,10 @@ class BlockFit:
         power = _scale_spectrum(fft.rfft(resid * self.w, axis=1), self.w, "power", 1.0)[:, band]
         # median of an exponential variable is ln 2 of its mean
         floor = np.median(power, axis=1) / np.log(2.0)
-        return coef, params[:, 0], floor
+        level = np.sqrt(np.einsum("ij,ij->i", resid, resid) / resid.shape[1]
+                        + 0.5 * np.einsum("ij,ij->i", coef.real, coef.real)
+                        + 0.5 * np.einsum("ij,ij->i", coef.imag, coef.imag))
+        return coef, params[:, 0], floor, level
 
     def noise(self, floor: np.ndarray) -> np.ndarray:
         """1-σ amplitude error per (block, order) from the noise floor (mean square per bin)."""
@@ -583,26 +588,29 @@ def _cot_track(context, orders, *, samples_per_rev, revolutions, overlap, window
     coef = np.empty((starts.shape[0], orders.shape[0]), dtype=complex)
     mean = np.empty(starts.shape[0])
     floor = np.empty(starts.shape[0])
+    level = np.empty(starts.shape[0])
     for sl in _frame_batches(starts):
         frames = y[starts[sl, None] + np.arange(length)[None, :]]
-        coef[sl], mean[sl], floor[sl] = fitter.fit(frames, angle[starts[sl]])
+        coef[sl], mean[sl], floor[sl], level[sl] = fitter.fit(frames, angle[starts[sl]])
     from .leakage import check_grid_leakage
 
     check_grid_leakage(fitter, y, starts, angle, coef, context["label"])
     t, r, span = _block_coords(t_rel, rpm, starts, length, fitter.centroid)
     return _cot_dataset(coef, mean, floor, fitter, t + context["t0"], r, span, context,
-                        overlap=overlap, interpolation=plan.interpolation, plan=plan)
+                        overlap=overlap, interpolation=plan.interpolation, plan=plan,
+                        level=level)
 
 
 def _cot_dataset(coef, mean, floor, fitter, t, r, span, context, *, overlap, interpolation,
-                 plan=None):
-    """The COT order-track Dataset (shared by the in-memory and streamed trackers)."""
+                 plan=None, level=None):
+    """The COT order-track Dataset (shared by the in-memory and streamed trackers);
+    ``level``: each block's rms (:meth:`BlockFit.fit`), for the smearing warning's floor."""
     factor = context["factor"]
     orders = fitter.orders
     units, label = context["units"], context["label"]
     noise = fitter.noise(floor)
     bias = smearing_bias(coef, t, span, fitter.mu2, r)
-    _warn_block_smearing(coef, bias, r, fitter, label, noise)
+    _warn_block_smearing(coef, bias, r, fitter, label, noise, level)
     ds = _track_dataset(np.abs(coef).T * factor, np.angle(coef).T, orders, t, r, units, label,
                         context["reference"])
     ds["mean"] = ("time", mean, {"units": units, "long_name":

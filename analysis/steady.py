@@ -198,7 +198,7 @@ def steady_orders(x, *, fs=None, speed_rpm, orders, amplitude: str = "peak", seg
         except AnalysisError as exc:
             log.info("%s: steady segment %d skipped (%s)", label, k, exc)
             continue
-        coef, mean, floor = fitter.fit(y[None, :revs * spr], ang[:1])
+        coef, mean, floor, _ = fitter.fit(y[None, :revs * spr], ang[:1])
         sigma = fitter.noise(floor)[0]
         span = speed[a:b]
         for j, order in enumerate(orders):

@@ -471,12 +471,12 @@ def order_track_stream(record, channel: str, *, orders, speed_rpm=None, speed_ch
                             f"{int(np.ceil(4 * orders.max()))}")
     fitter = BlockFit(orders, spr, revolutions, window)
     fitter.check_spacing()
-    parts = {"coef": [], "mean": [], "floor": [], "t": [], "r": [], "span": []}
+    parts = {"coef": [], "mean": [], "floor": [], "level": [], "t": [], "r": [], "span": []}
 
     def per_frames(frames, phi0, t, r, span):
-        coef, mean, floor = fitter.fit(frames, phi0)
-        for key, value in zip(("coef", "mean", "floor", "t", "r", "span"),
-                              (coef, mean, floor, t, r, span)):
+        coef, mean, floor, level = fitter.fit(frames, phi0)
+        for key, value in zip(("coef", "mean", "floor", "level", "t", "r", "span"),
+                              (coef, mean, floor, level, t, r, span)):
             parts[key].append(value)
 
     _blocks(speed, reader, label=label, samples_per_rev=spr, revolutions=revolutions,
@@ -488,7 +488,7 @@ def order_track_stream(record, channel: str, *, orders, speed_rpm=None, speed_ch
     plan = _chunk_plan(speed, chunk, spr, interpolation)
     ds = _cot_dataset(cat["coef"], cat["mean"], cat["floor"], fitter, cat["t"], cat["r"],
                       cat["span"], context, overlap=overlap, interpolation=plan.interpolation,
-                      plan=plan)
+                      plan=plan, level=cat["level"])
     ds.attrs.update({"amplitude_convention": amplitude, "trend": reader.info["removed"],
                      "trend_kind": reader.info["kind"],
                      "streamed_segment_seconds": float(segment_seconds)})
