@@ -211,7 +211,7 @@ def _smooth(b, fs_d, floor):
     return out
 
 
-def _peaks(amp, noise, t, fs_d, probe_bw):
+def _peaks(amp, noise, t, fs_d, probe_bw, floor=0.0):
     """Sharp peaks of one order's amplitude: ``[(i_peak, i_start, i_stop, T_half_power)]``.
 
     Peaks are sought in the amplitude less its running mean over ``10/B`` seconds (so a
@@ -221,13 +221,15 @@ def _peaks(amp, noise, t, fs_d, probe_bw):
     peak's prominence divided by √3 (for a resonance's envelope ``1/√(1 + (2t/T)²)`` the
     half-height width is √3 T). A peak less prominent than 0.1 % of its amplitude is none
     (a smoothing filter cannot take more than the prominence off it; on a noise-free record
-    round-off ripples would otherwise pass ten times a noise of 1e-13)."""
+    round-off ripples would otherwise pass ten times a noise of 1e-13). ``floor``: the
+    amplitude the solve cannot resolve (signal units; :func:`_level_floor`), a noise the
+    peaks must stand out of too (an order the record lacks reads round-off of the others)."""
     from scipy.ndimage import uniform_filter1d
     from scipy.signal import find_peaks, peak_widths
 
     size = int(np.clip(10.0 / max(probe_bw, 1e-9) * fs_d, 3, amp.shape[0]))
     high = amp - uniform_filter1d(amp, size=size, mode="nearest")
-    sigma = float(np.median(noise))
+    sigma = max(float(np.median(noise)), floor)
     idx, props = find_peaks(high, prominence=_PEAK_SIGMAS * sigma)
     # the filter's ends are not settled: no peak within 2/B of the record's ends
     inside = (t[idx] - t[0] >= 2.0 / probe_bw) & (t[-1] - t[idx] >= 2.0 / probe_bw)
@@ -242,7 +244,7 @@ def _peaks(amp, noise, t, fs_d, probe_bw):
     dt = 1.0 / fs_d
     out = []
     for i, prom, w, lo, hi in zip(idx, props["prominences"], widths, left, right):
-        if prom < _PEAK_SIGMAS * float(noise[i]):
+        if prom < _PEAK_SIGMAS * max(float(noise[i]), floor):
             continue                                # a bump of the local noise
         if prom < 0.5 * _ERROR_TARGET * float(amp[i]):
             continue    # flattened entirely it would cost < 0.1 %: no reason to widen
@@ -250,10 +252,11 @@ def _peaks(amp, noise, t, fs_d, probe_bw):
     return out
 
 
-def _next_bandwidth(res, current, floor, cap, p):
+def _next_bandwidth(res, current, floor, cap, p, level_floor=0.0):
     """Bandwidth per (decimated sample, order) for the next pass: the floor where the order is
-    steady, and around each sharp peak (:func:`_peaks`) the value minimising noise² + smearing²
-    (and at least ``4/T`` for a half-power crossing time ``T``) over ±2 T."""
+    steady, and around each sharp peak (:func:`_peaks`, above ``level_floor``, signal units)
+    the value minimising noise² + smearing² (and at least ``4/T`` for a half-power crossing
+    time ``T``) over ±2 T."""
     from .vkf import enbw_hz
 
     amp = np.abs(res["envelope"].values).T                  # (Nd, K)
@@ -267,7 +270,8 @@ def _next_bandwidth(res, current, floor, cap, p):
     fs_d = float(res.attrs["solve_rate_hz"])
     for j in range(amp.shape[1]):
         probe_bw = float(np.median(current[:, j]))
-        for i, lo, hi, width in _peaks(amp[:, j], noise[:, j], t, fs_d, probe_bw):
+        for i, lo, hi, width in _peaks(amp[:, j], noise[:, j], t, fs_d, probe_bw,
+                                       level_floor):
             s_pk = float(smear[lo:hi + 1, j].max())
             b_pk = float(current[i, j])
             # noise² + s²(B0/B)^(4p) is least at B* = (4p s² B0^(4p) / (e N0))^(1/(4p+1))
@@ -280,17 +284,29 @@ def _next_bandwidth(res, current, floor, cap, p):
     return np.clip(new, floor, cap)
 
 
-def _expected(res, current, new, p):
+def _expected(res, current, new, p, level_floor=0.0):
     """Expected relative error (total, smearing) at bandwidth ``new`` from the solve at
-    ``current``, relative to the order's local level."""
+    ``current``, relative to the order's local level (at least ``level_floor``, signal units:
+    the error of an order the record lacks is judged against what the solve can resolve)."""
     amp = np.abs(res["envelope"].values).T
     noise = res["amplitude_noise"].values.T
     smear = res["smearing_model"].values.T       # the Lorentzian model: scales as B^(-2p)
     with np.errstate(divide="ignore", invalid="ignore"):
         smear_new = smear * np.minimum(current / new, 1e3) ** (2 * p)
         noise_new = noise * np.sqrt(new / current)
-    level = _local_level(amp, res)
+    level = np.maximum(_local_level(amp, res), level_floor)
     return np.hypot(smear_new, noise_new) / level, smear_new / level
+
+
+def _level_floor(values) -> float:
+    """The amplitude below which the solve resolves nothing of a channel (signal units): the
+    VKF's numerical floor (:data:`analysis.vkf.NUMERICAL_FLOOR`) times the channel's peak-
+    equivalent level ``√2·std``. A clean two-order run-up's absent order 6 (round-off of the
+    others, ~1e-9 of the level) had been widened to 75 Hz around its "peaks" and warned of
+    with an expected error of 56 %."""
+    from .vkf import NUMERICAL_FLOOR
+
+    return NUMERICAL_FLOOR * float(np.sqrt(2.0) * np.std(values))
 
 
 def _local_level(amp, res):
@@ -359,6 +375,7 @@ def auto_track(context, *, orders, bandwidth_hz=None, bandwidth_orders=None,
     probe = np.minimum(np.maximum(0.25 * speed[None, :] / 60.0, floor_full),
                        0.5 * cap_orders[:, None] * speed[None, :] / 60.0)
     current = probe
+    level_floor = _level_floor(values)
     history = []
     res = None
     rel = smear_rel = None
@@ -372,7 +389,7 @@ def auto_track(context, *, orders, bandwidth_hz=None, bandwidth_orders=None,
         nyq_cap = 0.25 * fs_d
         cap_d = np.minimum(np.minimum(cap_full[:, index].T, nyq_cap),
                            np.maximum(_line_caps(res, orders, fs, p), floor_d))
-        new_d = _next_bandwidth(res, cur_d, floor_d, cap_d, p)
+        new_d = _next_bandwidth(res, cur_d, floor_d, cap_d, p, level_floor)
         new_d = np.minimum(_smooth(new_d, fs_d, floor_d), cap_d)
         if it > 0:
             # after the probe, widen only: a narrower solve sees a feature flatter than it is
@@ -387,7 +404,7 @@ def auto_track(context, *, orders, bandwidth_hz=None, bandwidth_orders=None,
         t_full = np.arange(n) / fs
         current = np.stack([np.interp(t_full, t_d, new_d[:, j]) for j in range(k)])
         current = np.minimum(np.maximum(current, floor_full), cap_full)
-    rel, smear_rel = _expected(res, cur_d, cur_d, p)         # at the bandwidth finally used
+    rel, smear_rel = _expected(res, cur_d, cur_d, p, level_floor)   # at the bandwidth used
     ds = _vkf_dataset(res, context, orders)
     bw_used = current[:, index]
     per_order = []
