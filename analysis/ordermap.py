@@ -72,11 +72,17 @@ class MapSpectra:
         # estimate is the envelope there
         self.centroid = float(np.sum(np.arange(length) * w) / np.sum(w))
 
-    def __call__(self, frames: np.ndarray) -> np.ndarray:
+    def __call__(self, frames: np.ndarray, own: bool = False) -> np.ndarray:
+        """Order spectra (blocks, orders) of ``frames`` (blocks, samples); ``own``: the
+        caller's own copy, windowed in place."""
         from scipy import fft
 
         coef = frames @ self.proj
-        spectra = fft.rfft(frames * self.w, axis=1)[:, :self.n_orders]
+        if own:
+            frames *= self.w
+        else:
+            frames = frames * self.w
+        spectra = fft.rfft(frames, axis=1, overwrite_x=True)[:, :self.n_orders]
         spectra -= coef @ self.trend_spectra
         out = _scale_spectrum(spectra, self.w, self.scaling, self.factor)
         out[:, 0] = np.abs(coef[:, 0]) if self.scaling == "amplitude" else coef[:, 0] ** 2
@@ -195,7 +201,7 @@ def order_map(x, *, fs=None, speed_rpm, samples_per_rev: int = 64, revolutions: 
     blocks = np.lib.stride_tricks.as_strided(y, (y.shape[0] - length + 1, length),
                                              (y.strides[0], y.strides[0]), writeable=False)
     for sl in _frame_batches(starts):
-        out[sl] = spectra(blocks[starts[sl]])
+        out[sl] = spectra(blocks[starts[sl]], own=True)     # (gathered: a copy)
     values = out
     order_axis = np.arange(n_orders) / revolutions
     t, r, _ = _block_coords(t_rel, r_s, starts, length, spectra.centroid)
