@@ -159,7 +159,10 @@ def test_slow_noisy_runup_without_resonance_keeps_the_narrow_band(seed):
     """10 rpm/s over 60 s, two steady orders under 0.5 rms noise, no resonance: nothing is
     sharp, so the defaults keep the narrow band everywhere (a noise bump once widened order
     1.5 to 15 Hz at 1300 rpm, 6 % off, with a stated uncertainty of 100 %), and the
-    amplitudes are within their stated 3 σ."""
+    amplitudes are within their stated σ: none beyond 4 σ, at least 90 % within 3 σ. (The
+    errors are correlated over 1/B = 7.5 s, so the 45 s judged hold about six independent
+    ones: over 20 seeds, 3 of 40 tracks had 94-98 % within 3 σ with the solve at 286 Hz and
+    as many at 182 Hz, rms error / rms σ 0.94 both; the largest |error|/σ was 3.5.)"""
     fs = 4000.0
     t = np.arange(int(60 * fs)) / fs
     rpm = 800 + 10 * t
@@ -174,8 +177,10 @@ def test_slow_noisy_runup_without_resonance_keeps_the_narrow_band(seed):
         u = ds["amplitude_uncertainty"].sel(order=order).values
         ok = np.isfinite(a)
         assert ok.mean() > 0.7                 # 1/B = 7.5 s unsettled at each end
-        # a Gaussian error passes 3 σ 0.3 % of the time (and the stated σ, not the truth)
-        assert np.mean(np.abs(a[ok] - true) <= 3 * u[ok]) > 0.98
+        # a Gaussian error passes 3 σ 0.3 % of the time and 4 σ 0.006 % (the stated σ, not the
+        # truth): a σ stated 1.5x low would show errors near 5 σ
+        assert np.mean(np.abs(a[ok] - true) <= 3 * u[ok]) > 0.9
+        assert np.max(np.abs(a[ok] - true) / u[ok]) < 4.0
         assert np.abs(a[ok] / true - 1).max() < 0.015
 
 
