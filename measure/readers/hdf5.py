@@ -545,13 +545,25 @@ _FAPL = []
 
 def _open_read(path):
     """``path`` opened read-only as a low-level ``h5py.h5f.FileID`` whose close also closes
-    every object opened in it (what ``h5py.File.close`` does by enumerating them)."""
+    every object opened in it (what ``h5py.File.close`` does by enumerating them).
+
+    HDF5 opens a file that this process holds open already (an ``h5py.File`` in a notebook)
+    only with the close degree it was opened with -- h5py's is "weak" -- and refused the strong
+    one as "file close degree doesn't match", which read as a corrupt file. Then the file is
+    opened weak: its objects close as they are released, the other handle keeps it open."""
     h5py = _h5()
-    if not _FAPL:  # one property list (it describes how to open, not any file)
-        fapl = h5py.h5p.create(h5py.h5p.FILE_ACCESS)
-        fapl.set_fclose_degree(h5py.h5f.CLOSE_STRONG)
-        _FAPL.append(fapl)
-    return h5py.h5f.open(os.fsencode(os.fspath(path)), h5py.h5f.ACC_RDONLY, fapl=_FAPL[0])
+    if not _FAPL:  # one property list each (they describe how to open, not any file)
+        for degree in (h5py.h5f.CLOSE_STRONG, h5py.h5f.CLOSE_WEAK):
+            fapl = h5py.h5p.create(h5py.h5p.FILE_ACCESS)
+            fapl.set_fclose_degree(degree)
+            _FAPL.append(fapl)
+    name = os.fsencode(os.fspath(path))
+    try:
+        return h5py.h5f.open(name, h5py.h5f.ACC_RDONLY, fapl=_FAPL[0])
+    except OSError as exc:
+        if "close degree" not in str(exc):
+            raise
+        return h5py.h5f.open(name, h5py.h5f.ACC_RDONLY, fapl=_FAPL[1])
 
 
 def read(path, *, channels=None) -> xr.Dataset:
