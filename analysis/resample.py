@@ -473,13 +473,22 @@ def plan_chunks(speed_rpm, *, n: int, fs: float, samples_per_rev: int = 64,
         # an order that the angle sampling folds back (module docstring). The FFT then runs
         # on 1/2^stages of the samples and returns the output rate above, zero padded where
         # that is higher than the stages' rate. Their ends are incomplete over
-        # HB_REACH·(2^s − 1) more samples: no more stages than leave 0.1 % of the record so
+        # HB_REACH·(2^s − 1) more samples: no more stages than leave 0.25 % of the record so
+        # (both ends together; 0.1 % before: a 10 s record at 20 kHz missed its third stage by
+        # 10 samples, and the order map ran 3.6 % slower for them). And no more than keep the
+        # FFT low-pass's stop edge within the stages' Nyquist frequency: above it the filter
+        # cannot act, the spectrum's top bin keeps what the stages folded there (the window
+        # ends' transients), and the zero padded transform spreads it over the whole window as
+        # one cosine -- a steady 1500 rpm record at 8 kHz (stop edge 1200 Hz, 2 stages to
+        # 2 kHz) read 3.4e-4 off in its angle samples over 60 s, a crossfade's short window
+        # 2e-3 (tests/analysis/test_resample_halfband.py)
         stages = 0
         if method == "bandlimited":
             f_clean = clean * hi / 60.0
             stages = max(0, min(_HB_MAX_STAGES,
                                 int(math.floor(math.log2(fs / (4.0 * f_clean)) + 1e-12))))
-            while stages and 2 * _HB_REACH * ((1 << stages) - 1) > n // 1000:
+            while stages and (2 * _HB_REACH * ((1 << stages) - 1) > n // 400
+                              or f_stop > fs / (1 << (stages + 1))):
                 stages -= 1
         half = int(math.ceil(_aa_half_length(f_pass, f_stop) * fs)) + 1
         half += _HB_REACH * ((1 << stages) - 1)
@@ -598,10 +607,12 @@ def resample_span(plan: ChunkPlan, ks, values: np.ndarray, start: int, phi: np.n
 
 def resample_arrays(values: np.ndarray, fs: float, speed_rpm: np.ndarray, *,
                     samples_per_rev: int = 64, interpolation: str = "auto",
-                    antialias: bool = True, chunk: int = 1 << 18, angle=None, label="x"):
+                    antialias: bool = True, chunk: int = 1 << 18, angle=None, label="x",
+                    max_order=None):
     """:func:`angle_resample` on plain arrays: ``(values, time, rpm, angle, plan)``."""
     plan = plan_chunks(speed_rpm, n=values.shape[0], fs=fs, samples_per_rev=samples_per_rev,
-                       interpolation=interpolation, antialias=antialias, chunk=chunk)
+                       interpolation=interpolation, antialias=antialias, chunk=chunk,
+                       clean_order=max_order)
     phi, j0, j1, positions = angle_samples(plan, speed_rpm, angle=angle, label=label)
     out, t_out, rpm_out, grid = resample_span(plan, range(plan.chunks), values, 0, phi,
                                               speed_rpm, j0, j1, last=True, positions=positions)
@@ -645,7 +656,7 @@ def angle_samples(plan: ChunkPlan, speed_rpm: np.ndarray, *, angle=None, label="
 @renamed(rpm="speed_rpm")
 def angle_resample(x, *, fs=None, speed_rpm, samples_per_rev: int = 64,
                    interpolation: str = "auto", antialias: bool = True, chunk: int = 1 << 18,
-                   shaft_angle=None):
+                   shaft_angle=None, max_order=None):
     """Resample a signal at constant increments of shaft angle (computed order tracking).
 
     Parameters
@@ -671,6 +682,11 @@ def angle_resample(x, *, fs=None, speed_rpm, samples_per_rev: int = 64,
     shaft_angle : array_like, optional
         Shaft angle (rad, increasing) at every sample, e.g. from the encoder edges; default
         the integral of the speed from the first sample.
+    max_order : float, optional
+        Highest order the samples are used at (default ``samples_per_rev/4``, the filter's
+        pass band; up to ``samples_per_rev/2``): the half-band stages before the filter keep
+        every order up to it free of their own folding, as :func:`analysis.ordermap.order_map`
+        with the same ``max_order`` resamples.
 
     Returns
     -------
@@ -700,7 +716,9 @@ def angle_resample(x, *, fs=None, speed_rpm, samples_per_rev: int = 64,
     speed = _as_rpm(speed_rpm, n, fs)
     out, t_out, rpm_out, grid, plan = resample_arrays(
         values, fs, speed, samples_per_rev=samples_per_rev, interpolation=interpolation,
-        antialias=antialias, chunk=chunk, angle=angle, label=label)
+        antialias=antialias, chunk=chunk, angle=angle, label=label,
+        max_order=None if max_order is None else check_positive(max_order, "max_order",
+                                                                 error=AnalysisError))
     import xarray as xr
 
     coords = {"angle": ("angle", grid, {"units": "rad", "long_name": "shaft angle"}),

@@ -59,8 +59,9 @@ Implementation: the record is first low-passed and decimated by ``q`` to a solve
 2.5 and 4 times ``f_max`` (the highest order frequency plus its bandwidth), the one that costs
 least: the cascade's multiply-adds plus the solve's work per decimated sample, which grows as
 the square of the unknowns per sample (:func:`_decimation_factor`; the bench's 3-order run-up is
-solved at 606 instead of 909 Hz, the call about 1.2x faster), as long as the sharper cascade
-leaves no more than 0.5 % of the record incomplete at either end, with a cascade of zero-phase
+solved at 606 instead of 909 Hz: bench suite ``orders``, row ``order_track vkf speed``), as
+long as the sharper cascade leaves no more than 0.5 % of the record incomplete at either end,
+with a cascade of zero-phase
 Kaiser-window FIR stages (:func:`_decimator`: pass band ``[0, f_max]`` flat to 1e-5, all that
 would alias into the output band 100 dB down — both checked on the designed taps by
 ``tests/analysis/test_vkf_kernels.py``), then solved in overlapping blocks whose overlap covers
@@ -272,8 +273,9 @@ def _decimation_factor(fs: float, f_max: float, columns: int, duration: float) -
     candidates an evenly spread 40 are weighed.
 
     On the bench's 10 s run-up (3 orders, 20 kHz, f_max 225.5 Hz) ``q`` = 33 instead of 22: the
-    solve at 606 instead of 909 Hz, 50 ms instead of 19 ms left incomplete at either end, the
-    call about 1.2x faster (``tests/analysis/test_vkf_decimation.py``). A 0.5 s sweep keeps
+    solve at 606 instead of 909 Hz, 50 ms instead of 19 ms left incomplete at either end
+    (``tests/analysis/test_vkf_decimation.py``; the time saved: bench suite ``orders``, row
+    ``order_track vkf speed``). A 0.5 s sweep keeps
     the 4 f_max rate."""
     q_lo = int(max(1, math.floor(fs / (4.0 * f_max))))
     q_hi = int(max(q_lo, math.floor(fs / (_MIN_SOLVE_RATE * f_max))))

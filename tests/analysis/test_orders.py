@@ -43,7 +43,8 @@ def test_amplitude_conventions(amplitude, factor):
 def test_parseval_power_scaling():
     """Σ of the power spectrum over orders > 0 equals the windowed mean square of the block with
     its window-weighted trend (constant and slope) removed (Parseval), and order 0 holds the squared
-    block mean; any window. The block is rebuilt here from angle_resample independently."""
+    block mean; any window. The block is rebuilt here from angle_resample independently (with
+    the map's max_order: the samples clean up to order 32, as the map resamples them)."""
     fs = 4096.0
     rng = np.random.default_rng(4)
     x = rng.normal(size=16384) + 0.7
@@ -51,7 +52,7 @@ def test_parseval_power_scaling():
     for window in ("boxcar", "hann", "flattop"):
         p = order_map(x, fs=fs, speed_rpm=1200.0, revolutions=8, window=window, scaling="power",
                       max_order=32, samples_per_rev=64)
-        y = angle_resample(x, fs=fs, speed_rpm=1200.0, samples_per_rev=64)
+        y = angle_resample(x, fs=fs, speed_rpm=1200.0, samples_per_rev=64, max_order=32)
         w = get_window(window, 512)
         s = np.linspace(-1, 1, 512)
         basis = np.stack([np.ones(512), s], axis=1)

@@ -53,16 +53,15 @@ def test_halfband_kernels_match_a_direct_convolution(n, monkeypatch):
 def test_plan_uses_stages_while_the_clean_orders_stay_in_their_pass_band():
     """1000→3000 rpm at 20 kHz, 64 samples/rev: orders up to 16 at the chunks' top speeds
     (2000 and 3000 rpm) lie at 533 and 800 Hz, which a stage leaves flat and unfolded while it
-    is within a quarter of the rate it leaves: 3 stages (to 2.5 kHz) and 2 (to 5 kHz) -- the
-    first limited to 2 by the 0.1 % margin rule (15·(2^s − 1) samples at either end: 210 of
-    200 000 for 3). The output rates (4 samples per period of the 800 and 1600 Hz stop edges:
-    3.2 and 6.4 kHz) may exceed the stages' rate (the FFT zero pads); cubic keeps the full
-    rate. A longer record takes the third stage; a map showing orders to 32 (1067 and 1600 Hz)
-    takes 2 and 1."""
+    is within a quarter of the rate it leaves: 3 stages (to 2.5 kHz) and 2 (to 5 kHz), their
+    margin (15·(2^s − 1) samples at either end: 210 of 200 000 for 3) within the 0.25 % rule.
+    The output rates (4 samples per period of the 800 and 1600 Hz stop edges: 3.2 and 6.4
+    kHz) may exceed the stages' rate (the FFT zero pads); cubic keeps the full rate. A map
+    showing orders to 32 (1067 and 1600 Hz) takes 2 and 1; shorter records fewer."""
     fs = 20_000.0
     rpm = 1000.0 + 2000.0 * np.arange(200_000) / 200_000
     plan = plan_chunks(rpm, n=rpm.size, fs=fs)
-    assert plan.halfband_stages == (2, 2)
+    assert plan.halfband_stages == (3, 2)
     for (nfft, n_out), s, (lo, hi) in zip(plan.lengths, plan.halfband_stages,
                                           [(1000.0, 2000.0), (2000.0, 3000.0)]):
         assert nfft % (1 << s) == 0
@@ -73,9 +72,14 @@ def test_plan_uses_stages_while_the_clean_orders_stay_in_their_pass_band():
     assert plan_chunks(rpm, n=rpm.size, fs=fs, clean_order=32).halfband_stages == (2, 1)
     longer = 1000.0 + 2000.0 * np.arange(400_000) / 400_000
     assert plan_chunks(longer, n=longer.size, fs=fs).halfband_stages == (3, 2)
-    # a 2.5 s record: the stages' margin may take 0.1 % of it at most (50 samples): one stage
+    # a 2.5 s record: the stages' margin may take 0.25 % of it at most (125 samples): two
+    # stages (90), not three (210); a 1 s record one (30 of 50), a 0.5 s record none (30 > 25)
     short = 1000.0 + 2000.0 * np.arange(50_000) / 50_000
-    assert plan_chunks(short, n=short.size, fs=fs).halfband_stages == (1, 1)
+    assert plan_chunks(short, n=short.size, fs=fs).halfband_stages == (2, 2)
+    second = 1000.0 + 2000.0 * np.arange(20_000) / 20_000
+    assert plan_chunks(second, n=second.size, fs=fs).halfband_stages == (1, 1)
+    half = 1000.0 + 2000.0 * np.arange(10_000) / 10_000
+    assert plan_chunks(half, n=half.size, fs=fs).halfband_stages == (0, 0)
 
 
 def test_fft_lowpass_upsamples_exactly_past_the_stages_rate():
@@ -145,3 +149,24 @@ def test_span_extremes_equal_a_direct_reduction():
     v[4321] = np.nan
     ext = SpanExtremes(v, block=1000)
     assert np.isnan(ext(4000, 5000)[0]) and ext(0, 4000) == (v[:4000].min(), v[:4000].max())
+
+
+def test_the_stop_edge_stays_within_the_stages_nyquist_frequency():
+    """A steady 1500 rpm record at 8 kHz: the FFT low-pass stops from 1200 Hz (order 48), above
+    the 1 kHz Nyquist frequency two stages would leave; what they folded there (the window
+    ends' transients) stayed in the spectrum's top bin and the zero padded transform spread it
+    over the whole record: the angle samples of orders 2 and 12 read 3.4e-4 off (60 s). One
+    stage now; every chunk's stop edge within its stages' Nyquist frequency; the samples within
+    the interpolator's documented 5e-6 of the closed form."""
+    from crankbench.analysis.resample import angle_resample, shaft_angle
+
+    fs = 8000.0
+    rpm = np.full(int(60 * fs), 1500.0)
+    phi = shaft_angle(rpm, fs)
+    plan = plan_chunks(rpm, n=rpm.size, fs=fs)
+    assert plan.halfband_stages == (1, 1)
+    for (f_pass, f_stop), s in zip(plan.bands, plan.halfband_stages):
+        assert f_stop <= fs / 2 ** (s + 1)
+    y = angle_resample(np.cos(2 * phi) + 0.3 * np.sin(12 * phi), fs=fs, speed_rpm=rpm)
+    a = y.angle.values
+    assert np.abs(y.values - (np.cos(2 * a) + 0.3 * np.sin(12 * a))).max() < 5e-6
