@@ -27,6 +27,12 @@ crossing doubles the noise of every steady order. The default therefore follows 
    order above 0.1 % of its amplitude; where that limit leaves more than
    about 1 % of expected error, an :class:`analysis.orders.OrderWarning` names the order, the
    speed, the local sweep rate, the expected error and the setting to use.
+5. **Lines beside the orders.** The lines that the probe's residual shows within 1.5 orders
+   of a tracked order (an engine signal has every half order) are solved jointly with the
+   tracked orders from then on, at the floor bandwidth, and not reported
+   (``attrs['auto_joint_lines']``): at the floor bandwidth of a short record (4 Hz for 2 s)
+   a half order 12.5 Hz away still passed, and a beat read as envelope curvature widened the
+   band further -- order 1 of a steady 2 s record with every half order read 27 % off.
 
 The result is an ordinary order track (``method='vkf'`` layout) with ``amplitude_uncertainty``
 (noise and smearing), ``bandwidth_hz`` (order, time), NaN within one response time ``1/B`` of
@@ -61,6 +67,9 @@ _WARN_AT = 0.01              # warn where the expected error exceeds ~1 %
 _MAX_PASSES = 4
 _PEAK_SIGMAS = 10.0         # a peak stands out by this many amplitude-noise sigmas
 _CAP_SPACING = 1.5          # widest band: this many times the distance to the nearest order
+_JOINT_REACH = 1.5          # lines of the signal this close (orders) to a tracked order are
+                            # solved with it (not reported): a 2 s steady record's untracked
+                            # half orders had put order 1 off by 27 % with the defaults
 
 
 def sweep_rate(speed_rpm, fs: float, *, window_s: float | None = None) -> float:
@@ -115,7 +124,7 @@ def steady_speed(speed_rpm, fs: float, *, tolerance: float = 0.01) -> bool:
     return bool(med > 0 and (hi - lo) <= 2.0 * tolerance * med)
 
 
-def _line_caps(res, orders, fs, p):
+def _line_caps(res, orders, fs, p, found=None):
     """Largest bandwidth (Hz) per (decimated sample, order) that keeps every other line of the
     signal out of each tracked order: for a line of amplitude ``A_L`` at ``Δf`` from an order of
     amplitude ``A``, the VKF lets ``|H(Δf)| A_L`` through, so
@@ -123,7 +132,9 @@ def _line_caps(res, orders, fs, p):
     residual of the current solve (orders not tracked) on an order spectrum of 16-revolution
     blocks: a line counts where it stays on its order bin over five consecutive blocks and lies
     at least 0.4 orders from the tracked order (closer content is the order's own envelope
-    spread by a fast crossing)."""
+    spread by a fast crossing). ``found``, a set, receives the order (bin) of every such line
+    within :data:`_JOINT_REACH` orders of a tracked order (:func:`auto_track` solves them
+    jointly)."""
     from .ordermap import MapSpectra
     from .resample import resample_arrays
 
@@ -134,14 +145,18 @@ def _line_caps(res, orders, fs, p):
     amp = np.abs(res["envelope"].values).T                     # (Nd, K)
     nd, k = amp.shape
     caps = np.full((nd, k), np.inf)
+    if found is not None:
+        found.clear()
     top = 0.45 * fs_d / (rpm_d.max() / 60.0)                   # highest order the solve holds
     spr = int(8 * np.ceil(max(4.0 * top, 16.0) / 8.0))
-    revs = 16
     try:
         y, t_rel, r_y, _, _ = resample_arrays(resid, fs_d, rpm_d, samples_per_rev=spr,
                                               antialias=False, label="residual")
     except Exception:                                          # too short to look for lines
         return caps
+    # 16-revolution blocks where five fit (48 revolutions), else 8 (24): a line must show in
+    # five consecutive blocks; half orders stay 4 bins apart in 8-revolution blocks
+    revs = 16 if y.shape[0] >= 48 * spr else 8
     length = spr * revs
     if y.shape[0] < length:
         return caps
@@ -154,7 +169,11 @@ def _line_caps(res, orders, fs, p):
     c = np.sqrt(2.0) - 1.0
     eps = 1e-3
     rows = lines * keep[None, :]
-    floors = np.array([float(np.median(r[keep])) if keep.any() else 0.0 for r in rows])
+    # each block's noise level: the lower quartile of its bins scaled to the median of a
+    # Rayleigh (noise-only) amplitude, 1.177/0.759 -- the median itself sat on the lines' main
+    # lobes where the lines are dense (every half order: every bin of an 8-revolution block)
+    floors = np.array([1.55 * float(np.percentile(r[keep], 25.0)) if keep.any() else 0.0
+                       for r in rows])
     is_peak = np.zeros_like(rows, dtype=bool)
     is_peak[:, 1:-1] = ((rows[:, 1:-1] > rows[:, :-2]) & (rows[:, 1:-1] >= rows[:, 2:])
                         & (rows[:, 1:-1] > 10.0 * floors[:, None]))
@@ -175,6 +194,11 @@ def _line_caps(res, orders, fs, p):
         peaks = np.flatnonzero(persistent[b])
         if peaks.size == 0:
             continue
+        if found is not None:
+            for q in peaks:
+                gap = np.abs(axis[q] - orders).min()
+                if 0.4 <= gap <= _JOINT_REACH:
+                    found.add(float(axis[q]))
         half = (length / 2.0) * 60.0 / (spr * max(float(r_y.mean()), 1e-9))
         # the samples within the block's time span (t is sorted: a slice, not a mask over
         # the whole record per block, which made this quadratic in the record length)
@@ -321,7 +345,7 @@ def _local_level(amp, res):
 
 
 def auto_track(context, *, orders, bandwidth_hz=None, bandwidth_orders=None,
-               filter_order: int = 2, min_bandwidth_orders=None, **_ignored):
+               filter_order: int = 2, min_bandwidth_orders=None, _joint=(), **_ignored):
     """The default order track: adaptive Vold–Kalman settings chosen from the record.
 
     Parameters
@@ -337,6 +361,10 @@ def auto_track(context, *, orders, bandwidth_hz=None, bandwidth_orders=None,
     min_bandwidth_orders : float, optional
         A floor in orders (Hz = value · rpm/60) above the noise floor, for a caller that needs
         the track to resolve a known feature width (the pipeline's resonance identification).
+    _joint : tuple of float
+        Internal: orders among ``orders`` that are lines of the signal found beside the
+        requested ones (within :data:`_JOINT_REACH`), solved jointly at the floor bandwidth so
+        that they do not leak into them, and not reported.
 
     Returns
     -------
@@ -374,6 +402,10 @@ def auto_track(context, *, orders, bandwidth_hz=None, bandwidth_orders=None,
     cap_full = np.minimum(_CAP_SPACING * cap_orders, 0.5 * orders)[:, None] * speed[None, :] / 60.0
     probe = np.minimum(np.maximum(0.25 * speed[None, :] / 60.0, floor_full),
                        0.5 * cap_orders[:, None] * speed[None, :] / 60.0)
+    extra = np.isin(orders, np.asarray(_joint, dtype=float))
+    if extra.any():            # lines solved with the orders: narrow throughout
+        cap_full[extra] = floor_full[extra]
+        probe[extra] = floor_full[extra]
     current = probe
     level_floor = _level_floor(values)
     history = []
@@ -387,8 +419,12 @@ def auto_track(context, *, orders, bandwidth_hz=None, bandwidth_orders=None,
         cur_d = current[:, index].T
         floor_d = floor_full[:, index].T
         nyq_cap = 0.25 * fs_d
+        found = set() if it == 0 and not _joint else None
         cap_d = np.minimum(np.minimum(cap_full[:, index].T, nyq_cap),
-                           np.maximum(_line_caps(res, orders, fs, p), floor_d))
+                           np.maximum(_line_caps(res, orders, fs, p, found), floor_d))
+        if found:              # lines beside the orders: solve them jointly from the start
+            return _with_joint_lines(context, orders, _merge_lines(found), filter_order,
+                                     min_bandwidth_orders)
         new_d = _next_bandwidth(res, cur_d, floor_d, cap_d, p, level_floor)
         new_d = np.minimum(_smooth(new_d, fs_d, floor_d), cap_d)
         if it > 0:
@@ -409,6 +445,8 @@ def auto_track(context, *, orders, bandwidth_hz=None, bandwidth_orders=None,
     bw_used = current[:, index]
     per_order = []
     for j, order in enumerate(orders):
+        if extra[j]:
+            continue
         b = bw_used[j]
         wide = b > 1.5 * floor_full[j, index]
         text = (f"order {order:g}: {np.median(b):.3g} Hz where steady"
@@ -419,15 +457,21 @@ def auto_track(context, *, orders, bandwidth_hz=None, bandwidth_orders=None,
                      f"{r[wide].max():.0f} rpm around sharp envelope features")
         per_order.append(text)
     worst = np.array([np.nanmax(c) if np.isfinite(c).any() else np.nan for c in rel.T])
+    worst = worst[~extra]
     settings = {
-        "method": "Vold-Kalman, joint with order 0, bandwidth per order against time",
+        "method": ("Vold-Kalman, joint with order 0" + (
+            f" and with the lines of the signal at orders {', '.join(f'{o:g}' for o in _joint)}"
+            " beside the tracked ones (found in the residual's order spectrum; solved at the "
+            "floor bandwidth, not reported)" if extra.any() else "")
+            + ", bandwidth per order against time"),
         "reason": ("narrow where the orders are steady (noise rejection), widened where the "
                    "envelope bends faster than the filter passes (resonance crossings)"),
         "sweep_rate_rpm_per_s": rate, "steady_speed": steady, "passes": len(history),
         "bandwidths": per_order, "filter_order": p,
         "expected_error_max_relative": [float(v) for v in worst]}
     ds.attrs["auto_settings"] = "; ".join(f"{key}: {value}" for key, value in settings.items())
-    ds.attrs["auto_bandwidth_hz_range"] = [float(bw_used.min()), float(bw_used.max())]
+    ds.attrs["auto_bandwidth_hz_range"] = [float(bw_used[~extra].min()),
+                                           float(bw_used[~extra].max())]
     ds.attrs["auto_expected_error"] = [float(v) for v in worst]
     ds["bandwidth_hz"] = (("order", "time"), bw_used, {"units": "Hz", "long_name":
                                                       "VKF -3 dB bandwidth used"})
@@ -439,9 +483,39 @@ def auto_track(context, *, orders, bandwidth_hz=None, bandwidth_orders=None,
             ds[name] = ds[name].where(~near_end)
         ds.attrs["unsettled_ends"] = "results within 1/B of the record's ends are NaN"
 
+    if extra.any():
+        keep = np.flatnonzero(~extra)
+        std = ds.attrs.get("amplitude_std_estimate")
+        ds = ds.isel(order=keep)
+        if isinstance(std, list) and len(std) == extra.shape[0]:
+            ds.attrs["amplitude_std_estimate"] = [std[j] for j in keep]
+        ds.attrs["auto_joint_lines"] = [float(o) for o in _joint]
+        orders, rel, smear_rel = orders[keep], rel[:, keep], smear_rel[:, keep]
+        cap_d, bw_used = cap_d[:, keep], bw_used[keep]
     _warn_limits(ds, orders, rel, smear_rel, cap_d, bw_used.T, speed[index],
                  fs, OrderWarning)
     return ds
+
+
+def _merge_lines(found) -> tuple:
+    """The lines found (orders, on the 1/16-order bins of the line search), one per cluster of
+    bins within 1/8 order (a line between two bins shows on both)."""
+    merged = []
+    for o in sorted(found):
+        if merged and o - merged[-1][-1] <= 0.125 + 1e-9:
+            merged[-1].append(o)
+        else:
+            merged.append([o])
+    return tuple(float(np.mean(group)) for group in merged)
+
+
+def _with_joint_lines(context, orders, lines, filter_order, min_bandwidth_orders):
+    """:func:`auto_track` of ``orders`` with ``lines`` solved jointly (not reported)."""
+    every = np.sort(np.concatenate([orders, np.asarray(lines, dtype=float)]))
+    log.info("order_track: lines of the signal at orders %s beside the tracked ones are solved "
+             "with them", ", ".join(f"{o:g}" for o in lines))
+    return auto_track(context, orders=every, filter_order=filter_order,
+                      min_bandwidth_orders=min_bandwidth_orders, _joint=tuple(lines))
 
 
 def _warn_limits(ds, orders, rel, smear_rel, cap_d, bw_d, speed_d, fs, category):
