@@ -540,8 +540,12 @@ def _warn_limits(ds, orders, rel, smear_rel, cap_d, bw_d, speed_d, fs, category)
                   f"bandwidth_hz={min(4 * cap_d[i, j], 0.25 * fs):.3g}" if own else
                   f"track order {order:g} alone or with orders further apart (method='vkf', "
                   f"bandwidth_hz={min(4 * cap_d[i, j], 0.25 * fs):.3g}), or sweep slower")
+        # (a steady stretch has no sweep to blame: what bends its envelope is a beat with a
+        # line of the signal the bandwidth cannot keep out)
+        sweep = (f"sweep {abs(local):.4g} rpm/s" if abs(local) >= 1.0 else
+                 "steady speed: a beat with a line of the signal, not a sweep")
         warnings.warn(
-            f"order {order:g} near {rpm[i]:.0f} rpm (sweep {abs(local):.4g} rpm/s): the envelope "
+            f"order {order:g} near {rpm[i]:.0f} rpm ({sweep}): the envelope "
             f"changes faster than the widest usable bandwidth ({cap_d[i, j]:.3g} Hz, set by "
             f"{why}) passes; expected peak error up to about {100 * smear_rel[i, j]:.2g} % "
             f"(total {100 * rel[i, j]:.2g} %; the smearing estimate is conservative). "
