@@ -197,7 +197,8 @@ def _line_caps(res, orders, fs, p, found=None):
         if found is not None:
             for q in peaks:
                 gap = np.abs(axis[q] - orders).min()
-                if 0.4 <= gap <= _JOINT_REACH:
+                # (and 0.4 orders from order 0, the trend's: closer content is its drift)
+                if 0.4 <= gap <= _JOINT_REACH and axis[q] >= 0.4:
                     found.add(float(axis[q]))
         half = (length / 2.0) * 60.0 / (spr * max(float(r_y.mean()), 1e-9))
         # the samples within the block's time span (t is sorted: a slice, not a mask over
