@@ -61,7 +61,7 @@ def cascade_gain(stages, fs: float, freq_hz) -> np.ndarray:
     ----------
     stages : sequence of (int, ndarray)
         ``(q_s, h_s)`` per stage (symmetric odd-length taps, applied at the rate left by the
-        stages before it), as :func:`analysis.vkf._decimator` returns.
+        stages before it), as :func:`analysis.vkf_decimate._decimator` returns.
     fs : float
         Input sample rate, Hz.
     freq_hz : array_like
@@ -83,14 +83,14 @@ def cascade_gain(stages, fs: float, freq_hz) -> np.ndarray:
 
 @functools.lru_cache(maxsize=64)
 def _decimation_table(fs: float, f_max: float, q: int):
-    from .vkf import _decimator
+    from .vkf_decimate import _decimator
 
     grid = np.linspace(0.0, f_max, _GAIN_GRID)
     return grid, _stage_gains(_decimator(fs, f_max, q), fs, grid)
 
 
 def decimation_gain(fs: float, f_max: float, q: int, freq_hz) -> np.ndarray:
-    """Gain of the Vold–Kalman decimation cascade (:func:`analysis.vkf._decimator` of
+    """Gain of the Vold–Kalman decimation cascade (:func:`analysis.vkf_decimate._decimator` of
     ``fs``, ``f_max``, ``q``) at ``freq_hz`` (within ``[0, f_max]``), from a table of 513
     frequencies interpolated linearly (cached per cascade; within 1e-10 of
     :func:`cascade_gain`, ``tests/analysis/test_vkf_smear.py``)."""

@@ -1,4 +1,4 @@
-"""The Vold–Kalman solve rate (``analysis.vkf._decimation_factor``): chosen between 2.5 and 4
+"""The Vold–Kalman solve rate (``analysis.vkf_decimate._decimation_factor``): chosen between 2.5 and 4
 times the highest order frequency by the work it saves, without changing what the filter
 passes, what it lets alias, or the tracks (independent references: the designed cascade's own
 response, the synthesised amplitudes, the same solve at 4 f_max)."""
@@ -9,7 +9,7 @@ import warnings
 import numpy as np
 import pytest
 
-from crankbench.analysis import vkf
+from crankbench.analysis import vkf_decimate as vkf
 from crankbench.analysis.orders import order_track
 from crankbench.analysis.resample import shaft_angle
 from crankbench.analysis.vkf_smear import cascade_gain
