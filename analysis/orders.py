@@ -637,18 +637,11 @@ def _block_coords(t_rel, rpm, starts, length, centroid=None):
     """Time (s, from the first sample), speed and duration of each block; ``centroid``: the
     window's centroid in samples from the block's first (default its middle)."""
     centre = starts + (length / 2.0 - 0.5 if centroid is None else centroid)
-    t, r = _lerp_at(t_rel, centre), _lerp_at(rpm, centre)
+    from ._kernels import lerp
+
+    t, r = lerp(t_rel, centre, 0), lerp(rpm, centre, 0)
     span = t_rel[starts + length - 1] - t_rel[starts]
     return t, r, span
-
-
-def _lerp_at(values, pos):
-    """``numpy.interp(pos, arange(len(values)), values)`` for positions within the samples
-    (the same arithmetic, bit for bit), without the index array."""
-    last = values.shape[0] - 1
-    i = np.clip(np.floor(pos).astype(np.int64), 0, max(last - 1, 0))
-    out = values[i] + (pos - i) * (values[np.minimum(i + 1, last)] - values[i])
-    return np.where(pos >= last, values[last], out)
 
 
 # ---------------------------------------------------------------------------- unusable spans

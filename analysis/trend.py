@@ -247,8 +247,8 @@ def remove_trend(values: np.ndarray, fs: float, *, phi: np.ndarray, speed_rpm: n
     # the tests on about 4000 samples (a fit of a line needs no more; cheap on a long record)
     step = max(1, values.shape[0] // 4000)
     sub = slice(None, None, step)
-    # the quick tests' fits of the channel on the angle and on the speed, from one centred
-    # Gram matrix of the subsample (the same sums as two _fit calls, a third of the time)
+    # the quick tests' fits of the channel on the angle and on the speed, from the centred
+    # subsample's dot products (the same sums as two _fit calls, half the time)
     quick = (_subsample_fits(values[sub], phi[sub], speed_rpm[sub] * (_TWO_PI / 60.0))
              if kind == "auto" else None)
     if kind in ("auto", "angle ramp"):
@@ -265,7 +265,8 @@ def remove_trend(values: np.ndarray, fs: float, *, phi: np.ndarray, speed_rpm: n
                          "order tracking", quantity or "", f", {units}" if units else "", s)
                 return values - (s * smooth + c), info
     if kind in ("auto", "speed mean"):
-        if kind == "speed mean" or _carries_speed(None, None, quick[1]):
+        if kind == "speed mean" or _speed_rule(quick[1], quick[1]["x_mean"],
+                                               quick[1]["y_mean"], quick[1]["spread"]):
             omega = speed_rpm * (_TWO_PI / 60.0)
             smooth = cycle_average(omega, phi, fs)
             fit = _fit(values, smooth)
@@ -286,15 +287,16 @@ def _is_ramp(fit) -> bool:
 
 
 def _carries_speed(values, omega, fit) -> bool:
-    """A channel whose mean is the (scaled) shaft speed: the fit explains 90 % of its variance
-    or the speed term is ≥ 5× the rest, and the mean is ≥ 20 % of the speed term (``values``
-    and ``omega`` None: the fit carries ``x_mean``, ``y_mean`` and ``spread``, the residual's
-    standard deviation, from :func:`_subsample_fits`)."""
-    if values is None:
-        x_mean, y_mean, spread = fit["x_mean"], fit["y_mean"], fit["spread"]
-    else:
-        x_mean, y_mean = float(np.mean(omega)), float(np.mean(values))
-        spread = float(np.std(values - fit["scale"] * omega - fit["offset"]))
+    """A channel whose mean is the (scaled) shaft speed (:func:`_speed_rule` on the fit of
+    ``values`` on ``omega``)."""
+    spread = float(np.std(values - fit["scale"] * omega - fit["offset"]))
+    return _speed_rule(fit, float(np.mean(omega)), float(np.mean(values)), spread)
+
+
+def _speed_rule(fit, x_mean: float, y_mean: float, spread: float) -> bool:
+    """The fit ``y ≈ s ω + c`` (means ``x_mean``, ``y_mean``; residual standard deviation
+    ``spread``) says the channel carries the speed: it explains 90 % of the variance or the
+    speed term is ≥ 5× the rest, and the mean is ≥ 20 % of the speed term."""
     share = abs(fit["scale"]) * x_mean
     return (share >= 5.0 * spread and abs(y_mean) >= 0.2 * share
             and (fit["r2"] >= 0.9 or share >= 50.0 * spread))
@@ -304,7 +306,7 @@ def _subsample_fits(y, x1, x2):
     """The least-squares lines ``y ≈ s x1 + c`` and ``y ≈ s x2 + c`` as :func:`_fit` gives
     them, from one Gram matrix of the centred samples; the second also with the means and
     the residual's standard deviation (``x_mean``, ``y_mean``, ``spread``) that
-    :func:`_carries_speed` judges."""
+    :func:`_speed_rule` judges."""
     m = max(int(y.shape[0]), 1)
     a = np.empty((3, y.shape[0]))
     a[0], a[1], a[2] = y, x1, x2
