@@ -19,6 +19,8 @@ import os
 
 import numpy as np
 
+from ..scan import BlockExtremes
+
 #: the kernel copies from the page cache fastest when source and destination share their
 #: offset within a page (about 20 % less CPU for 20 MB than at an arbitrary offset)
 _PAGE = 4096
@@ -191,7 +193,8 @@ def positioned_reader(fd: int):
 
 def read_runs(pread, runs, out: np.ndarray, block: int):
     """Fill ``out`` from the file's byte ``runs`` (:func:`raw_runs`) by ``pread(buffer, offset)``
-    (:func:`positioned_reader`), in pieces ending on multiples of ``block`` samples.
+    (:func:`positioned_reader`), folding each piece's samples into per-block extremes
+    (:class:`measure.scan.BlockExtremes`) right after the kernel copied them.
 
     Parameters
     ----------
@@ -207,46 +210,21 @@ def read_runs(pread, runs, out: np.ndarray, block: int):
     Returns
     -------
     tuple of numpy.ndarray, None or False
-        Per-block ``(lows, highs)`` of float data (NaN/inf propagate), None for other kinds,
-        False if the file ended early (truncated: HDF5 then reads and reports it).
+        Per-block ``(lows, highs)`` of float data (NaN in both for a block holding NaN, inf as
+        numpy's reductions give it), None for other kinds, False if the file ended early
+        (truncated: HDF5 then reads and reports it).
     """
     flat = out.view(np.uint8)
     item = out.dtype.itemsize
-    n = out.size
-    scan = out.dtype.kind == "f"
     step = max(1, _PIECE_BYTES // item)
-    if scan:
-        nb = -(-n // block)
-        lows = np.full(nb, np.inf, out.dtype)
-        highs = np.full(nb, -np.inf, out.dtype)
+    extremes = BlockExtremes(out.size, out.dtype, block) if out.dtype.kind == "f" else None
     for offset, first, count in runs:
         a, stop = first, first + count
         while a < stop:
             b = min(stop, a + step)
             if pread(flat[a * item:b * item], offset + (a - first) * item) != (b - a) * item:
                 return False
-            if scan:
-                piece_extremes(out, a, b, block, lows, highs)
+            if extremes is not None:
+                extremes.fold(out, a, b)
             a = b
-    return (lows, highs) if scan else None
-
-
-def piece_extremes(out, a: int, b: int, block: int, lows, highs) -> None:
-    """Fold the extremes of ``out[a:b]`` into the per-block ``lows``, ``highs`` (which start
-    at +inf / -inf; NaN propagates through numpy's minimum and maximum, silently): the whole
-    blocks inside -- no other piece holds a sample of them -- by one reduction along rows
-    written straight into their places, the part-blocks at either end combined with what
-    other pieces found there."""
-    k0 = -(-a // block)               # first block starting inside the piece
-    full_end = (b // block) * block   # whole full-length blocks end here
-    if k0 * block < full_end:
-        rows = out[k0 * block:full_end].reshape(-1, block)
-        k1 = k0 + rows.shape[0]
-        np.minimum.reduce(rows, axis=1, out=lows[k0:k1])
-        np.maximum.reduce(rows, axis=1, out=highs[k0:k1])
-    for lo, hi in ((a, min(b, k0 * block)), (max(a, full_end, k0 * block), b)):
-        if hi > lo:  # within one block
-            k = lo // block
-            piece = out[lo:hi]
-            lows[k] = np.minimum(lows[k], np.minimum.reduce(piece))
-            highs[k] = np.maximum(highs[k], np.maximum.reduce(piece))
+    return None if extremes is None else extremes.result()
