@@ -288,7 +288,8 @@ def _ends(coord, index=None) -> tuple[int, float, float]:
         return n, 0.0, 0.0
     if hasattr(index, "sample_rate") and hasattr(index, "start"):  # implicit: its numbers
         return n, index.start, index.start + (n - 1) / index.sample_rate
-    return n, float(coord[0]), float(coord[-1])
+    values = coord.values  # numpy's indexing: xarray's would wrap each number in a Variable
+    return n, float(values[0]), float(values[-1])
 
 
 def _check_time_axis_rate_only(name, ends, fs, dim) -> None:
@@ -356,6 +357,17 @@ def _is_int(value) -> bool:
 _SPEC_KEYS = {"data", "sample_rate", "units", "quantity", "time", "t0", "dim", "location",
               "direction", "sensitivity", "sensitivity_units", "pulses_per_rev",
               "missing_teeth", "attrs"}
+
+
+def plain_variable(dim: str, values: np.ndarray, attrs: dict) -> xr.Variable:
+    """``xarray.Variable((dim,), values, attrs)`` of a channel read into a plain numpy array
+    (``values``: float or integer samples in SI units), without xarray's checks for other array
+    types: among them, whether it is a dask array holding a masked one, which imports dask
+    (about 0.3 s with what it pulls in) at the first record a process reads. Anything but a
+    plain 1-D numeric ndarray takes xarray's full path."""
+    if type(values) is np.ndarray and values.ndim == 1 and values.dtype.kind in "fiu":
+        return xr.Variable((dim,), values, attrs, fastpath=True)
+    return xr.Variable((dim,), values, attrs)
 
 
 def make_record(
@@ -455,12 +467,12 @@ def make_record(
                                                              "long_name": "time from record start"})
         for name in clock["names"]:
             ch = built[name]
-            data_vars[name] = xr.Variable((clock["dim"],), ch["data"], ch["attrs"])
+            data_vars[name] = plain_variable(clock["dim"], ch["data"], ch["attrs"])
     pulses = [n for n, ch in built.items() if ch["pulse"]]
     for name in pulses:
         ch = built[name]
         dim = ch.get("dim") or ("pulse" if len(pulses) == 1 else f"pulse_{name}")
-        data_vars[name] = xr.Variable((dim,), ch["data"], ch["attrs"])
+        data_vars[name] = plain_variable(dim, ch["data"], ch["attrs"])
     ds = xr.Dataset(data_vars, coords=coords)
     ds = ds[list(built)]  # keep the caller's channel order
     ds_attrs = dict(attrs or {})

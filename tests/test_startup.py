@@ -31,6 +31,15 @@ def _heavy_loaded(code):
     "from crankbench.predict.torsion import chain",
     "import runpy, sys\nsys.argv = ['crankbench', '--help']\ntry:\n"
     "    runpy.run_module('crankbench', run_name='__main__')\nexcept SystemExit:\n    pass",
+    # a read of a large HDF5 record scans it with numpy unless numba is already loaded
+    # (measure.scan.BlockExtremes: importing numba costs more than it saves on a read)
+    "import tempfile, pathlib, numpy as np\nfrom crankbench.measure import io\n"
+    "from crankbench.measure.record import make_record\n"
+    "p = pathlib.Path(tempfile.mkdtemp()) / 'r.h5'\n"
+    "x = np.random.default_rng(0).standard_normal(400_000).astype(np.float32)\n"
+    "io.write(make_record({'a': dict(data=x, sample_rate=1e4, units='m/s^2',\n"
+    "                                 quantity='acceleration')}), p)\n"
+    "assert io.read(p)['a'].size == x.size",
 ])
 def test_no_heavy_optional_module_at_start_up(code):
     assert _heavy_loaded(code) == "[]"

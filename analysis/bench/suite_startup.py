@@ -15,7 +15,9 @@ Rows: ``import crankbench.measure, crankbench.analysis, crankbench.predict`` (th
 their public names load lazily), the first use of the main entry points
 (``from crankbench.measure import read``, ``from crankbench.analysis import order_track,
 analyse, find_resonances``, ``from crankbench.predict.torsion import chain``), the record
-reader module alone (``crankbench.measure.io``, 2.2 s in issue 21), and ``crankbench --help``.
+reader module alone (``crankbench.measure.io``, 2.2 s in issue 21), the import and first read
+of a small HDF5 record (xarray's check for a dask array imported dask and jinja2 there, 0.35
+s, until the readers built their variables without it), and ``crankbench --help``.
 """
 
 from __future__ import annotations
@@ -40,6 +42,10 @@ CASES = [
      "from crankbench.analysis import order_track, analyse, find_resonances\n"
      "from crankbench.predict.torsion import chain", None),
     ("import crankbench.measure.io", "import crankbench.measure.io", None),
+    ("first read of an .h5 record (sample_data/records/i4_runup.h5)",
+     "import pathlib, crankbench\nfrom crankbench.measure import read\n"
+     "read(pathlib.Path(crankbench.__file__).resolve().parents[1] / 'sample_data' / 'records'"
+     " / 'i4_runup.h5')", None),
     ("crankbench --help", None, 1.5),
 ]
 

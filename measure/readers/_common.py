@@ -10,7 +10,7 @@ import xarray as xr
 
 from crankbench.predict.errors import RecordError
 
-from ..record import is_pulse_dim, time_coordinate
+from ..record import is_pulse_dim, plain_variable, time_coordinate
 from ..units import QUANTITIES, SI_UNITS, sensitivity_to_si, to_si_owned
 
 __all__ = ["clean_attr", "clean_attrs", "regular_start", "channel_meta", "dims_of",
@@ -161,7 +161,7 @@ def build_dataset(channels: list[tuple[str, str, np.ndarray, dict]], coords: dic
     """
     data_vars = {}
     for name, dim, values, vattrs in channels:
-        data_vars[name] = xr.Variable((dim,), values, vattrs)
+        data_vars[name] = plain_variable(dim, values, vattrs)
     # a pandas Index built without copying: xarray would otherwise copy and re-check the array
     coord_vars = {dim: (dim, pd.Index(np.asarray(t, dtype=np.float64), copy=False),
                         {"units": "s", "long_name": "time from record start"})

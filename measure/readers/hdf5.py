@@ -46,6 +46,7 @@ from ..timeindex import regular_clock, sampled_dataset, sampled_time
 from . import _h5raw
 from ._common import (
     build_dataset,
+    plain_variable,
     clean_attr,
     dims_of,
     refuse_external_links,
@@ -604,7 +605,7 @@ def read(path, *, channels=None) -> xr.Dataset:
             os.close(fd)
     if clock is not None:  # built in one step (no merge/align pass)
         clock, (n, fs, start) = clock
-        data_vars = {name: xr.Variable((dim,), values, vattrs)
+        data_vars = {name: plain_variable(dim, values, vattrs)
                      for name, dim, values, vattrs in out}
         return sampled_dataset(data_vars, n, fs, start=start, dim=clock, attrs=attrs)
     ds = build_dataset(out, explicit, attrs)
