@@ -85,7 +85,8 @@ _SMEAR_WARN = 0.02
 _NUMERICAL_FLOOR = 5e-6
 
 
-def warn_block_smearing(coef, bias, speed_rpm, fitter, label, noise=None, level=None):
+def warn_block_smearing(coef, bias, speed_rpm, fitter, label, noise=None, level=None, *,
+                        leaked=False):
     """Warn (:class:`analysis.orders.OrderWarning`) when the stated smearing of a block
     estimate passes 2 % (``_SMEAR_WARN``) of its amplitude; blocks in a dip below 5 % of the
     order's largest amplitude are not judged, nor smearing within 3× the estimate's floor:
@@ -109,6 +110,10 @@ def warn_block_smearing(coef, bias, speed_rpm, fitter, label, noise=None, level=
     level : ndarray, shape (blocks,), optional
         Each block's rms (the orders and the residual; signal units), the scale of the
         numerical floor (default: the largest estimate of the block).
+    leaked : bool
+        A line not tracked was found leaking into the blocks (:mod:`analysis.leakage`): its
+        beat with the order swings the block estimates as an envelope change would, and the
+        warning says so.
     """
     from .orders import OrderWarning
 
@@ -130,5 +135,7 @@ def warn_block_smearing(coef, bias, speed_rpm, fitter, label, noise=None, level=
         f"block near {float(speed_rpm[i]):.0f} rpm: stated smearing {100 * rel[i, j]:.2g} % of the "
         "amplitude, and where the envelope changes this fast within a block the estimate of "
         "it reads low (the loss can be twice that); use method='auto' (adaptive Vold-Kalman) "
-        "or method='vkf' with a bandwidth wider than the envelope's changes",
+        "or method='vkf' with a bandwidth wider than the envelope's changes"
+        + ("; or the swing is the beat of the leaking line warned of above (track it, or "
+           "lengthen the blocks as said there)" if leaked else ""),
         OrderWarning, stacklevel=4)

@@ -594,23 +594,25 @@ def _cot_track(context, orders, *, samples_per_rev, revolutions, overlap, window
         coef[sl], mean[sl], floor[sl], level[sl] = fitter.fit(frames, angle[starts[sl]])
     from .leakage import check_grid_leakage
 
-    check_grid_leakage(fitter, y, starts, angle, coef, context["label"])
+    leaked = check_grid_leakage(fitter, y, starts, angle, coef, context["label"])
     t, r, span = _block_coords(t_rel, rpm, starts, length, fitter.centroid)
     return _cot_dataset(coef, mean, floor, fitter, t + context["t0"], r, span, context,
                         overlap=overlap, interpolation=plan.interpolation, plan=plan,
-                        level=level)
+                        level=level, leaked=leaked)
 
 
 def _cot_dataset(coef, mean, floor, fitter, t, r, span, context, *, overlap, interpolation,
-                 plan=None, level=None):
+                 plan=None, level=None, leaked=False):
     """The COT order-track Dataset (shared by the in-memory and streamed trackers);
-    ``level``: each block's rms (:meth:`BlockFit.fit`), for the smearing warning's floor."""
+    ``level``: each block's rms (:meth:`BlockFit.fit`), for the smearing warning's floor;
+    ``leaked``: a grid line was found leaking into the blocks (the smearing warning says it may
+    be its cause)."""
     factor = context["factor"]
     orders = fitter.orders
     units, label = context["units"], context["label"]
     noise = fitter.noise(floor)
     bias = smearing_bias(coef, t, span, fitter.mu2, r)
-    _warn_block_smearing(coef, bias, r, fitter, label, noise, level)
+    _warn_block_smearing(coef, bias, r, fitter, label, noise, level, leaked=leaked)
     ds = _track_dataset(np.abs(coef).T * factor, np.angle(coef).T, orders, t, r, units, label,
                         context["reference"])
     ds["mean"] = ("time", mean, {"units": units, "long_name":
