@@ -103,7 +103,7 @@ def check_grid_leakage(fitter, y, starts, angle, coef, label) -> bool:
     warnings.warn(
         f"{label}: lines at orders {', '.join(f'{q:g}' for q in named)}, not tracked, lie "
         f"inside the {fitter.revolutions}-revolution window's main lobe and leak into the "
-        f"tracked orders (fitted with them, rms over blocks: {text}); track those orders too, or use "
-        f"revolutions >= {int(np.floor(lobe / gap + 1e-9)) + 1}",
+        f"tracked orders (fitted with them, rms over blocks: {text}); track those orders "
+        f"too, or use revolutions >= {int(np.floor(lobe / gap + 1e-9)) + 1}",
         OrderWarning, stacklevel=3)
     return True

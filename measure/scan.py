@@ -19,8 +19,8 @@ import threading
 
 import numpy as np
 
-__all__ = ["shared_scans", "note_block_extremes", "BlockExtremes", "nonfinite_spans", "clipped_spans",
-           "CLIP_QUANTITIES"]
+__all__ = ["shared_scans", "note_block_extremes", "BlockExtremes", "nonfinite_spans",
+           "clipped_spans", "CLIP_QUANTITIES"]
 
 
 #: samples per block of the cache-friendly scans below (128 KB of float64: numpy's min and max
@@ -93,10 +93,10 @@ class BlockExtremes:
     analysis kernels load it; ``CRANKBENCH_NO_NUMBA`` unset), one compiled pass keeps four
     integer extremes of the samples' bit patterns per block -- the largest and smallest as
     signed and as unsigned integers, whose order is the floats' among non-negative and (in
-    reverse) among negative values -- and derives the float extremes from them: 1.8-1.9x faster than numpy's ``min`` then ``max``
-    per block on 5 M float32 samples (bench suite ``io``, rows ``record scan``). The
-    read does not import numba for it (about 0.3 s, more than it saves on any one record).
-    Without it, numpy's reductions.
+    reverse) among negative values -- and derives the float extremes from them: 1.8-1.9x
+    faster than numpy's ``min`` then ``max`` per block on 5 M float32 samples (bench suite
+    ``io``, rows ``record scan``). The read does not import numba for it (about 0.3 s, more
+    than it saves on any one record). Without it, numpy's reductions.
 
     Parameters
     ----------
@@ -129,12 +129,13 @@ class BlockExtremes:
     def fold(self, x: np.ndarray, a: int, b: int) -> None:
         """Fold the samples ``x[a:b]`` (``x`` the whole 1-D array, ``a < b``) into their
         blocks."""
-        if self.bits is not None and x.flags.c_contiguous:
+        if self.bits is not None:
             kernel, si, ui, *acc = self.bits
-            kernel(x.view(si), x.view(ui), a, b, self.block, *acc)
-            return
-        if self.bits is not None:  # a strided view: numpy folds into the same integers
-            self._fold_bits_numpy(x, a, b)
+            if x.flags.c_contiguous:
+                kernel(x.view(si), x.view(ui), 0, a, b, self.block, *acc)
+            else:  # a strided view: the piece copied (its samples at a..b)
+                piece = np.ascontiguousarray(x[a:b])
+                kernel(piece.view(si), piece.view(ui), a, a, b, self.block, *acc)
             return
         block, lows, highs = self.block, self.lows, self.highs
         k0 = -(-a // block)               # first block starting inside the piece
@@ -151,14 +152,6 @@ class BlockExtremes:
                     piece = x[lo:hi]
                     lows[k] = np.minimum(lows[k], np.minimum.reduce(piece))
                     highs[k] = np.maximum(highs[k], np.maximum.reduce(piece))
-
-    def _fold_bits_numpy(self, x, a, b) -> None:
-        _, si, ui, hs, ls, hu, lu = self.bits
-        for k in range(a // self.block, (b - 1) // self.block + 1):
-            s, e = max(a, k * self.block), min(b, (k + 1) * self.block)
-            i, u = x[s:e].view(si), x[s:e].view(ui)
-            hs[k], ls[k] = max(hs[k], i.max()), min(ls[k], i.min())
-            hu[k], lu[k] = max(hu[k], u.max()), min(lu[k], u.min())
 
     def result(self) -> tuple[np.ndarray, np.ndarray]:
         """``(lows, highs)``: per-block minimum and maximum (NaN in both for a block with NaN).
@@ -184,12 +177,13 @@ def _bits_numba():
     from numba import njit
 
     @njit(cache=True, boundscheck=False)
-    def fold(i, u, a, b, block, hs, ls, hu, lu):   # pragma: no cover - compiled
+    def fold(i, u, offset, a, b, block, hs, ls, hu, lu):   # pragma: no cover - compiled
+        # samples a..b of the channel, held in i/u from channel sample `offset` on
         for k in range(a // block, (b - 1) // block + 1):
             s = max(a, k * block)
             e = min(b, (k + 1) * block)
-            ib = i[s:e]
-            ub = u[s:e]
+            ib = i[s - offset:e - offset]
+            ub = u[s - offset:e - offset]
             h1, l1, h2, l2 = hs[k], ls[k], hu[k], lu[k]
             for t in range(ib.size):  # four integer extremes in one vectorised pass
                 v = ib[t]
