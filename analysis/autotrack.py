@@ -33,6 +33,11 @@ crossing doubles the noise of every steady order. The default therefore follows 
    (``attrs['auto_joint_lines']``): at the floor bandwidth of a short record (4 Hz for 2 s)
    a half order 12.5 Hz away still passed, and a beat read as envelope curvature widened the
    band further -- order 1 of a steady 2 s record with every half order read 27 % off.
+   A record of 2-4 half-overlapping 8-revolution blocks (12-24 revolutions) is searched too.
+6. **Short records** (:func:`short_record_blocks`, called by ``order_track``): where the
+   floor band exceeds half an order, or where the line search finds lines beside the tracked
+   orders in a record of fewer than :data:`SHORT_REVOLUTIONS` revolutions, computed order
+   tracking takes over (the reason in ``attrs['auto_settings']``).
 
 The result is an ordinary order track (``method='vkf'`` layout) with ``amplitude_uncertainty``
 (noise and smearing), ``bandwidth_hz`` (order, time), NaN within half the response time
@@ -79,6 +84,9 @@ _WARN_AT = 0.01              # warn where the expected error exceeds ~1 %
 _MAX_PASSES = 4
 _PEAK_SIGMAS = 10.0         # a peak stands out by this many amplitude-noise sigmas
 _CAP_SPACING = 1.5          # widest band: this many times the distance to the nearest order
+#: records of fewer revolutions with lines beside the tracked orders go to computed order
+#: tracking (:func:`short_record_blocks`)
+SHORT_REVOLUTIONS = 24
 _JOINT_REACH = 1.5          # lines of the signal this close (orders) to a tracked order are
                             # solved with it (not reported): a 2 s steady record's untracked
                             # half orders had put order 1 off by 27 % with the defaults
@@ -166,11 +174,14 @@ def _line_caps(res, orders, fs, p, found=None):
                                               antialias=False, label="residual")
     except Exception:                                          # too short to look for lines
         return caps
-    # 16-revolution blocks where five fit (48 revolutions), else 8 (24): a line must show in
-    # five consecutive blocks; half orders stay 4 bins apart in 8-revolution blocks
+    # 16-revolution blocks where five fit (48 revolutions), else 8 (two of them in 12
+    # revolutions at least): a line must show in five consecutive blocks (all of two to
+    # four); half orders stay 4 bins apart in 8-revolution blocks, the bins between them on
+    # the window's nulls (in 4-revolution blocks no bin between two half orders is free of
+    # them, and the lower quartile of the bins read as noise sat on the lines)
     revs = 16 if y.shape[0] >= 48 * spr else 8
     length = spr * revs
-    if y.shape[0] < length:
+    if y.shape[0] < 3 * length // 2:  # fewer than 2 half-overlapping blocks: no persistence
         return caps
     starts = np.arange(0, y.shape[0] - length + 1, length // 2)
     spectra = MapSpectra(length, "hann", "amplitude", 1.0, length // 2 + 1)
@@ -195,12 +206,15 @@ def _line_caps(res, orders, fs, p, found=None):
     spread = is_peak.copy()
     spread[:, 1:] |= is_peak[:, :-1]
     spread[:, :-1] |= is_peak[:, 1:]
-    # on its bin (±1) in 5 consecutive blocks (about 48 revolutions) centred on this one
+    # on its bin (±1) in the 5 consecutive blocks nearest this one (about 48 revolutions;
+    # the record's first and last blocks are judged with the 5 at that end), or in all of a
+    # short record's 2-4 blocks
+    nb = rows.shape[0]
+    width = min(5, nb)
     persistent = np.zeros_like(is_peak)
-    for b in range(rows.shape[0]):
-        lo, hi = b - 2, b + 3
-        if lo >= 0 and hi <= rows.shape[0]:
-            persistent[b] = is_peak[b] & np.all(spread[lo:hi], axis=0)
+    for b in range(nb):
+        lo = min(max(b - width // 2, 0), nb - width)
+        persistent[b] = is_peak[b] & np.all(spread[lo:lo + width], axis=0)
     for b in range(starts.shape[0]):
         row = rows[b]
         peaks = np.flatnonzero(persistent[b])
@@ -574,16 +588,25 @@ def _warn_limits(ds, orders, rel, smear_rel, cap_d, bw_d, speed_d, fs, category)
                     order, 100 * rel[i, j], rpm[i])
 
 
-def short_record_blocks(phi, speed_rpm, fs, orders):
+def short_record_blocks(phi, speed_rpm, fs, orders, lines=None):
     """``(revolutions, window, reason)`` when a record is too short for the adaptive
     Vold–Kalman default, else None. ``phi`` shaft angle (rad) and ``speed_rpm`` speed (rpm)
-    per sample, ``fs`` sample rate (Hz).
+    per sample, ``fs`` sample rate (Hz); ``lines``: the lines of the signal beside the tracked
+    orders that the adaptive filter's line search found (``attrs['auto_joint_lines']``), if it
+    ran.
 
     The adaptive filter's narrowest band is ``8/duration`` Hz (:mod:`analysis.autotrack`) and
     an order's band may not exceed half the order (its distance to order 0 and its mirror);
     where the first exceeds the second for any order at the record's lowest speed, the filter
     cannot separate that order in this record (it would return NaN after trimming its
-    unsettled ends). Computed order tracking takes over with Hann blocks of ``4/spacing``
+    unsettled ends). Nor, in a record of fewer than :data:`SHORT_REVOLUTIONS` revolutions,
+    the ``lines`` beside an order: its narrowest band (a third of an order or more) passes
+    them, and jointly solved at that band they still beat with the orders (with every half
+    order 0.5-10 in the signal, orders 1, 2 and 4.5 read up to 30 % off on a steady
+    17.5-revolution record and 11 % on a 20-revolution ramp; 0.6-1.2 % with 4-revolution
+    blocks). A short record of a single order crossing a resonance keeps the filter (computed
+    order tracking read a Q = 20 peak 2 % low at 400 rpm/s in 19 revolutions, the filter
+    0.06 %). Computed order tracking takes over with Hann blocks of ``4/spacing``
     revolutions (the orders, and order 0, outside each other's main lobe), fewer where the
     record holds less than two such blocks (the spacing check then warns).
     """
@@ -592,14 +615,18 @@ def short_record_blocks(phi, speed_rpm, fs, orders):
     low = float(np.min(speed_rpm)) / 60.0
     orders = np.asarray(orders, float)
     caps = 0.5 * orders * low
-    if np.all(floor <= caps):
-        return None
     revs_total = abs(float(phi[-1] - phi[0])) / (2 * np.pi)
+    too_wide = not np.all(floor <= caps)
+    if not too_wide and not (lines and revs_total < SHORT_REVOLUTIONS):
+        return None
     worst = float(orders[np.argmax(floor - caps)])
     why = (f"the record ({duration:.3g} s, {revs_total:.3g} revolutions) is too short for the "
            f"adaptive Vold-Kalman default, whose narrowest band 8/duration = {floor:.3g} Hz "
-           f"exceeds half of order {worst:g} ({0.5 * worst * low:.3g} Hz at "
-           f"{60.0 * low:.4g} rpm)")
+           + (f"exceeds half of order {worst:g} ({0.5 * worst * low:.3g} Hz at "
+              f"{60.0 * low:.4g} rpm)" if too_wide else
+              f"({floor / max(low, 1e-300):.2g} orders at {60.0 * low:.4g} rpm) cannot keep "
+              f"the lines of the signal at orders {', '.join(f'{q:g}' for q in lines)} out "
+              f"of the tracked ones in fewer than {SHORT_REVOLUTIONS} revolutions"))
     o = np.sort(np.concatenate([[0.0], orders]))
     need = int(np.ceil(4.0 / float(np.min(np.diff(o)))))
     revs = max(1, min(need, int(np.floor(revs_total / 2.0))))

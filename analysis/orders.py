@@ -455,10 +455,18 @@ def order_track(x, *, fs=None, speed_rpm, orders, amplitude: str = "peak", metho
     context = dict(values=values, fs=fs_, speed=speed, phi=phi, angle=angle, units=units,
                    label=label, t0=_t0(x), factor=factor, reference=reference)
     short = None
-    if method == "auto" and bandwidth_hz is None and bandwidth_orders is None:
+    adaptive = method == "auto" and bandwidth_hz is None and bandwidth_orders is None
+    if adaptive:
         from .autotrack import short_record_blocks
 
         short = short_record_blocks(phi, speed, fs_, orders)
+    if short is None and method == "auto":
+        from .autotrack import auto_track
+
+        ds = auto_track(context, **options)
+        lines = ds.attrs.get("auto_joint_lines") if adaptive else None
+        if lines:  # lines beside the orders in a short record: COT after all
+            short = short_record_blocks(phi, speed, fs_, orders, lines=lines)
     if short is not None:             # too short for the adaptive filter: COT, stated
         revs, win, why = short
         ds = _cot_track(context, orders, samples_per_rev=samples_per_rev, revolutions=revs,
@@ -467,9 +475,7 @@ def order_track(x, *, fs=None, speed_rpm, orders, amplitude: str = "peak", metho
                                      f"blocks: {why}")
         log.info("order_track: %s", ds.attrs["auto_settings"])
     elif method == "auto":
-        from .autotrack import auto_track
-
-        ds = auto_track(context, **options)
+        pass                          # the adaptive filter's track, above
     elif method == "vkf":
         ds = _vkf_track(context, orders, bandwidth_hz=bandwidth_hz,
                         bandwidth_orders=bandwidth_orders, filter_order=filter_order)
