@@ -319,11 +319,12 @@ class BlockFit:
                 f"the noise amplified up to {self.noise_gain[worst]:.2g}x; use revolutions >= "
                 f"{need} for independent estimates", OrderWarning, stacklevel=4)
 
-    def fit(self, frames: np.ndarray, phi0: np.ndarray):
+    def fit(self, frames: np.ndarray, phi0: np.ndarray, spectra: bool = False):
         """Complex amplitudes (blocks, orders) referred to the absolute angle, the block means,
         the broadband noise floor per bin of the residual (mean square per bin) and the
         block's level: the rms of what varies in it (the fitted orders and the residual, trend
-        excluded; signal units), the scale of the resampling's numerical error."""
+        excluded; signal units), the scale of the resampling's numerical error. With
+        ``spectra``, also the residual's windowed DFT at the floor's bins (:attr:`bins`)."""
         from scipy import fft
 
         k = self.orders.shape[0]
@@ -332,14 +333,31 @@ class BlockFit:
         coef = params[:, nt:nt + k] + 1j * params[:, nt + k:]
         coef *= np.exp(-1j * np.outer(phi0, self.orders))
         resid = frames - params @ self.basis.T
-        band = slice(1, min(self.length // 2, int(self.spr / 4.0 * self.revolutions)) + 1)
-        power = _scale_spectrum(fft.rfft(resid * self.w, axis=1), self.w, "power", 1.0)[:, band]
+        band = self.bins
+        spec = fft.rfft(resid * self.w, axis=1)
+        power = _scale_spectrum(spec, self.w, "power", 1.0)[:, band]
         # median of an exponential variable is ln 2 of its mean
         floor = np.median(power, axis=1) / np.log(2.0)
         level = np.sqrt(np.einsum("ij,ij->i", resid, resid) / resid.shape[1]
                         + 0.5 * np.einsum("ij,ij->i", coef.real, coef.real)
                         + 0.5 * np.einsum("ij,ij->i", coef.imag, coef.imag))
-        return coef, params[:, 0], floor, level
+        out = coef, params[:, 0], floor, level
+        return out + (spec[:, band],) if spectra else out
+
+    @property
+    def bins(self) -> slice:
+        """DFT bins of the residual's noise floor: 1 up to the anti-alias band (order spr/4)."""
+        return slice(1, min(self.length // 2, int(self.spr / 4.0 * self.revolutions)) + 1)
+
+    def line_free_floor(self, spectra, floor, phi0, hop: int) -> np.ndarray:
+        """The blocks' noise floor with the signal's order-locked lines differenced out
+        (:func:`analysis.cot_noise.differenced_floor`): ``spectra`` and ``floor`` from
+        :meth:`fit`, ``phi0`` the blocks' start angles (rad), ``hop`` samples between starts."""
+        from .cot_noise import differenced_floor
+
+        bins = np.arange(self.bins.start, self.bins.stop)
+        return differenced_floor(spectra, floor, phi0, bins, self.revolutions, self.length, hop,
+                                 2.0 / (self.length * np.sum(self.w ** 2)))
 
     def noise(self, floor: np.ndarray) -> np.ndarray:
         """1-σ amplitude error per (block, order) from the noise floor (mean square per bin)."""
@@ -592,12 +610,14 @@ def _cot_track(context, orders, *, samples_per_rev, revolutions, overlap, window
             f"{context['label']}: the record covers {y.shape[0] / spr:.4g} revolutions, fewer "
             f"than one block of revolutions={revolutions}; lower revolutions")
     coef = np.empty((starts.shape[0], orders.shape[0]), dtype=complex)
-    mean = np.empty(starts.shape[0])
-    floor = np.empty(starts.shape[0])
-    level = np.empty(starts.shape[0])
+    mean, floor, level = (np.empty(starts.shape[0]) for _ in range(3))
+    spec = np.empty((starts.shape[0], fitter.bins.stop - 1), dtype=complex)
     for sl in _frame_batches(starts):
         frames = y[starts[sl, None] + np.arange(length)[None, :]]
-        coef[sl], mean[sl], floor[sl], level[sl] = fitter.fit(frames, angle[starts[sl]])
+        coef[sl], mean[sl], floor[sl], level[sl], spec[sl] = fitter.fit(
+            frames, angle[starts[sl]], spectra=True)
+    hop = int(starts[1] - starts[0]) if starts.shape[0] > 1 else length
+    floor = fitter.line_free_floor(spec, floor, angle[starts], hop)  # other lines: no noise
     from .leakage import check_grid_leakage
 
     leaked = check_grid_leakage(fitter, y, starts, angle, coef, context["label"])

@@ -471,18 +471,22 @@ def order_track_stream(record, channel: str, *, orders, speed_rpm=None, speed_ch
                             f"{int(np.ceil(4 * orders.max()))}")
     fitter = BlockFit(orders, spr, revolutions, window)
     fitter.check_spacing()
-    parts = {"coef": [], "mean": [], "floor": [], "level": [], "t": [], "r": [], "span": []}
+    keys = ("coef", "mean", "floor", "level", "spec", "phi0", "t", "r", "span")
+    parts = {key: [] for key in keys}
 
     def per_frames(frames, phi0, t, r, span):
-        coef, mean, floor, level = fitter.fit(frames, phi0)
-        for key, value in zip(("coef", "mean", "floor", "level", "t", "r", "span"),
-                              (coef, mean, floor, level, t, r, span)):
+        coef, mean, floor, level, spec = fitter.fit(frames, phi0, spectra=True)
+        for key, value in zip(keys, (coef, mean, floor, level, spec,
+                                     phi0, t, r, span)):
             parts[key].append(value)
 
     _blocks(speed, reader, label=label, samples_per_rev=spr, revolutions=revolutions,
             overlap=overlap, interpolation=interpolation, chunk=chunk, segment=segment,
             per_frames=per_frames, centroid=fitter.centroid)
     cat = {k: np.concatenate(v) for k, v in parts.items()}
+    # the signal's other lines out of the noise floor, as in memory (analysis.cot_noise)
+    cat["floor"] = fitter.line_free_floor(cat["spec"], cat["floor"], cat["phi0"],
+                                          max(1, int(round(fitter.length * (1.0 - overlap)))))
     context = {"factor": factor, "units": str(var.attrs.get("units", "")), "label": label,
                "reference": speed.angle_reference}
     plan = _chunk_plan(speed, chunk, spr, interpolation)
