@@ -78,10 +78,19 @@ def differenced_floor(spectra: np.ndarray, floor: np.ndarray, angle0: np.ndarray
     if nb <= m:
         return floor
     orders = np.asarray(bins, float) / revolutions
-    ref = spectra * np.exp(-1j * np.outer(angle0, orders))   # referred to the shaft angle
     index = np.arange(nb)
     partner = np.where(index + m < nb, index + m, index - m)  # nb > m: one of them exists
-    diff = ref - ref[partner]
+    step = angle0[m] - angle0[0]
+    if np.allclose(angle0[partner] - angle0, np.where(partner > index, step, -step),
+                   rtol=0.0, atol=1e-9 * max(abs(step), 1.0)):
+        # blocks a uniform angle apart (the resampled grid): one phase factor per bin and
+        # direction, |X_b e^{-i o θ_b} - X_p e^{-i o θ_p}| = |X_b - X_p e^{-i o (θ_p - θ_b)}|
+        turn = np.exp(-1j * step * orders)
+        diff = spectra - spectra[partner] * np.where((partner > index)[:, None], turn,
+                                                     turn.conj())
+    else:  # referred to the shaft angle block by block
+        ref = spectra * np.exp(-1j * np.outer(angle0, orders))
+        diff = ref - ref[partner]
     # independent noise in the two blocks: the difference carries twice the power
     power = 0.5 * scale * (diff.real ** 2 + diff.imag ** 2)
     low = np.median(power, axis=1) / np.log(2.0)
