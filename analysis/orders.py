@@ -492,12 +492,10 @@ def order_track(x, *, fs=None, speed_rpm, orders, amplitude: str = "peak", metho
         ds.attrs["auto_settings"] = (f"computed order tracking, {revs}-revolution {win} "
                                      f"blocks: {why}")
         log.info("order_track: %s", ds.attrs["auto_settings"])
-    elif method == "auto":
-        pass                          # the adaptive filter's track, above
     elif method == "vkf":
         ds = _vkf_track(context, orders, bandwidth_hz=bandwidth_hz,
                         bandwidth_orders=bandwidth_orders, filter_order=filter_order)
-    else:
+    elif method == "cot":             # ('auto' has its track from the adaptive filter above)
         ds = _cot_track(context, orders, samples_per_rev=samples_per_rev,
                         revolutions=revolutions, overlap=overlap, window=window,
                         interpolation=interpolation)
