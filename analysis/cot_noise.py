@@ -1,6 +1,6 @@
 """The noise floor of computed order tracking's blocks, with the signal's other lines left out.
 
-:meth:`analysis.orders.BlockFit.fit` reads each block's noise as the median power per bin of
+:meth:`analysis.blocks.BlockFit.fit` reads each block's noise as the median power per bin of
 its residual (the block less the tracked orders and trend). An engine signal has a line at
 every half order whether it is tracked or not, and with the window's main lobes they fill most
 bins of a short block: with every half order 0.5-10 in the signal, 4-revolution blocks stated
@@ -45,7 +45,7 @@ def differenced_floor(spectra: np.ndarray, floor: np.ndarray, angle0: np.ndarray
         Samples from one block's start to the next (uniform).
     scale : float
         Power per bin of a unit ``|X|²`` (``2 / (length · Σw²)``, as
-        :func:`analysis.orders._scale_spectrum` scales).
+        :func:`analysis.blocks._scale_spectrum` scales).
 
     Returns
     -------
