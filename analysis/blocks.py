@@ -45,9 +45,15 @@ def get_window(window, length: int) -> np.ndarray:
                             f"{suggest(str(window), names)}") from None
 
 
+def _hop(length: int, overlap: float) -> int:
+    """Samples from one frame's start to the next: frames of ``length`` samples with fractional
+    ``overlap`` (in memory and streamed alike)."""
+    return max(1, int(round(length * (1.0 - overlap))))
+
+
 def _frames(n: int, length: int, overlap: float) -> np.ndarray:
     """Start indices of frames of ``length`` samples with fractional ``overlap``."""
-    hop = max(1, int(round(length * (1.0 - overlap))))
+    hop = _hop(length, overlap)
     if n < length:
         return np.zeros(0, dtype=np.int64)
     return np.arange(0, n - length + 1, hop, dtype=np.int64)

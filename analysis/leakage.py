@@ -96,7 +96,7 @@ def check_grid_leakage(fitter, y, starts, angle, coef, label) -> bool:
     dist = np.array([np.min(np.abs(q - orders)) for q in extra])
     inside = present & (dist < half - 1e-9)
     named = extra[inside] if inside.any() else extra[present] if present.any() else extra
-    gap = float(np.min([np.min(np.abs(q - orders)) for q in named]))
+    gap = float(np.min(dist[np.isin(extra, named)]))
     lobe = 2.0 if fitter.window != "boxcar" else 1.0
     text = ", ".join(f"order {o:g} by {100 * m / lv:.0f} %"
                      for o, m, lv in zip(orders[bad], shift[bad], level[bad]))

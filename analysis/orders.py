@@ -66,7 +66,7 @@ from .resample import INTERPOLATIONS, _angle_input, _as_rpm, _as_signal, resampl
 from .block_smearing import smearing_bias, warn_block_smearing as _warn_block_smearing
 from .spans import stopped_spans as _stopped_spans
 from .blocks import (_FRAMES_PER_BATCH, BlockFit, _frame_batches, _frames,  # noqa: F401
-                     _scale_spectrum, get_window)  # (re-exported: the block machinery's home)
+                     _hop, _scale_spectrum, get_window)  # (re-exported: the block machinery's home)
 
 __all__ = ["order_track", "order_map", "order_spectrum", "band_amplitude", "campbell_map",
            "AMPLITUDES", "amplitude_factor", "get_window", "BlockFit", "OrderWarning"]
@@ -414,8 +414,7 @@ def _cot_track(context, orders, *, samples_per_rev, revolutions, overlap, window
         frames = y[starts[sl, None] + np.arange(length)[None, :]]
         coef[sl], mean[sl], floor[sl], level[sl], spec[sl] = fitter.fit(
             frames, angle[starts[sl]], spectra=True)
-    hop = int(starts[1] - starts[0]) if starts.shape[0] > 1 else length
-    floor = fitter.line_free_floor(spec, floor, angle[starts], hop)  # other lines: no noise
+    floor = fitter.line_free_floor(spec, floor, angle[starts], _hop(length, overlap))
     from .leakage import check_grid_leakage
 
     leaked = check_grid_leakage(fitter, y, starts, angle, coef, context["label"])

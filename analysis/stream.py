@@ -340,7 +340,9 @@ def _blocks(speed, reader, *, label, samples_per_rev, revolutions, overlap, inte
 
     check_option(interpolation, "interpolation", INTERPOLATIONS, error=AnalysisError)
     length = samples_per_rev * revolutions
-    hop = max(1, int(round(length * (1.0 - overlap))))
+    from .blocks import _hop
+
+    hop = _hop(length, overlap)
     framer = _Framer(length, hop)
     n_blocks = 0
     for arrays in _angle_samples(reader, speed, samples_per_rev=samples_per_rev,
@@ -485,8 +487,10 @@ def order_track_stream(record, channel: str, *, orders, speed_rpm=None, speed_ch
             per_frames=per_frames, centroid=fitter.centroid)
     cat = {k: np.concatenate(v) for k, v in parts.items()}
     # the signal's other lines out of the noise floor, as in memory (analysis.cot_noise)
+    from .blocks import _hop
+
     cat["floor"] = fitter.line_free_floor(cat["spec"], cat["floor"], cat["phi0"],
-                                          max(1, int(round(fitter.length * (1.0 - overlap)))))
+                                          _hop(fitter.length, overlap))
     context = {"factor": factor, "units": str(var.attrs.get("units", "")), "label": label,
                "reference": speed.angle_reference}
     plan = _chunk_plan(speed, chunk, spr, interpolation)
